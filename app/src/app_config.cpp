@@ -1,0 +1,100 @@
+// Composition of the config sections: see app_config.hpp.
+#include "app_config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+namespace aerotrack::app {
+namespace {
+
+rt::TaskSpec parseTaskSpec(const rt::ConfigNode& node) {
+  rt::TaskSpec t;
+  t.name = node.getString("name");
+  t.rate_hz = node.getDoubleOr("rate_hz", 0.0, 0.0, 100000.0);
+  t.trigger = node.getStringOr("trigger", "");
+  t.budget_ms = node.getDouble("budget_ms", 1e-6, 10000.0);
+  t.priority = node.getIntOr("priority", 0, 0, 99);
+  t.cpu = node.getIntOr("cpu", -1, -1, 1023);
+  node.finish();
+  if (const rt::Status s = rt::validate(t); !s) node.fail("", s.error().message);
+  return t;
+}
+
+AppConfig parseRoot(const rt::ConfigNode& root) {
+  AppConfig c;
+  c.source = root.sourceName();
+  const rt::ConfigNode vehicle = root.child("vehicle");
+  c.vehicle.radius_m = vehicle.getDouble("radius_m", 0.05, 2.0);
+  c.vehicle.max_speed_mps = vehicle.getDouble("max_speed_mps", 0.1, 30.0);
+  c.vehicle.max_accel_mps2 = vehicle.getDouble("max_accel_mps2", 0.1, 30.0);
+  vehicle.finish();
+
+  c.hal = hal::parseHalConfig(root.child("hal"));
+  // The simulated vehicle's controller; only a config that simulates needs the section.
+  if (root.has("sim") || c.hal.usesSim()) c.sim = hal::parsePointMassParams(root.child("sim"));
+
+  const rt::ConfigNode server = root.child("trajectory_server");
+  c.trajectory_server.yaw_min_speed_mps = server.getDouble("yaw_min_speed_mps", 0.0, 10.0);
+  server.finish();
+
+  if (root.has("realtime")) {
+    const rt::ConfigNode rt_node = root.child("realtime");
+    c.realtime.use_realtime_priority = rt_node.getBool("realtime_priority");
+    c.realtime.use_affinity = rt_node.getBool("affinity");
+    c.realtime.lock_memory = rt_node.getBool("lock_memory");
+    rt_node.finish();
+  }
+
+  const std::vector<rt::ConfigNode> tasks = root.childList("tasks");
+  for (const rt::ConfigNode& t : tasks) c.tasks.push_back(parseTaskSpec(t));
+  if (const rt::Status s = rt::validate(c.tasks); !s) root.fail("tasks", s.error().message);
+  root.finish();
+  return c;
+}
+
+rt::Expected<AppConfig> parseFrom(rt::Expected<rt::ConfigNode> root) {
+  if (!root) return root.error();
+  return rt::parseConfig<AppConfig>([&] { return parseRoot(*root); });
+}
+
+}  // namespace
+
+rt::Expected<AppConfig> loadAppConfig(const std::string& path) { return parseFrom(rt::ConfigNode::loadFile(path)); }
+
+rt::Expected<AppConfig> parseAppConfig(const std::string& yaml_text, const std::string& source_name) {
+  return parseFrom(rt::ConfigNode::fromString(yaml_text, source_name));
+}
+
+std::string toYaml(const AppConfig& c) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "radius_m" << YAML::Value << c.vehicle.radius_m;
+  out << YAML::Key << "max_speed_mps" << YAML::Value << c.vehicle.max_speed_mps;
+  out << YAML::Key << "max_accel_mps2" << YAML::Value << c.vehicle.max_accel_mps2;
+  out << YAML::EndMap;
+  out << YAML::Key << "hal" << YAML::Value;
+  hal::emitYaml(out, c.hal);
+  out << YAML::Key << "sim" << YAML::Value;
+  hal::emitYaml(out, c.sim);
+  out << YAML::Key << "trajectory_server" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "yaw_min_speed_mps" << YAML::Value << c.trajectory_server.yaw_min_speed_mps;
+  out << YAML::EndMap;
+  out << YAML::Key << "realtime" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "realtime_priority" << YAML::Value << c.realtime.use_realtime_priority;
+  out << YAML::Key << "affinity" << YAML::Value << c.realtime.use_affinity;
+  out << YAML::Key << "lock_memory" << YAML::Value << c.realtime.lock_memory;
+  out << YAML::EndMap;
+  out << YAML::Key << "tasks" << YAML::Value << YAML::BeginSeq;
+  for (const rt::TaskSpec& t : c.tasks) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << t.name;
+    if (t.periodic()) out << YAML::Key << "rate_hz" << YAML::Value << t.rate_hz;
+    else out << YAML::Key << "trigger" << YAML::Value << t.trigger;
+    out << YAML::Key << "budget_ms" << YAML::Value << t.budget_ms;
+    out << YAML::Key << "priority" << YAML::Value << t.priority;
+    out << YAML::Key << "cpu" << YAML::Value << t.cpu << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace aerotrack::app

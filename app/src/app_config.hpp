@@ -1,0 +1,41 @@
+// The typed configuration of one aerotrack process (config/*.yaml): vehicle limits, device
+// backends, module parameters and the task table. Each section is parsed by its owner (hal,
+// modules, rt); this file only composes them and owns the top-level keys.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "aerotrack/hal/factory.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/realtime_executor.hpp"
+#include "aerotrack/rt/task.hpp"
+#include "aerotrack/trajectory_server/trajectory_server.hpp"
+
+namespace aerotrack::app {
+
+struct VehicleConfig {
+  double radius_m = 0.25;       ///< Collision radius (paper: 300 x 300 mm frame).
+  double max_speed_mps = 3.0;
+  double max_accel_mps2 = 4.0;
+};
+
+struct AppConfig {
+  std::string source;  ///< The file it was read from.
+  VehicleConfig vehicle;
+  hal::HalConfig hal;
+  hal::sim::PointMassParams sim;
+  trajectory_server::TrajectoryServerParams trajectory_server;
+  rt::RealtimeOptions realtime;
+  std::vector<rt::TaskSpec> tasks;
+};
+
+/// Loads and checks a config file. The error names the file, line and key.
+rt::Expected<AppConfig> loadAppConfig(const std::string& path);
+/// Same, from YAML text (tests); source_name stands for the file name in messages.
+rt::Expected<AppConfig> parseAppConfig(const std::string& yaml_text, const std::string& source_name);
+
+/// The effective configuration as YAML (what --print-config shows); parses back to the same.
+std::string toYaml(const AppConfig& config);
+
+}  // namespace aerotrack::app

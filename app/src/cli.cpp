@@ -1,0 +1,162 @@
+// Command-line parsing: see cli.hpp.
+#include "cli.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+namespace aerotrack::app {
+
+std::string ParsedArgs::valueOr(const std::string& name, const std::string& fallback) const {
+  const auto it = values.find(name);
+  return it == values.end() ? fallback : it->second;
+}
+
+std::vector<CommandSpec> commandTable() {
+  return {
+      {"run", "the onboard executable: devices from config, real-time executor", "",
+       {{"config", "FILE", true, "configuration YAML (backends, tasks, parameters)"},
+        {"print-config", "", false, "print the effective configuration and exit"},
+        {"duration-s", "S", false, "stop after S seconds (default: until SIGINT/SIGTERM)"}},
+       ""},
+      {"sim", "closed-loop run in the built-in simulator (lockstep unless --realtime)", "",
+       {{"scenario", "NAME|FILE", true, "scenario name in config/scenarios/ or a YAML file"},
+        {"seed", "N", false, "random seed (default 1)"},
+        {"out", "DIR", false, "write summary.json here (default out/sim-<scenario>-<seed>)"},
+        {"mode", "proposed|baseline", false, "planner mode (arrives with the closed loop, issue 9)"},
+        {"realtime", "", false, "run at 1x on the real-time executor instead of lockstep"},
+        {"config", "FILE", false, "configuration YAML (default config/sim.yaml)"}},
+       ""},
+      {"bench", "many seeded sim trials in parallel processes", "",
+       {{"scenario", "NAME|FILE", true, ""},
+        {"trials", "N", true, ""},
+        {"speed", "MPS", false, ""},
+        {"mode", "proposed|baseline", false, ""},
+        {"out", "DIR", false, ""},
+        {"jobs", "J", false, ""}},
+       "issue 3 (simulator)"},
+      {"detect", "run the keypoint detector on an image or video", "IMAGE|VIDEO",
+       {{"model", "lightning|thunder|multipose", false, ""},
+        {"json", "", false, ""},
+        {"draw", "OUT.png", false, ""}},
+       "issue 5 (perception)"},
+      {"calibrate", "fit the localization regression", "",
+       {{"data", "TRAIN.csv", true, ""}, {"out", "PARAMS.yaml", true, ""}, {"model", "paper|pinhole", false, ""}},
+       "issue 6 (localization)"},
+      {"eval-localization", "evaluate a fitted localization on test data", "",
+       {{"data", "TEST.csv", true, ""}, {"params", "PARAMS.yaml", true, ""}, {"json", "", false, ""}},
+       "issue 6 (localization)"},
+  };
+}
+
+rt::Expected<ParsedArgs> parseArgs(const std::vector<std::string>& args, const std::vector<CommandSpec>& table) {
+  ParsedArgs out;
+  for (const std::string& a : args)
+    if (a == "--help" || a == "-h") out.help = true;
+  if (args.empty()) {
+    if (out.help) return out;
+    return rt::Error{"no command given; try 'aerotrack --help'"};
+  }
+  if (args[0] == "--help" || args[0] == "-h") return out;
+  const CommandSpec* command = nullptr;
+  for (const CommandSpec& c : table)
+    if (c.name == args[0]) command = &c;
+  if (command == nullptr) return rt::Error{"unknown command '" + args[0] + "'; try 'aerotrack --help'"};
+  out.command = command->name;
+  if (out.help) return out;
+
+  for (std::size_t i = 1; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a.rfind("--", 0) != 0) {
+      if (command->positional.empty() || out.positional)
+        return rt::Error{command->name + ": unexpected argument '" + a + "'"};
+      out.positional = a;
+      continue;
+    }
+    std::string name = a.substr(2);
+    std::optional<std::string> inline_value;
+    if (const auto eq = name.find('='); eq != std::string::npos) {
+      inline_value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+    }
+    const OptionSpec* option = nullptr;
+    for (const OptionSpec& o : command->options)
+      if (o.name == name) option = &o;
+    if (option == nullptr) return rt::Error{command->name + ": unknown option '--" + name + "'"};
+    if (option->value_name.empty()) {
+      if (inline_value) return rt::Error{command->name + ": option '--" + name + "' takes no value"};
+      out.flags.insert(name);
+      continue;
+    }
+    if (!inline_value) {
+      if (i + 1 >= args.size()) return rt::Error{command->name + ": option '--" + name + "' needs a value " + option->value_name};
+      inline_value = args[++i];
+    }
+    if (out.values.count(name) != 0) return rt::Error{command->name + ": option '--" + name + "' given twice"};
+    out.values[name] = *inline_value;
+  }
+  for (const OptionSpec& o : command->options)
+    if (o.required && out.values.count(o.name) == 0)
+      return rt::Error{command->name + ": missing required option --" + o.name + " " + o.value_name};
+  if (!command->positional.empty() && !out.positional)
+    return rt::Error{command->name + ": missing argument " + command->positional};
+  return out;
+}
+
+std::string usage(const std::vector<CommandSpec>& table) {
+  std::ostringstream out;
+  out << "aerotrack: onboard autonomy for a quadrotor that follows a person\n\n"
+      << "usage: aerotrack <command> [options]    (aerotrack <command> --help for its options)\n\ncommands:\n";
+  for (const CommandSpec& c : table) {
+    out << "  " << c.name << std::string(c.name.size() < 20 ? 20 - c.name.size() : 1, ' ') << c.summary;
+    if (!c.landed_in.empty()) out << "  [not yet available: " << c.landed_in << "]";
+    out << "\n";
+  }
+  out << "\nexit status: 0 success, 1 bad input or failure, 2 capability not available yet\n";
+  return out.str();
+}
+
+std::string usage(const CommandSpec& c) {
+  std::ostringstream out;
+  out << "usage: aerotrack " << c.name;
+  if (!c.positional.empty()) out << " " << c.positional;
+  for (const OptionSpec& o : c.options) {
+    std::string text = "--" + o.name + (o.value_name.empty() ? "" : " " + o.value_name);
+    out << " " << (o.required ? text : "[" + text + "]");
+  }
+  out << "\n  " << c.summary << "\n";
+  if (!c.landed_in.empty()) out << "  not yet available: arrives with " << c.landed_in << "\n";
+  for (const OptionSpec& o : c.options)
+    if (!o.help.empty()) out << "  --" << o.name << ": " << o.help << "\n";
+  return out.str();
+}
+
+rt::Expected<double> parseDouble(const std::string& option, const std::string& text, double min, double max) {
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || errno != 0 || !std::isfinite(v))
+    return rt::Error{"--" + option + ": expected a number, got '" + text + "'"};
+  if (v < min || v > max) {
+    std::ostringstream msg;
+    msg << "--" << option << ": " << v << " is out of range [" << min << ", " << max << "]";
+    return rt::Error{msg.str()};
+  }
+  return v;
+}
+
+rt::Expected<std::int64_t> parseInt(const std::string& option, const std::string& text, std::int64_t min,
+                                    std::int64_t max) {
+  errno = 0;
+  char* end = nullptr;
+  const long long v = std::strtoll(text.c_str(), &end, 10);
+  if (text.empty() || end != text.c_str() + text.size() || errno != 0)
+    return rt::Error{"--" + option + ": expected an integer, got '" + text + "'"};
+  if (v < min || v > max)
+    return rt::Error{"--" + option + ": " + std::to_string(v) + " is out of range [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "]"};
+  return static_cast<std::int64_t>(v);
+}
+
+}  // namespace aerotrack::app

@@ -1,0 +1,12 @@
+// The subcommands that have landed. Each returns the process exit status and prints its own
+// one-line errors (the app is where printing happens, DESIGN.md rule 6).
+#pragma once
+
+#include "cli.hpp"
+
+namespace aerotrack::app {
+
+int runCommand(const ParsedArgs& args);
+int simCommand(const ParsedArgs& args);
+
+}  // namespace aerotrack::app

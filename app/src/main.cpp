@@ -1,0 +1,44 @@
+// aerotrack: one binary, many commands (DESIGN.md, "The command line"). main parses the command
+// line and dispatches; every failure ends in one line on stderr and a non-zero status.
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  using namespace aerotrack::app;
+  try {
+    const std::vector<CommandSpec> table = commandTable();
+    const auto args = parseArgs(std::vector<std::string>(argv + 1, argv + argc), table);
+    if (!args) {
+      std::fprintf(stderr, "aerotrack: %s\n", args.error().message.c_str());
+      return 1;
+    }
+    if (args->command.empty()) {
+      std::fputs(usage(table).c_str(), stdout);
+      return 0;
+    }
+    const CommandSpec* spec = nullptr;
+    for (const CommandSpec& c : table)
+      if (c.name == args->command) spec = &c;
+    if (args->help) {
+      std::fputs(usage(*spec).c_str(), stdout);
+      return 0;
+    }
+    if (!spec->landed_in.empty()) {
+      std::fprintf(stderr, "aerotrack %s: not available yet; this capability arrives with %s\n", spec->name.c_str(),
+                   spec->landed_in.c_str());
+      return 2;
+    }
+    if (args->command == "run") return runCommand(*args);
+    if (args->command == "sim") return simCommand(*args);
+    std::fprintf(stderr, "aerotrack: command '%s' has no handler\n", args->command.c_str());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "aerotrack: internal error: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,71 @@
+// `aerotrack run --config FILE [--print-config] [--duration-s S]`: the onboard executable. Devices
+// from config, every task on the real-time executor, until SIGINT/SIGTERM (or the duration).
+#include <atomic>
+#include <cstdio>
+#include <thread>
+
+#include "commands.hpp"
+#include "report.hpp"
+#include "signals.hpp"
+#include "system.hpp"
+#include "aerotrack/rt/realtime_executor.hpp"
+
+namespace aerotrack::app {
+
+int runCommand(const ParsedArgs& args) {
+  const auto config = loadAppConfig(args.values.at("config"));
+  if (!config) {
+    std::fprintf(stderr, "aerotrack run: %s\n", config.error().message.c_str());
+    return 1;
+  }
+  if (args.flags.count("print-config") != 0) {
+    std::fputs(toYaml(*config).c_str(), stdout);
+    return 0;
+  }
+  double duration_s = 0.0;  // 0: until a signal
+  if (args.has("duration-s")) {
+    const auto d = parseDouble("duration-s", args.values.at("duration-s"), 0.0, 1e7);
+    if (!d) {
+      std::fprintf(stderr, "aerotrack run: %s\n", d.error().message.c_str());
+      return 1;
+    }
+    duration_s = *d;
+  }
+
+  std::atomic<bool> stop{false};
+  SignalWatcher signals(stop);  // before any thread starts
+  const rt::MonotonicClock clock;
+  auto system = System::build(*config, clock.now());
+  if (!system) {
+    std::fprintf(stderr, "aerotrack run: %s\n", system.error().message.c_str());
+    return 1;
+  }
+  rt::RealtimeExecutor executor(clock, config->realtime);
+  for (const rt::TaskBinding& b : (*system)->bindings()) {
+    if (const rt::Status s = executor.add(b); !s) {
+      std::fprintf(stderr, "aerotrack run: %s\n", s.error().message.c_str());
+      return 1;
+    }
+  }
+  const auto warnings = executor.start();
+  if (!warnings) {
+    std::fprintf(stderr, "aerotrack run: %s\n", warnings.error().message.c_str());
+    return 1;
+  }
+  for (const std::string& w : *warnings) std::fprintf(stderr, "aerotrack run: warning: %s\n", w.c_str());
+  std::fprintf(stderr, "aerotrack run: %zu tasks running (%s); Ctrl-C stops\n", (*system)->bindings().size(),
+               config->source.c_str());
+
+  const rt::TimeNs end_ns = duration_s > 0.0 ? clock.now() + rt::secondsToNs(duration_s) : 0;
+  while (!stop.load() && (end_ns == 0 || clock.now() < end_ns))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  executor.requestStop();
+  executor.join();
+
+  std::fputs(timingTable(snapshotTimings(executor.stats())).c_str(), stdout);
+  std::fputs(deviceHealthReport((*system)->devices(), clock.now()).c_str(), stdout);
+  if (signals.received() != 0) std::fprintf(stderr, "aerotrack run: stopped by signal %d\n", signals.received());
+  return 0;
+}
+
+}  // namespace aerotrack::app

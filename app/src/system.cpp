@@ -1,0 +1,59 @@
+// Wiring: see system.hpp.
+#include "system.hpp"
+
+#include "device_tasks.hpp"
+#include "aerotrack/trajectory_server/trajectory_server_task.hpp"
+
+namespace aerotrack::app {
+
+std::vector<std::string> System::knownTasks() { return {"sim_world", "odometry", "trajectory_server"}; }
+
+rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, rt::TimeNs start_ns) {
+  std::unique_ptr<System> system(new System(config));
+  auto devices = hal::makeDevices(config.hal, config.sim, start_ns);
+  if (!devices) return rt::Error{config.source + ": " + devices.error().message};
+  system->devices_ = std::move(devices.value());
+
+  bool has_world_task = false;
+  for (std::size_t i = 0; i < config.tasks.size(); ++i) {
+    if (const rt::Status s = system->addTask(config.tasks[i], i); !s) return s.error();
+    has_world_task = has_world_task || config.tasks[i].name == "sim_world";
+  }
+  if (system->devices_.world && !has_world_task)
+    return rt::Error{config.source + ": tasks: sim backends are configured but no 'sim_world' task steps the simulation"};
+  return system;
+}
+
+rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
+  const std::string where = config_.source + ": tasks[" + std::to_string(index) + "]";
+  std::unique_ptr<rt::Task> task;
+  if (spec.name == "sim_world") {
+    if (!devices_.world) return rt::Error{where + ": task 'sim_world' needs a sim backend in hal"};
+    task = std::make_unique<SimWorldTask>(devices_.world);
+  } else if (spec.name == "odometry") {
+    task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry);
+  } else if (spec.name == "trajectory_server") {
+    auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
+        config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);
+    task = std::move(server);
+  } else {
+    std::string known;
+    for (const std::string& k : knownTasks()) known += (known.empty() ? "" : ", ") + k;
+    return rt::Error{where + ".name: unknown task '" + spec.name + "' (known: " + known + ")"};
+  }
+
+  rt::Doorbell* doorbell = nullptr;
+  if (!spec.periodic()) {
+    doorbells_.push_back(std::make_unique<rt::Doorbell>());
+    doorbell = doorbells_.back().get();
+    if (spec.trigger == "odometry") channels_.odometry.attachDoorbell(doorbell);
+    else if (spec.trigger == "setpoints") channels_.setpoints.attachDoorbell(doorbell);
+    else if (spec.trigger == "trajectories") channels_.trajectories.attachDoorbell(doorbell);
+    else return rt::Error{where + ".trigger: unknown channel '" + spec.trigger + "' (known: odometry, setpoints, trajectories)"};
+  }
+  tasks_.push_back(std::move(task));
+  bindings_.push_back({spec, tasks_.back().get(), doorbell});
+  return rt::ok();
+}
+
+}  // namespace aerotrack::app

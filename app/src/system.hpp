@@ -1,0 +1,53 @@
+// The one place where devices, channels, modules and tasks are wired (DESIGN.md: app/). A System
+// is built from an AppConfig: the HAL factory makes the devices, then every row of the task table
+// becomes a task bound to its channels. A name in the table that no task answers to is an error,
+// and so is a simulated device without the task that steps the simulation.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app_config.hpp"
+#include "aerotrack/hal/factory.hpp"
+#include "aerotrack/rt/doorbell.hpp"
+#include "aerotrack/rt/latest_slot.hpp"
+#include "aerotrack/rt/shared_slot.hpp"
+#include "aerotrack/rt/task.hpp"
+#include "aerotrack/trajectory_server/trajectory.hpp"
+
+namespace aerotrack::app {
+
+/// Every channel of the process. Names here are the names a task's `trigger` may use.
+struct Channels {
+  rt::LatestSlot<hal::OdometrySample> odometry;
+  rt::LatestSlot<hal::Setpoint> setpoints;
+  rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
+};
+
+class System {
+ public:
+  /// Builds devices and tasks. start_ns: the executor clock's time at start (sim world epoch).
+  static rt::Expected<std::unique_ptr<System>> build(const AppConfig& config, rt::TimeNs start_ns);
+
+  const std::vector<rt::TaskBinding>& bindings() const { return bindings_; }
+  Channels& channels() { return channels_; }
+  hal::Devices& devices() { return devices_; }
+  const AppConfig& config() const { return config_; }
+
+  /// Names of the tasks this build knows, for messages and tests.
+  static std::vector<std::string> knownTasks();
+
+ private:
+  explicit System(AppConfig config) : config_(std::move(config)) {}
+  rt::Status addTask(const rt::TaskSpec& spec, std::size_t index);
+
+  AppConfig config_;
+  hal::Devices devices_;
+  Channels channels_;
+  std::vector<std::unique_ptr<rt::Task>> tasks_;
+  std::vector<std::unique_ptr<rt::Doorbell>> doorbells_;
+  std::vector<rt::TaskBinding> bindings_;
+};
+
+}  // namespace aerotrack::app

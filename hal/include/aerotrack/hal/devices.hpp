@@ -1,0 +1,55 @@
+// Device interfaces (DESIGN.md: hal/). A backend implements them for real hardware (real/),
+// recorded files (replay/), the simulator (sim/) or nothing at all (null/); the modules cannot
+// tell them apart. All calls are non-blocking: a capture task polls its device at the device's
+// rate. Each device is used by one task thread (calls on one device are not concurrent) unless
+// its backend says otherwise; health() may be called from any thread.
+#pragma once
+
+#include <optional>
+#include <string_view>
+
+#include "aerotrack/hal/types.hpp"
+
+namespace aerotrack::hal {
+
+class Device {
+ public:
+  virtual ~Device() = default;
+  /// Backend name as written in config ("null", "sim", ...).
+  virtual std::string_view backend() const = 0;
+  virtual DeviceHealth health(TimeNs now_ns) const = 0;
+};
+
+class GimbalCamera : public Device {
+ public:
+  /// The newest frame not returned before, or an empty handle if there is none.
+  virtual ImageFrameHandle grab(TimeNs now_ns) = 0;
+};
+
+class DepthCamera : public Device {
+ public:
+  /// The newest depth frame not returned before, or an empty handle.
+  virtual DepthFrameHandle grab(TimeNs now_ns) = 0;
+};
+
+class Gimbal : public Device {
+ public:
+  virtual void command(const GimbalCommand& command) = 0;
+  /// Newest encoder reading, or nothing if none has arrived.
+  virtual std::optional<GimbalState> read(TimeNs now_ns) = 0;
+};
+
+class Odometry : public Device {
+ public:
+  /// Newest state estimate, or nothing if none has arrived. May repeat the previous sample;
+  /// compare stamp_ns to detect new data.
+  virtual std::optional<OdometrySample> read(TimeNs now_ns) = 0;
+};
+
+class VehicleLink : public Device {
+ public:
+  virtual void send(const Setpoint& setpoint) = 0;
+  virtual VehicleStatus status(TimeNs now_ns) = 0;
+};
+
+}  // namespace aerotrack::hal

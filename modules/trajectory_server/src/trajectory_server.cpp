@@ -1,0 +1,29 @@
+// Trajectory sampling into setpoints: see trajectory_server.hpp.
+#include "aerotrack/trajectory_server/trajectory_server.hpp"
+
+#include <cmath>
+
+namespace aerotrack::trajectory_server {
+
+std::optional<hal::Setpoint> TrajectoryServer::sample(rt::TimeNs now_ns) {
+  if (!current_.trajectory) return std::nullopt;
+  const double t_s = rt::nsToSeconds(now_ns - current_.start_ns);
+  const TrajectorySample s = current_.trajectory->sample(t_s);
+  hal::Setpoint sp;
+  sp.stamp_ns = now_ns;
+  sp.p_W_m = s.p_W_m;
+  sp.v_W_mps = s.v_W_mps;
+  sp.a_W_mps2 = s.a_W_mps2;
+  const double vx = s.v_W_mps.x();
+  const double vy = s.v_W_mps.y();
+  const double speed2 = vx * vx + vy * vy;
+  if (speed2 >= params_.yaw_min_speed_mps * params_.yaw_min_speed_mps) {
+    held_yaw_rad_ = std::atan2(vy, vx);
+    // d/dt atan2(vy, vx) = (vx ay - vy ax) / (vx^2 + vy^2)
+    sp.yaw_rate_radps = (vx * s.a_W_mps2.y() - vy * s.a_W_mps2.x()) / speed2;
+  }
+  sp.yaw_rad = held_yaw_rad_;
+  return sp;
+}
+
+}  // namespace aerotrack::trajectory_server

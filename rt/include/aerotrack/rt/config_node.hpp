@@ -1,0 +1,101 @@
+// Strict reading of YAML configuration into typed structs. Every error names the file, the line
+// and the full key path ("config/sim.yaml:14: tasks[2].rate_hz: expected a number, got 'fast'"):
+// a missing key, a key nobody reads (unknown or misspelt), a wrong type, an out-of-range value.
+// Nothing is silently defaulted: optional keys take their default in code, next to the reader
+// call, and `aerotrack run --print-config` shows the effective values.
+//
+// Use: parse functions take a ConfigNode, read every key they know, then call finish(), which
+// rejects the keys left over. Inside parsing, errors are thrown as ConfigError to keep the
+// parsers linear; parseConfig() converts them to an Error value at the boundary (rule 6).
+#pragma once
+
+#include <functional>
+#include <initializer_list>
+#include <memory>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "aerotrack/rt/expected.hpp"
+
+namespace aerotrack::rt {
+
+/// Thrown by ConfigNode while parsing; caught by parseConfig(). Do not let it escape a library.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class ConfigNode {
+ public:
+  /// Reads and parses a YAML file. Error if it is missing, unreadable or not valid YAML.
+  static Expected<ConfigNode> loadFile(const std::string& path);
+  /// Parses YAML text; source_name stands for the file name in messages.
+  static Expected<ConfigNode> fromString(const std::string& text, const std::string& source_name);
+
+  bool has(const std::string& key) const;
+
+  // Required scalars. Throw ConfigError if missing, of the wrong type or outside [min, max].
+  double getDouble(const std::string& key, double min, double max) const;
+  int getInt(const std::string& key, int min, int max) const;
+  std::uint64_t getUint64(const std::string& key) const;
+  bool getBool(const std::string& key) const;
+  std::string getString(const std::string& key) const;
+  /// A string that must be one of `allowed`. If "null" is allowed, a YAML null means "null".
+  std::string getEnum(const std::string& key, std::initializer_list<const char*> allowed) const;
+  /// A list of exactly `size` numbers (any size if size == 0), each in [min, max].
+  std::vector<double> getDoubleList(const std::string& key, std::size_t size, double min, double max) const;
+  /// A list of rows, each a list of exactly `columns` numbers in [min, max] ("[[0, 0, 1], [5, 0, 1]]").
+  std::vector<std::vector<double>> getDoubleRows(const std::string& key, std::size_t columns, double min,
+                                                 double max) const;
+
+  // Optional scalars: the default applies only when the key is absent; a present key is checked.
+  double getDoubleOr(const std::string& key, double fallback, double min, double max) const;
+  int getIntOr(const std::string& key, int fallback, int min, int max) const;
+  bool getBoolOr(const std::string& key, bool fallback) const;
+  std::string getStringOr(const std::string& key, const std::string& fallback) const;
+
+  /// A required nested map.
+  ConfigNode child(const std::string& key) const;
+  /// A required list of maps ("tasks: [ {...}, {...} ]"). May be empty.
+  std::vector<ConfigNode> childList(const std::string& key) const;
+
+  /// Rejects keys of this map that no getter asked for. Call after reading a map.
+  void finish() const;
+
+  /// Throws a ConfigError about `key` of this node (for checks across several keys).
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+
+  /// "file:line: path" of this node, for messages.
+  std::string where() const;
+  const std::string& sourceName() const { return *source_; }
+
+ private:
+  ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path);
+  YAML::Node require(const std::string& key) const;
+  std::string keyPath(const std::string& key) const;
+  std::string locate(const YAML::Node& node, const std::string& key) const;
+  std::string locateAt(const YAML::Node& node, const std::string& full_path) const;
+  template <class T>
+  T scalarAs(const std::string& key, const YAML::Node& value, const char* what) const;
+
+  YAML::Node node_;
+  std::shared_ptr<const std::string> source_;
+  std::string path_;
+  std::shared_ptr<std::set<std::string>> used_;  // shared so copies of a node agree
+};
+
+/// Runs a parse function and turns a thrown ConfigError into an Error value.
+template <class T>
+Expected<T> parseConfig(const std::function<T()>& parse) {
+  try {
+    return parse();
+  } catch (const ConfigError& error) {
+    return Error{error.what()};
+  }
+}
+
+}  // namespace aerotrack::rt

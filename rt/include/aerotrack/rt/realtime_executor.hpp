@@ -1,0 +1,75 @@
+// The real-time executor (DESIGN.md rule 3): one thread per task; periodic tasks sleep to
+// absolute deadlines with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME); a run that ends after
+// the next release counts the skipped periods as missed deadlines and resynchronises to the next
+// future release rather than bursting to catch up (as ArduPilot's PeriodicThread does).
+// Event-triggered tasks wait on their doorbell. SCHED_FIFO priorities, CPU affinity and
+// mlockall are applied when the process is permitted; when not, start() reports a warning per
+// refusal and the tasks run at normal priority.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "aerotrack/rt/clock.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/task.hpp"
+#include "aerotrack/rt/timing_stats.hpp"
+
+namespace aerotrack::rt {
+
+struct RealtimeOptions {
+  bool use_realtime_priority = true;  ///< Try SCHED_FIFO with each task's priority (> 0).
+  bool use_affinity = true;           ///< Pin tasks whose cpu >= 0.
+  bool lock_memory = true;            ///< Try mlockall(MCL_CURRENT | MCL_FUTURE).
+  DurationNs stop_poll_ns = 50 * kNsPerMillisecond;  ///< Longest sleep before re-checking stop.
+};
+
+class RealtimeExecutor {
+ public:
+  explicit RealtimeExecutor(const MonotonicClock& clock, RealtimeOptions options = {});
+  ~RealtimeExecutor();  ///< Stops and joins.
+
+  RealtimeExecutor(const RealtimeExecutor&) = delete;
+  RealtimeExecutor& operator=(const RealtimeExecutor&) = delete;
+
+  Status add(const TaskBinding& binding);
+
+  /// Starts one thread per task. Returns warnings (permissions refused), or an Error if a thread
+  /// could not be created (then no thread is left running).
+  Expected<std::vector<std::string>> start();
+
+  /// Asks every thread to finish its current step and exit; safe from any thread.
+  void requestStop() { stop_.store(true, std::memory_order_release); }
+  bool stopRequested() const { return stop_.load(std::memory_order_acquire); }
+
+  /// Waits for all threads (after requestStop()).
+  void join();
+
+  struct NamedStats {
+    std::string name;
+    const TimingStats* stats;
+  };
+  std::vector<NamedStats> stats() const;
+
+ private:
+  struct Entry {
+    TaskBinding binding;
+    DurationNs period_ns = 0;
+    std::unique_ptr<TimingStats> stats;
+  };
+
+  void runPeriodic(Entry& entry, TimeNs first_release_ns);
+  void runEvent(Entry& entry);
+
+  const MonotonicClock& clock_;
+  RealtimeOptions options_;
+  std::vector<Entry> entries_;
+  std::vector<std::thread> threads_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::size_t> started_{0};  // threads that passed the start gate
+};
+
+}  // namespace aerotrack::rt

@@ -1,0 +1,50 @@
+// Tasks and the task table. A task is a thin adapter that connects a pure library to channels;
+// the executor decides when it runs. Its TaskSpec is one row of the task table (config YAML),
+// which reads as the system's timing contract: rate or trigger, time budget, priority, CPU.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/time.hpp"
+
+namespace aerotrack::rt {
+
+class Doorbell;
+
+/// One row of the task table.
+struct TaskSpec {
+  std::string name;
+  double rate_hz = 0.0;   ///< > 0: periodic at this rate. 0: event-triggered.
+  std::string trigger;    ///< Event-triggered: name of the channel whose data wakes the task.
+  double budget_ms = 0.0; ///< Execution-time budget per run; a longer run counts as an overrun.
+  int priority = 0;       ///< SCHED_FIFO priority 1..99 on the real-time executor; 0: normal.
+  int cpu = -1;           ///< CPU to pin the task's thread to; -1: any.
+
+  bool periodic() const { return rate_hz > 0.0; }
+};
+
+/// Checks one spec for consistency (exactly one of rate_hz/trigger, budget > 0, ranges).
+Status validate(const TaskSpec& spec);
+
+/// Checks a whole table: each spec valid and names unique.
+Status validate(const std::vector<TaskSpec>& table);
+
+/// Work the executor runs. step() is called from one thread at a time.
+class Task {
+ public:
+  virtual ~Task() = default;
+  /// Runs one step. now_ns is the executor clock's time at the release of this step: the
+  /// scheduled release in lockstep, the wake-up time on the real-time executor.
+  virtual void step(TimeNs now_ns) = 0;
+};
+
+/// A task bound to its row of the table and, if event-triggered, to the doorbell of its input.
+struct TaskBinding {
+  TaskSpec spec;
+  Task* task = nullptr;          ///< Not owned; outlives the executor run.
+  Doorbell* doorbell = nullptr;  ///< Required for event-triggered tasks, ignored otherwise.
+};
+
+}  // namespace aerotrack::rt

@@ -1,0 +1,242 @@
+// Strict YAML reading: see config_node.hpp.
+#include "aerotrack/rt/config_node.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace aerotrack::rt {
+namespace {
+
+std::string shortValue(const YAML::Node& value) {
+  if (value.IsScalar()) return "'" + value.Scalar() + "'";
+  if (value.IsMap()) return "a map";
+  if (value.IsSequence()) return "a list";
+  return "nothing";
+}
+
+std::string formatNumber(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+ConfigNode::ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path)
+    : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)),
+      used_(std::make_shared<std::set<std::string>>()) {}
+
+Expected<ConfigNode> ConfigNode::fromString(const std::string& text, const std::string& source_name) {
+  auto source = std::make_shared<const std::string>(source_name);
+  try {
+    YAML::Node root = YAML::Load(text);
+    if (!root.IsMap()) return Error{source_name + ": the top level must be a map of keys"};
+    return ConfigNode(root, source, "");
+  } catch (const YAML::Exception& e) {
+    return Error{source_name + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg};
+  }
+}
+
+Expected<ConfigNode> ConfigNode::loadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return Error{path + ": cannot open file"};
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{path + ": read error"};
+  return fromString(text.str(), path);
+}
+
+std::string ConfigNode::keyPath(const std::string& key) const {
+  if (key.empty()) return path_;
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+std::string ConfigNode::locateAt(const YAML::Node& node, const std::string& full_path) const {
+  const YAML::Mark mark = node.Mark();
+  std::string out = *source_;
+  if (!mark.is_null()) out += ":" + std::to_string(mark.line + 1);
+  return full_path.empty() ? out : out + ": " + full_path;
+}
+
+std::string ConfigNode::locate(const YAML::Node& node, const std::string& key) const {
+  return locateAt(node, keyPath(key));
+}
+
+std::string ConfigNode::where() const { return locate(node_, ""); }
+
+void ConfigNode::fail(const std::string& key, const std::string& message) const {
+  const YAML::Node value = node_.IsMap() ? node_[key] : YAML::Node();
+  throw ConfigError(locate(value.IsDefined() ? value : node_, key) + ": " + message);
+}
+
+bool ConfigNode::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+
+YAML::Node ConfigNode::require(const std::string& key) const {
+  used_->insert(key);
+  const YAML::Node value = node_[key];
+  if (!value.IsDefined()) throw ConfigError(locate(node_, key) + ": missing required key");
+  if (value.IsNull()) fail(key, "has no value");
+  return value;
+}
+
+template <class T>
+T ConfigNode::scalarAs(const std::string& key, const YAML::Node& value, const char* what) const {
+  if (!value.IsScalar()) fail(key, std::string("expected ") + what + ", got " + shortValue(value));
+  try {
+    return value.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(key, std::string("expected ") + what + ", got " + shortValue(value));
+  }
+}
+
+double ConfigNode::getDouble(const std::string& key, double min, double max) const {
+  const double v = scalarAs<double>(key, require(key), "a number");
+  if (!std::isfinite(v) || v < min || v > max)
+    fail(key, formatNumber(v) + " is out of range [" + formatNumber(min) + ", " + formatNumber(max) + "]");
+  return v;
+}
+
+int ConfigNode::getInt(const std::string& key, int min, int max) const {
+  const int v = scalarAs<int>(key, require(key), "an integer");
+  if (v < min || v > max)
+    fail(key, std::to_string(v) + " is out of range [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+  return v;
+}
+
+std::uint64_t ConfigNode::getUint64(const std::string& key) const {
+  const YAML::Node value = require(key);
+  if (value.IsScalar() && !value.Scalar().empty() && value.Scalar()[0] == '-')
+    fail(key, "expected a non-negative integer, got " + shortValue(value));
+  return scalarAs<std::uint64_t>(key, value, "a non-negative integer");
+}
+
+bool ConfigNode::getBool(const std::string& key) const { return scalarAs<bool>(key, require(key), "true or false"); }
+
+std::string ConfigNode::getString(const std::string& key) const {
+  return scalarAs<std::string>(key, require(key), "a string");
+}
+
+std::string ConfigNode::getEnum(const std::string& key, std::initializer_list<const char*> allowed) const {
+  // YAML reads a bare `null` as "no value"; where "null" is an allowed name (null backends), it
+  // means that name.
+  const YAML::Node raw = node_.IsMap() ? node_[key] : YAML::Node();
+  const bool null_allowed = std::any_of(allowed.begin(), allowed.end(), [](const char* a) { return std::string(a) == "null"; });
+  if (null_allowed && raw.IsDefined() && raw.IsNull()) {
+    used_->insert(key);
+    return "null";
+  }
+  const std::string v = getString(key);
+  std::string list;
+  for (const char* a : allowed) {
+    if (v == a) return v;
+    list += list.empty() ? a : std::string(", ") + a;
+  }
+  fail(key, "'" + v + "' is not one of: " + list);
+}
+
+std::vector<double> ConfigNode::getDoubleList(const std::string& key, std::size_t size, double min, double max) const {
+  const YAML::Node value = require(key);
+  if (!value.IsSequence()) fail(key, "expected a list of numbers, got " + shortValue(value));
+  if (size != 0 && value.size() != size)
+    fail(key, "expected " + std::to_string(size) + " numbers, got " + std::to_string(value.size()));
+  std::vector<double> out;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string item_key = key + "[" + std::to_string(i) + "]";
+    const double v = scalarAs<double>(item_key, value[i], "a number");
+    if (!std::isfinite(v) || v < min || v > max)
+      fail(key, "item " + std::to_string(i) + ": " + formatNumber(v) + " is out of range [" + formatNumber(min) + ", " +
+                    formatNumber(max) + "]");
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::vector<std::vector<double>> ConfigNode::getDoubleRows(const std::string& key, std::size_t columns, double min,
+                                                           double max) const {
+  const YAML::Node value = require(key);
+  if (!value.IsSequence()) fail(key, "expected a list of rows, got " + shortValue(value));
+  std::vector<std::vector<double>> rows;
+  for (std::size_t r = 0; r < value.size(); ++r) {
+    const YAML::Node row = value[r];
+    const std::string row_name = "row " + std::to_string(r);
+    if (!row.IsSequence() || row.size() != columns)
+      fail(key, row_name + ": expected a list of " + std::to_string(columns) + " numbers, got " + shortValue(row));
+    std::vector<double> out;
+    for (std::size_t c = 0; c < columns; ++c) {
+      if (!row[c].IsScalar()) fail(key, row_name + ": expected a number, got " + shortValue(row[c]));
+      double v = 0.0;
+      try {
+        v = row[c].as<double>();
+      } catch (const YAML::Exception&) {
+        fail(key, row_name + ": expected a number, got " + shortValue(row[c]));
+      }
+      if (!std::isfinite(v) || v < min || v > max)
+        fail(key, row_name + ": " + formatNumber(v) + " is out of range [" + formatNumber(min) + ", " + formatNumber(max) + "]");
+      out.push_back(v);
+    }
+    rows.push_back(std::move(out));
+  }
+  return rows;
+}
+
+double ConfigNode::getDoubleOr(const std::string& key, double fallback, double min, double max) const {
+  if (!has(key)) {
+    used_->insert(key);
+    return fallback;
+  }
+  return getDouble(key, min, max);
+}
+
+int ConfigNode::getIntOr(const std::string& key, int fallback, int min, int max) const {
+  if (!has(key)) {
+    used_->insert(key);
+    return fallback;
+  }
+  return getInt(key, min, max);
+}
+
+bool ConfigNode::getBoolOr(const std::string& key, bool fallback) const {
+  if (!has(key)) {
+    used_->insert(key);
+    return fallback;
+  }
+  return getBool(key);
+}
+
+std::string ConfigNode::getStringOr(const std::string& key, const std::string& fallback) const {
+  if (!has(key)) {
+    used_->insert(key);
+    return fallback;
+  }
+  return getString(key);
+}
+
+ConfigNode ConfigNode::child(const std::string& key) const {
+  const YAML::Node value = require(key);
+  if (!value.IsMap()) fail(key, "expected a map of keys, got " + shortValue(value));
+  return ConfigNode(value, source_, keyPath(key));
+}
+
+std::vector<ConfigNode> ConfigNode::childList(const std::string& key) const {
+  const YAML::Node value = require(key);
+  if (!value.IsSequence()) fail(key, "expected a list, got " + shortValue(value));
+  std::vector<ConfigNode> out;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string item_path = keyPath(key) + "[" + std::to_string(i) + "]";
+    if (!value[i].IsMap()) throw ConfigError(locateAt(value[i], item_path) + ": expected a map of keys, got " + shortValue(value[i]));
+    out.push_back(ConfigNode(value[i], source_, item_path));
+  }
+  return out;
+}
+
+void ConfigNode::finish() const {
+  if (!node_.IsMap()) return;
+  for (const auto& item : node_) {
+    const std::string key = item.first.as<std::string>();
+    if (used_->count(key) == 0) throw ConfigError(locate(item.first, key) + ": unknown key");
+  }
+}
+
+}  // namespace aerotrack::rt

@@ -1,0 +1,168 @@
+// Real-time executor: see realtime_executor.hpp.
+#include "aerotrack/rt/realtime_executor.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+
+#include "aerotrack/rt/doorbell.hpp"
+
+namespace aerotrack::rt {
+namespace {
+
+timespec toTimespec(TimeNs t_ns) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(t_ns / kNsPerSecond);
+  ts.tv_nsec = static_cast<long>(t_ns % kNsPerSecond);
+  return ts;
+}
+
+// Sleeps until deadline_ns on CLOCK_MONOTONIC, waking at least every poll_ns to check stop.
+// Returns false if stop was requested.
+bool sleepUntil(TimeNs deadline_ns, const MonotonicClock& clock, DurationNs poll_ns, const std::atomic<bool>& stop) {
+  for (;;) {
+    if (stop.load(std::memory_order_acquire)) return false;
+    const TimeNs now = clock.now();
+    if (now >= deadline_ns) return true;
+    const TimeNs wake_ns = std::min(deadline_ns, now + poll_ns);
+    const timespec ts = toTimespec(wake_ns);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+  }
+}
+
+}  // namespace
+
+RealtimeExecutor::RealtimeExecutor(const MonotonicClock& clock, RealtimeOptions options)
+    : clock_(clock), options_(options) {}
+
+RealtimeExecutor::~RealtimeExecutor() {
+  requestStop();
+  join();
+}
+
+Status RealtimeExecutor::add(const TaskBinding& binding) {
+  if (!threads_.empty()) return Error{"cannot add task '" + binding.spec.name + "' after start()"};
+  if (Status s = validate(binding.spec); !s) return s;
+  if (binding.task == nullptr) return Error{"task '" + binding.spec.name + "' has no implementation"};
+  if (!binding.spec.periodic() && binding.doorbell == nullptr)
+    return Error{"event task '" + binding.spec.name + "' has no doorbell for trigger '" + binding.spec.trigger + "'"};
+  for (const Entry& e : entries_)
+    if (e.binding.spec.name == binding.spec.name) return Error{"task '" + binding.spec.name + "' added twice"};
+  Entry entry;
+  entry.binding = binding;
+  entry.period_ns = binding.spec.periodic() ? periodFromRateHz(binding.spec.rate_hz) : 0;
+  entry.stats = std::make_unique<TimingStats>(millisecondsToNs(binding.spec.budget_ms));
+  entries_.push_back(std::move(entry));
+  return ok();
+}
+
+Expected<std::vector<std::string>> RealtimeExecutor::start() {
+  if (!threads_.empty()) return Error{"executor already started"};
+  std::vector<std::string> warnings;
+  if (options_.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+    warnings.push_back(std::string("mlockall refused (") + std::strerror(errno) + "): memory may be paged out");
+
+  // Threads wait at this gate until every one has its priority and affinity, then all start
+  // from one common release time so that rate-related tasks stay in phase.
+  std::atomic<bool> go{false};
+  TimeNs first_release_ns = 0;
+  try {
+    for (Entry& e : entries_) {
+      threads_.emplace_back([this, &e, &go, &first_release_ns] {
+        go.wait(false, std::memory_order_acquire);
+        if (e.binding.spec.periodic()) runPeriodic(e, first_release_ns);
+        else runEvent(e);
+      });
+    }
+  } catch (const std::system_error& ex) {
+    requestStop();
+    go.store(true, std::memory_order_release);
+    go.notify_all();
+    join();
+    return Error{std::string("could not start a task thread: ") + ex.what()};
+  }
+
+  for (std::size_t i = 0; i < entries_.size(); ++i) {
+    const TaskSpec& spec = entries_[i].binding.spec;
+    const pthread_t handle = threads_[i].native_handle();
+    pthread_setname_np(handle, spec.name.substr(0, 15).c_str());
+    if (options_.use_realtime_priority && spec.priority > 0) {
+      sched_param param{};
+      param.sched_priority = spec.priority;
+      if (const int err = pthread_setschedparam(handle, SCHED_FIFO, &param); err != 0)
+        warnings.push_back("task '" + spec.name + "': SCHED_FIFO priority " + std::to_string(spec.priority) +
+                           " refused (" + std::strerror(err) + "); running at normal priority");
+    }
+    if (options_.use_affinity && spec.cpu >= 0) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(spec.cpu, &set);
+      if (const int err = pthread_setaffinity_np(handle, sizeof(set), &set); err != 0)
+        warnings.push_back("task '" + spec.name + "': pinning to CPU " + std::to_string(spec.cpu) + " refused (" +
+                           std::strerror(err) + ")");
+    }
+  }
+  first_release_ns = clock_.now();
+  go.store(true, std::memory_order_release);
+  go.notify_all();
+  // `go` and `first_release_ns` live on this stack frame: wait until every thread has passed the
+  // gate before returning. Each thread copies first_release_ns before its first sleep.
+  for (std::size_t n = started_.load(std::memory_order_acquire); n < entries_.size(); n = started_.load(std::memory_order_acquire))
+    started_.wait(n, std::memory_order_acquire);
+  return warnings;
+}
+
+void RealtimeExecutor::runPeriodic(Entry& e, TimeNs first_release_ns) {
+  started_.fetch_add(1, std::memory_order_acq_rel);
+  started_.notify_all();
+  TimingStats& stats = *e.stats;
+  TimeNs release_ns = first_release_ns;
+  while (sleepUntil(release_ns, clock_, options_.stop_poll_ns, stop_)) {
+    const TimeNs wake_ns = clock_.now();
+    stats.recordWakeLatency(wake_ns - release_ns);
+    e.binding.task->step(wake_ns);
+    const TimeNs end_ns = clock_.now();
+    stats.recordRun(end_ns - wake_ns);
+    release_ns += e.period_ns;
+    if (end_ns > release_ns) {
+      // Overran into later periods: skip them and resynchronise to the next future release.
+      const auto skipped = static_cast<std::uint64_t>((end_ns - release_ns) / e.period_ns) + 1;
+      stats.addMissedDeadlines(skipped);
+      release_ns += static_cast<DurationNs>(skipped) * e.period_ns;
+    }
+  }
+}
+
+void RealtimeExecutor::runEvent(Entry& e) {
+  started_.fetch_add(1, std::memory_order_acq_rel);
+  started_.notify_all();
+  TimingStats& stats = *e.stats;
+  Doorbell& doorbell = *e.binding.doorbell;
+  while (!stop_.load(std::memory_order_acquire)) {
+    if (!doorbell.waitFor(options_.stop_poll_ns)) continue;
+    doorbell.consume();
+    const TimeNs begin_ns = clock_.now();
+    e.binding.task->step(begin_ns);
+    stats.recordRun(clock_.now() - begin_ns);
+  }
+}
+
+void RealtimeExecutor::join() {
+  for (std::thread& t : threads_)
+    if (t.joinable()) t.join();
+}
+
+std::vector<RealtimeExecutor::NamedStats> RealtimeExecutor::stats() const {
+  std::vector<NamedStats> out;
+  out.reserve(entries_.size());
+  for (const Entry& e : entries_) out.push_back({e.binding.spec.name, e.stats.get()});
+  return out;
+}
+
+}  // namespace aerotrack::rt

@@ -1,0 +1,32 @@
+// Validation of task-table rows.
+#include "aerotrack/rt/task.hpp"
+
+#include <cmath>
+#include <set>
+
+namespace aerotrack::rt {
+
+Status validate(const TaskSpec& spec) {
+  const std::string where = "task '" + spec.name + "': ";
+  if (spec.name.empty()) return Error{"task with an empty name"};
+  if (!std::isfinite(spec.rate_hz) || spec.rate_hz < 0.0 || spec.rate_hz > 100000.0)
+    return Error{where + "rate_hz must be in [0, 100000]"};
+  if (spec.periodic() == !spec.trigger.empty())
+    return Error{where + "needs exactly one of rate_hz (periodic) or trigger (event)"};
+  if (!std::isfinite(spec.budget_ms) || spec.budget_ms <= 0.0 || spec.budget_ms > 10000.0)
+    return Error{where + "budget_ms must be in (0, 10000]"};
+  if (spec.priority < 0 || spec.priority > 99) return Error{where + "priority must be in [0, 99]"};
+  if (spec.cpu < -1 || spec.cpu > 1023) return Error{where + "cpu must be -1 (any) or in [0, 1023]"};
+  return ok();
+}
+
+Status validate(const std::vector<TaskSpec>& table) {
+  std::set<std::string> names;
+  for (const TaskSpec& spec : table) {
+    if (Status s = validate(spec); !s) return s;
+    if (!names.insert(spec.name).second) return Error{"task '" + spec.name + "' appears twice in the table"};
+  }
+  return ok();
+}
+
+}  // namespace aerotrack::rt
