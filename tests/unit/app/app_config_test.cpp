@@ -1,0 +1,155 @@
+// The app's configuration: the shipped files load, --print-config output parses back to the same
+// configuration, and each error class names the file and the key.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "app_config.hpp"
+#include "scenario.hpp"
+#include "system.hpp"
+
+namespace aerotrack::app {
+namespace {
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const std::string kConfigDir = AEROTRACK_SOURCE_DIR "/config";
+
+/// config/sim.yaml with one line replaced (or removed if `with` is empty).
+std::string simYamlWith(const std::string& line, const std::string& with) {
+  std::string text = readFile(kConfigDir + "/sim.yaml");
+  const auto pos = text.find(line);
+  EXPECT_NE(pos, std::string::npos) << line;
+  text.replace(pos, line.size(), with);
+  return text;
+}
+
+std::string errorOf(const std::string& yaml) {
+  const auto c = parseAppConfig(yaml, "sim.yaml");
+  return c ? "" : c.error().message;
+}
+
+/// "sim.yaml:<line>" where <line> is the 1-based line of the first occurrence of needle.
+std::string at(const std::string& yaml, const std::string& needle) {
+  const auto pos = yaml.find(needle);
+  EXPECT_NE(pos, std::string::npos) << needle;
+  return "sim.yaml:" + std::to_string(1 + std::count(yaml.begin(), yaml.begin() + static_cast<long>(pos), '\n'));
+}
+
+TEST(AppConfig, ShippedConfigsLoad) {
+  for (const char* name : {"sim.yaml", "null.yaml"}) {
+    const auto c = loadAppConfig(kConfigDir + "/" + name);
+    ASSERT_TRUE(c) << c.error().message;
+    EXPECT_FALSE(c->tasks.empty());
+  }
+  const auto sim = loadAppConfig(kConfigDir + "/sim.yaml");
+  EXPECT_EQ(sim->hal.odometry, "sim");
+  EXPECT_EQ(sim->hal.gimbal, "null");
+  EXPECT_EQ(sim->tasks[0].name, "sim_world");
+  EXPECT_EQ(sim->tasks[0].rate_hz, 500.0);
+}
+
+TEST(AppConfig, PrintedConfigParsesBackToTheSameConfig) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml");
+  ASSERT_TRUE(c);
+  const std::string printed = toYaml(*c);
+  const auto again = parseAppConfig(printed, "printed.yaml");
+  ASSERT_TRUE(again) << again.error().message << "\n" << printed;
+  EXPECT_EQ(toYaml(*again), printed);
+}
+
+TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
+  const std::string yaml = simYamlWith("  max_speed_mps: 3.0", "  max_speed_mps: 3.0\n  max_sped_mps: 2.0");
+  EXPECT_EQ(errorOf(yaml), at(yaml, "max_sped_mps") + ": vehicle.max_sped_mps: unknown key");
+}
+
+TEST(AppConfig, GivenMissingKeyThenErrorNamesIt) {
+  // The line is that of the map missing the key (yaml-cpp marks a map at its first key).
+  const std::string yaml = simYamlWith("  radius_m: 0.25          # collision sphere (paper: 300 x 300 mm frame)\n", "");
+  EXPECT_EQ(errorOf(yaml), at(yaml, "  max_speed_mps") + ": vehicle.radius_m: missing required key");
+}
+
+TEST(AppConfig, GivenWrongTypeThenErrorNamesIt) {
+  const std::string yaml = simYamlWith("max_accel_mps2: 4.0", "max_accel_mps2: fast");
+  EXPECT_EQ(errorOf(yaml), at(yaml, "max_accel_mps2: fast") + ": vehicle.max_accel_mps2: expected a number, got 'fast'");
+}
+
+TEST(AppConfig, GivenOutOfRangeThenErrorNamesIt) {
+  const std::string rate = simYamlWith("rate_hz: 500,", "rate_hz: -5,");
+  EXPECT_EQ(errorOf(rate), at(rate, "rate_hz: -5") + ": tasks[0].rate_hz: -5 is out of range [0, 100000]");
+  const std::string radius = simYamlWith("radius_m: 0.25", "radius_m: 7");
+  EXPECT_EQ(errorOf(radius), at(radius, "radius_m: 7") + ": vehicle.radius_m: 7 is out of range [0.05, 2]");
+}
+
+TEST(AppConfig, GivenBadTaskRowsThenErrorNamesTheRow) {
+  const std::string both = simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: x, rate_hz: 100,");
+  EXPECT_EQ(errorOf(both), at(both, "{name: odometry") +
+                               ": tasks[1]: task 'odometry': needs exactly one of rate_hz (periodic) or trigger (event)");
+  const std::string twice = simYamlWith("{name: odometry, ", "{name: sim_world, ");
+  EXPECT_EQ(errorOf(twice), at(twice, "  - {name: sim_world") + ": tasks: task 'sim_world' appears twice in the table");
+}
+
+TEST(AppConfig, GivenBadBackendThenErrorNamesIt) {
+  const std::string yaml = simYamlWith("odometry: sim", "odometry: vicon");
+  EXPECT_EQ(errorOf(yaml), at(yaml, "odometry: vicon") + ": hal.odometry: 'vicon' is not one of: null, sim");
+}
+
+TEST(System, GivenUnknownTaskNameThenErrorNamesTheRow) {
+  const auto c = parseAppConfig(simYamlWith("{name: odometry, ", "{name: odometer, "), "sim.yaml");
+  ASSERT_TRUE(c);
+  const auto s = System::build(*c, 0);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().message,
+            "sim.yaml: tasks[1].name: unknown task 'odometer' (known: sim_world, odometry, trajectory_server)");
+}
+
+TEST(System, GivenSimBackendWithoutWorldTaskThenError) {
+  const auto c = parseAppConfig(simYamlWith("  - {name: sim_world,         rate_hz: 500, budget_ms: 0.5, priority: 90, cpu: -1}\n", ""), "sim.yaml");
+  ASSERT_TRUE(c);
+  const auto s = System::build(*c, 0);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("no 'sim_world' task"), std::string::npos);
+}
+
+TEST(System, GivenEventTaskOnUnknownChannelThenError) {
+  const auto c = parseAppConfig(simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: imu,"), "sim.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  const auto s = System::build(*c, 0);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().message.rfind("sim.yaml: tasks[1].trigger: unknown channel 'imu'", 0), 0U);
+}
+
+TEST(System, GivenShippedSimConfigThenOneBindingPerRowInTableOrder) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml");
+  auto s = System::build(*c, 0);
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ((*s)->bindings().size(), c->tasks.size());
+  for (std::size_t i = 0; i < c->tasks.size(); ++i) EXPECT_EQ((*s)->bindings()[i].spec.name, c->tasks[i].name);
+  EXPECT_NE((*s)->devices().world, nullptr);
+}
+
+TEST(Scenario, ShippedScenarioLoads) {
+  const auto s = loadScenario(kConfigDir + "/scenarios/open.yaml");
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_EQ(s->name, "open");
+  EXPECT_EQ(s->tour_waypoints_m.size(), 5U);
+}
+
+TEST(Scenario, GivenMalformedFieldThenErrorNamesIt) {
+  std::string text = readFile(kConfigDir + "/scenarios/open.yaml");
+  text.replace(text.find("start_m: [0.0, 0.0, 0.0]"), 24, "start_m: [0.0, 0.0]");
+  const auto s = parseScenario(text, "open.yaml");
+  ASSERT_FALSE(s);
+  const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(text.find("start_m:")), '\n');
+  EXPECT_EQ(s.error().message, "open.yaml:" + std::to_string(line) + ": drone.start_m: expected 3 numbers, got 2");
+}
+
+}  // namespace
+}  // namespace aerotrack::app

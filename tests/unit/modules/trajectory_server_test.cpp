@@ -1,0 +1,123 @@
+// Trajectory server and the minimum-jerk tour: closed-form values, limits, derivatives against
+// finite differences, yaw along the velocity.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "aerotrack/trajectory_server/min_jerk_tour.hpp"
+#include "aerotrack/trajectory_server/trajectory_server.hpp"
+
+namespace aerotrack::trajectory_server {
+namespace {
+
+MinJerkTour makeTour(double vmax = 2.0, double amax = 2.0) {
+  auto tour = MinJerkTour::create({{0, 0, 0}, {4, 0, 0}, {4, 3, 0}}, vmax, amax);
+  EXPECT_TRUE(tour);
+  return std::move(tour.value());
+}
+
+TEST(MinJerkTour, GivenBadInputThenError) {
+  EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}}, 1, 1));
+  EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}, {1, 0, 0}}, 0, 1));
+  EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}, {NAN, 0, 0}}, 1, 1));
+}
+
+TEST(MinJerkTour, LegDurationIsTheSmallestThatRespectsBothLimits) {
+  const MinJerkTour tour = makeTour(2.0, 2.0);
+  // 4 m: speed needs 1.875*4/2 = 3.75 s, accel needs sqrt(5.7735*4/2) = 3.398 s
+  EXPECT_NEAR(tour.legDurationsS()[0], 3.75, 1e-9);
+  // 3 m: speed 2.8125 s, accel sqrt(5.7735*3/2) = 2.9428 s
+  EXPECT_NEAR(tour.legDurationsS()[1], std::sqrt(10.0 / std::sqrt(3.0) * 3.0 / 2.0), 1e-9);
+  EXPECT_NEAR(tour.durationS(), tour.legDurationsS()[0] + tour.legDurationsS()[1], 1e-12);
+}
+
+TEST(MinJerkTour, PassesThroughWaypointsAtRestAndHoldsAfterTheEnd) {
+  const MinJerkTour tour = makeTour();
+  const double t1 = tour.legDurationsS()[0];
+  for (double t : {0.0, t1, tour.durationS(), tour.durationS() + 5.0, -1.0}) {
+    const TrajectorySample s = tour.sample(t);
+    EXPECT_LT(s.v_W_mps.norm(), 1e-9) << t;
+    EXPECT_LT(s.a_W_mps2.norm(), 1e-9) << t;
+  }
+  EXPECT_LT((tour.sample(t1).p_W_m - Eigen::Vector3d(4, 0, 0)).norm(), 1e-12);
+  EXPECT_LT((tour.sample(99).p_W_m - Eigen::Vector3d(4, 3, 0)).norm(), 1e-12);
+  EXPECT_LT((tour.sample(t1 / 2).p_W_m - Eigen::Vector3d(2, 0, 0)).norm(), 1e-12);  // symmetric
+}
+
+TEST(MinJerkTour, RespectsSpeedAndAccelerationLimitsEverywhere) {
+  const MinJerkTour tour = makeTour(1.5, 1.0);
+  double vmax = 0, amax = 0;
+  for (double t = 0; t <= tour.durationS(); t += 0.001) {
+    vmax = std::max(vmax, tour.sample(t).v_W_mps.norm());
+    amax = std::max(amax, tour.sample(t).a_W_mps2.norm());
+  }
+  EXPECT_LE(vmax, 1.5 + 1e-9);
+  EXPECT_LE(amax, 1.0 + 1e-9);
+  EXPECT_GT(std::max(vmax / 1.5, amax / 1.0), 0.999);  // and one of them is reached
+}
+
+TEST(MinJerkTour, VelocityAndAccelerationMatchFiniteDifferences) {
+  const MinJerkTour tour = makeTour();
+  const double h = 1e-5;
+  for (double t = 0.1; t < tour.durationS() - 0.1; t += 0.37) {
+    const Eigen::Vector3d v_fd = (tour.sample(t + h).p_W_m - tour.sample(t - h).p_W_m) / (2 * h);
+    const Eigen::Vector3d a_fd = (tour.sample(t + h).v_W_mps - tour.sample(t - h).v_W_mps) / (2 * h);
+    EXPECT_LT((v_fd - tour.sample(t).v_W_mps).norm(), 1e-6) << t;
+    EXPECT_LT((a_fd - tour.sample(t).a_W_mps2).norm(), 1e-6) << t;
+  }
+}
+
+TEST(TrajectoryServer, GivenNoTrajectoryThenNoSetpoint) {
+  TrajectoryServer server(TrajectoryServerParams{});
+  EXPECT_FALSE(server.sample(0).has_value());
+}
+
+TEST(TrajectoryServer, GivenMovingTrajectoryThenYawFollowsVelocityAndYawRateMatchesItsDerivative) {
+  const auto tour = std::make_shared<const MinJerkTour>(makeTour());
+  TrajectoryServerParams params;
+  params.initial_yaw_rad = 1.0;
+  TrajectoryServer server(params);
+  const rt::TimeNs start = 1'000'000'000;
+  server.setTrajectory({tour, start});
+
+  const auto before = server.sample(0);  // before the start: first state, initial yaw held
+  ASSERT_TRUE(before);
+  EXPECT_EQ(before->yaw_rad, 1.0);
+  EXPECT_LT(before->p_W_m.norm(), 1e-12);
+
+  const double t1 = tour->legDurationsS()[0];
+  const auto on_leg1 = server.sample(start + rt::secondsToNs(t1 / 2));
+  EXPECT_NEAR(on_leg1->yaw_rad, 0.0, 1e-9);  // flying +x
+  const auto on_leg2 = server.sample(start + rt::secondsToNs(t1 + tour->legDurationsS()[1] / 2));
+  EXPECT_NEAR(on_leg2->yaw_rad, M_PI / 2, 1e-9);  // flying +y
+  EXPECT_EQ(on_leg2->stamp_ns, start + rt::secondsToNs(t1 + tour->legDurationsS()[1] / 2));
+
+  const auto after = server.sample(start + rt::secondsToNs(100));
+  EXPECT_NEAR(after->yaw_rad, M_PI / 2, 1e-9);  // held after stopping
+  EXPECT_LT((after->p_W_m - Eigen::Vector3d(4, 3, 0)).norm(), 1e-12);
+}
+
+/// A circle at constant speed: yaw rate is speed / radius.
+class Circle final : public Trajectory {
+ public:
+  double durationS() const override { return 100; }
+  TrajectorySample sample(double t) const override {
+    const double w = 0.5, r = 2.0;
+    TrajectorySample s;
+    s.p_W_m = {r * std::cos(w * t), r * std::sin(w * t), 1};
+    s.v_W_mps = {-r * w * std::sin(w * t), r * w * std::cos(w * t), 0};
+    s.a_W_mps2 = {-r * w * w * std::cos(w * t), -r * w * w * std::sin(w * t), 0};
+    return s;
+  }
+};
+
+TEST(TrajectoryServer, GivenCircleThenYawRateIsSpeedOverRadius) {
+  TrajectoryServer server(TrajectoryServerParams{});
+  server.setTrajectory({std::make_shared<const Circle>(), 0});
+  const auto sp = server.sample(rt::secondsToNs(3.0));
+  EXPECT_NEAR(sp->yaw_rate_radps, 0.5, 1e-9);
+  EXPECT_NEAR(std::remainder(sp->yaw_rad - (0.5 * 3.0 + M_PI / 2), 2 * M_PI), 0.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace aerotrack::trajectory_server
