@@ -58,7 +58,9 @@ rt::Expected<AppConfig> parseFrom(rt::Expected<rt::ConfigNode> root) {
 
 }  // namespace
 
-rt::Expected<AppConfig> loadAppConfig(const std::string& path) { return parseFrom(rt::ConfigNode::loadFile(path)); }
+rt::Expected<AppConfig> loadAppConfig(const std::string& path) {
+  return parseFrom(rt::ConfigNode::loadFile(path));
+}
 
 rt::Expected<AppConfig> parseAppConfig(const std::string& yaml_text, const std::string& source_name) {
   return parseFrom(rt::ConfigNode::fromString(yaml_text, source_name));
@@ -87,8 +89,10 @@ std::string toYaml(const AppConfig& c) {
   out << YAML::Key << "tasks" << YAML::Value << YAML::BeginSeq;
   for (const rt::TaskSpec& t : c.tasks) {
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << t.name;
-    if (t.periodic()) out << YAML::Key << "rate_hz" << YAML::Value << t.rate_hz;
-    else out << YAML::Key << "trigger" << YAML::Value << t.trigger;
+    if (t.periodic())
+      out << YAML::Key << "rate_hz" << YAML::Value << t.rate_hz;
+    else
+      out << YAML::Key << "trigger" << YAML::Value << t.trigger;
     out << YAML::Key << "budget_ms" << YAML::Value << t.budget_ms;
     out << YAML::Key << "priority" << YAML::Value << t.priority;
     out << YAML::Key << "cpu" << YAML::Value << t.cpu << YAML::EndMap;

@@ -15,7 +15,7 @@
 namespace aerotrack::app {
 
 struct VehicleConfig {
-  double radius_m = 0.25;       ///< Collision radius (paper: 300 x 300 mm frame).
+  double radius_m = 0.25;  ///< Collision radius (paper: 300 x 300 mm frame).
   double max_speed_mps = 3.0;
   double max_accel_mps2 = 4.0;
 };

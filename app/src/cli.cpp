@@ -15,12 +15,16 @@ std::string ParsedArgs::valueOr(const std::string& name, const std::string& fall
 
 std::vector<CommandSpec> commandTable() {
   return {
-      {"run", "the onboard executable: devices from config, real-time executor", "",
+      {"run",
+       "the onboard executable: devices from config, real-time executor",
+       "",
        {{"config", "FILE", true, "configuration YAML (backends, tasks, parameters)"},
         {"print-config", "", false, "print the effective configuration and exit"},
         {"duration-s", "S", false, "stop after S seconds (default: until SIGINT/SIGTERM)"}},
        ""},
-      {"sim", "closed-loop run in the built-in simulator (lockstep unless --realtime)", "",
+      {"sim",
+       "closed-loop run in the built-in simulator (lockstep unless --realtime)",
+       "",
        {{"scenario", "NAME|FILE", true, "scenario name in config/scenarios/ or a YAML file"},
         {"seed", "N", false, "random seed (default 1)"},
         {"out", "DIR", false, "write summary.json here (default out/sim-<scenario>-<seed>)"},
@@ -28,7 +32,9 @@ std::vector<CommandSpec> commandTable() {
         {"realtime", "", false, "run at 1x on the real-time executor instead of lockstep"},
         {"config", "FILE", false, "configuration YAML (default config/sim.yaml)"}},
        ""},
-      {"bench", "many seeded sim trials in parallel processes", "",
+      {"bench",
+       "many seeded sim trials in parallel processes",
+       "",
        {{"scenario", "NAME|FILE", true, ""},
         {"trials", "N", true, ""},
         {"speed", "MPS", false, ""},
@@ -36,15 +42,19 @@ std::vector<CommandSpec> commandTable() {
         {"out", "DIR", false, ""},
         {"jobs", "J", false, ""}},
        "issue 3 (simulator)"},
-      {"detect", "run the keypoint detector on an image or video", "IMAGE|VIDEO",
-       {{"model", "lightning|thunder|multipose", false, ""},
-        {"json", "", false, ""},
-        {"draw", "OUT.png", false, ""}},
+      {"detect",
+       "run the keypoint detector on an image or video",
+       "IMAGE|VIDEO",
+       {{"model", "lightning|thunder|multipose", false, ""}, {"json", "", false, ""}, {"draw", "OUT.png", false, ""}},
        "issue 5 (perception)"},
-      {"calibrate", "fit the localization regression", "",
+      {"calibrate",
+       "fit the localization regression",
+       "",
        {{"data", "TRAIN.csv", true, ""}, {"out", "PARAMS.yaml", true, ""}, {"model", "paper|pinhole", false, ""}},
        "issue 6 (localization)"},
-      {"eval-localization", "evaluate a fitted localization on test data", "",
+      {"eval-localization",
+       "evaluate a fitted localization on test data",
+       "",
        {{"data", "TEST.csv", true, ""}, {"params", "PARAMS.yaml", true, ""}, {"json", "", false, ""}},
        "issue 6 (localization)"},
   };
@@ -90,7 +100,8 @@ rt::Expected<ParsedArgs> parseArgs(const std::vector<std::string>& args, const s
       continue;
     }
     if (!inline_value) {
-      if (i + 1 >= args.size()) return rt::Error{command->name + ": option '--" + name + "' needs a value " + option->value_name};
+      if (i + 1 >= args.size())
+        return rt::Error{command->name + ": option '--" + name + "' needs a value " + option->value_name};
       inline_value = args[++i];
     }
     if (out.values.count(name) != 0) return rt::Error{command->name + ": option '--" + name + "' given twice"};

@@ -15,8 +15,8 @@
 namespace aerotrack::app {
 
 struct OptionSpec {
-  std::string name;       ///< Without the leading "--".
-  std::string value_name; ///< Empty: a flag without value.
+  std::string name;        ///< Without the leading "--".
+  std::string value_name;  ///< Empty: a flag without value.
   bool required = false;
   std::string help;
 };
@@ -26,7 +26,7 @@ struct CommandSpec {
   std::string summary;
   std::string positional;  ///< Name of the one positional argument ("IMAGE|VIDEO"), empty if none.
   std::vector<OptionSpec> options;
-  std::string landed_in;   ///< Non-empty: the capability has not landed; names the issue that brings it.
+  std::string landed_in;  ///< Non-empty: the capability has not landed; names the issue that brings it.
 };
 
 struct ParsedArgs {

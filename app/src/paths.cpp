@@ -13,7 +13,8 @@ std::string configDir() {
   if (!ec) {
     const std::filesystem::path bin = exe.parent_path();
     for (const auto& candidate : {bin / "../../config", bin / "../share/aerotrack/config"})
-      if (std::filesystem::is_directory(candidate, ec)) return std::filesystem::weakly_canonical(candidate, ec).string();
+      if (std::filesystem::is_directory(candidate, ec))
+        return std::filesystem::weakly_canonical(candidate, ec).string();
   }
   return "config";
 }

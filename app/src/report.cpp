@@ -24,10 +24,10 @@ std::string timingTable(const std::vector<TaskTiming>& timings) {
 nlohmann::json timingJson(const std::vector<TaskTiming>& timings) {
   nlohmann::json out = nlohmann::json::object();
   for (const TaskTiming& t : timings) {
-    out[t.name] = {{"runs", t.timing.runs},         {"overruns", t.timing.overruns},
-                   {"missed_deadlines", t.timing.missed_deadlines},
-                   {"p50_ms", t.timing.p50_ms},     {"p99_ms", t.timing.p99_ms},
-                   {"max_ms", t.timing.max_ms},     {"mean_ms", t.timing.mean_ms}};
+    out[t.name] = {
+        {"runs", t.timing.runs},      {"overruns", t.timing.overruns}, {"missed_deadlines", t.timing.missed_deadlines},
+        {"p50_ms", t.timing.p50_ms},  {"p99_ms", t.timing.p99_ms},     {"max_ms", t.timing.max_ms},
+        {"mean_ms", t.timing.mean_ms}};
   }
   return out;
 }
@@ -36,7 +36,8 @@ std::string deviceHealthReport(const hal::Devices& d, rt::TimeNs now_ns) {
   std::string out;
   const auto add = [&](const char* name, const hal::Device& device) {
     const hal::DeviceHealth h = device.health(now_ns);
-    out += std::string(name) + " (" + std::string(device.backend()) + "): " + hal::toString(h.state) + " - " + h.detail + "\n";
+    out += std::string(name) + " (" + std::string(device.backend()) + "): " + hal::toString(h.state) + " - " +
+           h.detail + "\n";
   };
   add("gimbal_camera", *d.gimbal_camera);
   add("depth_camera", *d.depth_camera);

@@ -4,11 +4,11 @@
 #include <cstdio>
 #include <thread>
 
+#include "aerotrack/rt/realtime_executor.hpp"
 #include "commands.hpp"
 #include "report.hpp"
 #include "signals.hpp"
 #include "system.hpp"
-#include "aerotrack/rt/realtime_executor.hpp"
 
 namespace aerotrack::app {
 

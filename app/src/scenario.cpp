@@ -6,7 +6,9 @@
 namespace aerotrack::app {
 namespace {
 
-Eigen::Vector3d toVector3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
+Eigen::Vector3d toVector3(const std::vector<double>& v) {
+  return {v[0], v[1], v[2]};
+}
 
 Scenario parseRoot(const rt::ConfigNode& root) {
   Scenario s;
@@ -35,7 +37,9 @@ rt::Expected<Scenario> parseFrom(rt::Expected<rt::ConfigNode> root) {
 
 }  // namespace
 
-rt::Expected<Scenario> loadScenario(const std::string& path) { return parseFrom(rt::ConfigNode::loadFile(path)); }
+rt::Expected<Scenario> loadScenario(const std::string& path) {
+  return parseFrom(rt::ConfigNode::loadFile(path));
+}
 
 rt::Expected<Scenario> parseScenario(const std::string& yaml_text, const std::string& source_name) {
   return parseFrom(rt::ConfigNode::fromString(yaml_text, source_name));

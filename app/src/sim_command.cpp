@@ -11,15 +11,15 @@
 #include <fstream>
 #include <thread>
 
+#include "aerotrack/rt/lockstep_executor.hpp"
+#include "aerotrack/rt/realtime_executor.hpp"
+#include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 #include "commands.hpp"
 #include "paths.hpp"
 #include "report.hpp"
 #include "scenario.hpp"
 #include "signals.hpp"
 #include "system.hpp"
-#include "aerotrack/rt/lockstep_executor.hpp"
-#include "aerotrack/rt/realtime_executor.hpp"
-#include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 
 namespace aerotrack::app {
 namespace {

@@ -1,12 +1,14 @@
 // Wiring: see system.hpp.
 #include "system.hpp"
 
-#include "device_tasks.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
+#include "device_tasks.hpp"
 
 namespace aerotrack::app {
 
-std::vector<std::string> System::knownTasks() { return {"sim_world", "odometry", "trajectory_server"}; }
+std::vector<std::string> System::knownTasks() {
+  return {"sim_world", "odometry", "trajectory_server"};
+}
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, rt::TimeNs start_ns) {
   std::unique_ptr<System> system(new System(config));
@@ -20,7 +22,8 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, rt:
     has_world_task = has_world_task || config.tasks[i].name == "sim_world";
   }
   if (system->devices_.world && !has_world_task)
-    return rt::Error{config.source + ": tasks: sim backends are configured but no 'sim_world' task steps the simulation"};
+    return rt::Error{config.source +
+                     ": tasks: sim backends are configured but no 'sim_world' task steps the simulation"};
   return system;
 }
 
@@ -46,10 +49,15 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   if (!spec.periodic()) {
     doorbells_.push_back(std::make_unique<rt::Doorbell>());
     doorbell = doorbells_.back().get();
-    if (spec.trigger == "odometry") channels_.odometry.attachDoorbell(doorbell);
-    else if (spec.trigger == "setpoints") channels_.setpoints.attachDoorbell(doorbell);
-    else if (spec.trigger == "trajectories") channels_.trajectories.attachDoorbell(doorbell);
-    else return rt::Error{where + ".trigger: unknown channel '" + spec.trigger + "' (known: odometry, setpoints, trajectories)"};
+    if (spec.trigger == "odometry")
+      channels_.odometry.attachDoorbell(doorbell);
+    else if (spec.trigger == "setpoints")
+      channels_.setpoints.attachDoorbell(doorbell);
+    else if (spec.trigger == "trajectories")
+      channels_.trajectories.attachDoorbell(doorbell);
+    else
+      return rt::Error{where + ".trigger: unknown channel '" + spec.trigger +
+                       "' (known: odometry, setpoints, trajectories)"};
   }
   tasks_.push_back(std::move(task));
   bindings_.push_back({spec, tasks_.back().get(), doorbell});

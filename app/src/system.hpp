@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "app_config.hpp"
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/rt/doorbell.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
+#include "app_config.hpp"
 
 namespace aerotrack::app {
 

@@ -25,7 +25,9 @@ std::string formatNumber(double v) {
 }  // namespace
 
 ConfigNode::ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path)
-    : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)),
+    : node_(std::move(node)),
+      source_(std::move(source)),
+      path_(std::move(path)),
       used_(std::make_shared<std::set<std::string>>()) {}
 
 Expected<ConfigNode> ConfigNode::fromString(const std::string& text, const std::string& source_name) {
@@ -64,14 +66,18 @@ std::string ConfigNode::locate(const YAML::Node& node, const std::string& key) c
   return locateAt(node, keyPath(key));
 }
 
-std::string ConfigNode::where() const { return locate(node_, ""); }
+std::string ConfigNode::where() const {
+  return locate(node_, "");
+}
 
 void ConfigNode::fail(const std::string& key, const std::string& message) const {
   const YAML::Node value = node_.IsMap() ? node_[key] : YAML::Node();
   throw ConfigError(locate(value.IsDefined() ? value : node_, key) + ": " + message);
 }
 
-bool ConfigNode::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+bool ConfigNode::has(const std::string& key) const {
+  return node_.IsMap() && node_[key].IsDefined();
+}
 
 YAML::Node ConfigNode::require(const std::string& key) const {
   used_->insert(key);
@@ -112,7 +118,9 @@ std::uint64_t ConfigNode::getUint64(const std::string& key) const {
   return scalarAs<std::uint64_t>(key, value, "a non-negative integer");
 }
 
-bool ConfigNode::getBool(const std::string& key) const { return scalarAs<bool>(key, require(key), "true or false"); }
+bool ConfigNode::getBool(const std::string& key) const {
+  return scalarAs<bool>(key, require(key), "true or false");
+}
 
 std::string ConfigNode::getString(const std::string& key) const {
   return scalarAs<std::string>(key, require(key), "a string");
@@ -122,7 +130,8 @@ std::string ConfigNode::getEnum(const std::string& key, std::initializer_list<co
   // YAML reads a bare `null` as "no value"; where "null" is an allowed name (null backends), it
   // means that name.
   const YAML::Node raw = node_.IsMap() ? node_[key] : YAML::Node();
-  const bool null_allowed = std::any_of(allowed.begin(), allowed.end(), [](const char* a) { return std::string(a) == "null"; });
+  const bool null_allowed =
+      std::any_of(allowed.begin(), allowed.end(), [](const char* a) { return std::string(a) == "null"; });
   if (null_allowed && raw.IsDefined() && raw.IsNull()) {
     used_->insert(key);
     return "null";
@@ -173,7 +182,8 @@ std::vector<std::vector<double>> ConfigNode::getDoubleRows(const std::string& ke
         fail(key, row_name + ": expected a number, got " + shortValue(row[c]));
       }
       if (!std::isfinite(v) || v < min || v > max)
-        fail(key, row_name + ": " + formatNumber(v) + " is out of range [" + formatNumber(min) + ", " + formatNumber(max) + "]");
+        fail(key, row_name + ": " + formatNumber(v) + " is out of range [" + formatNumber(min) + ", " +
+                      formatNumber(max) + "]");
       out.push_back(v);
     }
     rows.push_back(std::move(out));
@@ -225,7 +235,8 @@ std::vector<ConfigNode> ConfigNode::childList(const std::string& key) const {
   std::vector<ConfigNode> out;
   for (std::size_t i = 0; i < value.size(); ++i) {
     const std::string item_path = keyPath(key) + "[" + std::to_string(i) + "]";
-    if (!value[i].IsMap()) throw ConfigError(locateAt(value[i], item_path) + ": expected a map of keys, got " + shortValue(value[i]));
+    if (!value[i].IsMap())
+      throw ConfigError(locateAt(value[i], item_path) + ": expected a map of keys, got " + shortValue(value[i]));
     out.push_back(ConfigNode(value[i], source_, item_path));
   }
   return out;

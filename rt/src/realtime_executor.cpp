@@ -76,8 +76,10 @@ Expected<std::vector<std::string>> RealtimeExecutor::start() {
     for (Entry& e : entries_) {
       threads_.emplace_back([this, &e, &go, &first_release_ns] {
         go.wait(false, std::memory_order_acquire);
-        if (e.binding.spec.periodic()) runPeriodic(e, first_release_ns);
-        else runEvent(e);
+        if (e.binding.spec.periodic())
+          runPeriodic(e, first_release_ns);
+        else
+          runEvent(e);
       });
     }
   } catch (const std::system_error& ex) {
@@ -113,7 +115,8 @@ Expected<std::vector<std::string>> RealtimeExecutor::start() {
   go.notify_all();
   // `go` and `first_release_ns` live on this stack frame: wait until every thread has passed the
   // gate before returning. Each thread copies first_release_ns before its first sleep.
-  for (std::size_t n = started_.load(std::memory_order_acquire); n < entries_.size(); n = started_.load(std::memory_order_acquire))
+  for (std::size_t n = started_.load(std::memory_order_acquire); n < entries_.size();
+       n = started_.load(std::memory_order_acquire))
     started_.wait(n, std::memory_order_acquire);
   return warnings;
 }

@@ -33,7 +33,8 @@ double LatencyHistogram::quantileNs(double q) const {
   const std::uint64_t total = count();
   if (total == 0) return 0.0;
   // Rank of the q-quantile among the sorted samples (1-based, nearest-rank definition).
-  const auto rank = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(total))));
+  const auto rank = std::max<std::uint64_t>(
+      1, static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(total))));
   std::uint64_t seen = 0;
   for (std::size_t i = 0; i < kBuckets; ++i) {
     seen += buckets_[i].load(std::memory_order_relaxed);

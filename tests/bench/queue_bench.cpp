@@ -60,13 +60,15 @@ void twoThreads(benchmark::State& state, Push push, Pop pop) {
 
 void BM_SpscQueue_TwoThreads(benchmark::State& state) {
   SpscQueue<std::uint64_t> q(kCapacity, OverflowPolicy::kDropNewest);
-  twoThreads(state, [&](std::uint64_t i) { return q.try_push(i); }, [&](std::uint64_t& v) { return q.try_pop(v); });
+  twoThreads(
+      state, [&](std::uint64_t i) { return q.try_push(i); }, [&](std::uint64_t& v) { return q.try_pop(v); });
 }
 BENCHMARK(BM_SpscQueue_TwoThreads)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_ReaderWriterQueue_TwoThreads(benchmark::State& state) {
   moodycamel::ReaderWriterQueue<std::uint64_t> q(kCapacity);
-  twoThreads(state, [&](std::uint64_t i) { return q.try_enqueue(i); }, [&](std::uint64_t& v) { return q.try_dequeue(v); });
+  twoThreads(
+      state, [&](std::uint64_t i) { return q.try_enqueue(i); }, [&](std::uint64_t& v) { return q.try_dequeue(v); });
 }
 BENCHMARK(BM_ReaderWriterQueue_TwoThreads)->UseRealTime()->Unit(benchmark::kMillisecond);
 

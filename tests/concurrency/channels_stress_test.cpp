@@ -61,10 +61,18 @@ void stressQueue(OverflowPolicy policy, std::size_t capacity) {
   }
 }
 
-TEST(SpscQueueStress, DropNewestSmallQueueKeepsOrderAndCounts) { stressQueue(OverflowPolicy::kDropNewest, 8); }
-TEST(SpscQueueStress, DropOldestSmallQueueKeepsOrderAndCounts) { stressQueue(OverflowPolicy::kDropOldest, 8); }
-TEST(SpscQueueStress, DropOldestTinyQueueKeepsOrderAndCounts) { stressQueue(OverflowPolicy::kDropOldest, 2); }
-TEST(SpscQueueStress, LargeQueueLosesNothingWhenConsumerKeepsUp) { stressQueue(OverflowPolicy::kDropNewest, 1 << 16); }
+TEST(SpscQueueStress, DropNewestSmallQueueKeepsOrderAndCounts) {
+  stressQueue(OverflowPolicy::kDropNewest, 8);
+}
+TEST(SpscQueueStress, DropOldestSmallQueueKeepsOrderAndCounts) {
+  stressQueue(OverflowPolicy::kDropOldest, 8);
+}
+TEST(SpscQueueStress, DropOldestTinyQueueKeepsOrderAndCounts) {
+  stressQueue(OverflowPolicy::kDropOldest, 2);
+}
+TEST(SpscQueueStress, LargeQueueLosesNothingWhenConsumerKeepsUp) {
+  stressQueue(OverflowPolicy::kDropNewest, 1 << 16);
+}
 
 TEST(SpscQueueStress, SharedHandlesAreNeitherLeakedNorFreedTwice) {
   SpscQueue<std::shared_ptr<const std::vector<int>>> q(4, OverflowPolicy::kDropOldest);

@@ -4,11 +4,11 @@
 
 #include <cstring>
 
+#include "aerotrack/rt/lockstep_executor.hpp"
+#include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 #include "app_config.hpp"
 #include "scenario.hpp"
 #include "system.hpp"
-#include "aerotrack/rt/lockstep_executor.hpp"
-#include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 
 namespace aerotrack::app {
 namespace {
@@ -30,9 +30,9 @@ RunResult flyOpenScenario() {
   waypoints.insert(waypoints.end(), scenario->tour_waypoints_m.begin(), scenario->tour_waypoints_m.end());
   auto tour = trajectory_server::MinJerkTour::create(waypoints, 2.0, 2.0);
   EXPECT_TRUE(tour);
-  (*system)->channels().trajectories.write(std::make_shared<const trajectory_server::TimedTrajectory>(
-      trajectory_server::TimedTrajectory{std::make_shared<const trajectory_server::MinJerkTour>(tour.value()),
-                                         rt::secondsToNs(1.0)}));
+  (*system)->channels().trajectories.write(
+      std::make_shared<const trajectory_server::TimedTrajectory>(trajectory_server::TimedTrajectory{
+          std::make_shared<const trajectory_server::MinJerkTour>(tour.value()), rt::secondsToNs(1.0)}));
   rt::ManualClock clock(0);
   rt::MonotonicClock wall;
   rt::LockstepExecutor executor(clock, wall);

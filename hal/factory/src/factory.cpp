@@ -64,13 +64,19 @@ rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::PointMassP
   d.depth_camera = std::make_unique<null::NullDepthCamera>();
   d.gimbal = std::make_unique<null::NullGimbal>();
 
-  if (config.odometry == "sim") d.odometry = std::make_unique<sim::SimOdometry>(d.world);
-  else if (config.odometry == "null") d.odometry = std::make_unique<null::NullOdometry>();
-  else return rt::Error{"hal.odometry: unknown backend '" + config.odometry + "'"};
+  if (config.odometry == "sim")
+    d.odometry = std::make_unique<sim::SimOdometry>(d.world);
+  else if (config.odometry == "null")
+    d.odometry = std::make_unique<null::NullOdometry>();
+  else
+    return rt::Error{"hal.odometry: unknown backend '" + config.odometry + "'"};
 
-  if (config.vehicle_link == "sim") d.vehicle_link = std::make_unique<sim::SimVehicleLink>(d.world);
-  else if (config.vehicle_link == "null") d.vehicle_link = std::make_unique<null::NullVehicleLink>();
-  else return rt::Error{"hal.vehicle_link: unknown backend '" + config.vehicle_link + "'"};
+  if (config.vehicle_link == "sim")
+    d.vehicle_link = std::make_unique<sim::SimVehicleLink>(d.world);
+  else if (config.vehicle_link == "null")
+    d.vehicle_link = std::make_unique<null::NullVehicleLink>();
+  else
+    return rt::Error{"hal.vehicle_link: unknown backend '" + config.vehicle_link + "'"};
 
   return d;
 }

@@ -9,7 +9,9 @@ namespace {
 
 using rt::DurationNs;
 
-double wrapPi(double angle_rad) { return std::remainder(angle_rad, 2.0 * M_PI); }
+double wrapPi(double angle_rad) {
+  return std::remainder(angle_rad, 2.0 * M_PI);
+}
 
 }  // namespace
 

@@ -72,13 +72,15 @@ TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
 
 TEST(AppConfig, GivenMissingKeyThenErrorNamesIt) {
   // The line is that of the map missing the key (yaml-cpp marks a map at its first key).
-  const std::string yaml = simYamlWith("  radius_m: 0.25          # collision sphere (paper: 300 x 300 mm frame)\n", "");
+  const std::string yaml =
+      simYamlWith("  radius_m: 0.25          # collision sphere (paper: 300 x 300 mm frame)\n", "");
   EXPECT_EQ(errorOf(yaml), at(yaml, "  max_speed_mps") + ": vehicle.radius_m: missing required key");
 }
 
 TEST(AppConfig, GivenWrongTypeThenErrorNamesIt) {
   const std::string yaml = simYamlWith("max_accel_mps2: 4.0", "max_accel_mps2: fast");
-  EXPECT_EQ(errorOf(yaml), at(yaml, "max_accel_mps2: fast") + ": vehicle.max_accel_mps2: expected a number, got 'fast'");
+  EXPECT_EQ(errorOf(yaml),
+            at(yaml, "max_accel_mps2: fast") + ": vehicle.max_accel_mps2: expected a number, got 'fast'");
 }
 
 TEST(AppConfig, GivenOutOfRangeThenErrorNamesIt) {
@@ -89,9 +91,11 @@ TEST(AppConfig, GivenOutOfRangeThenErrorNamesIt) {
 }
 
 TEST(AppConfig, GivenBadTaskRowsThenErrorNamesTheRow) {
-  const std::string both = simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: x, rate_hz: 100,");
-  EXPECT_EQ(errorOf(both), at(both, "{name: odometry") +
-                               ": tasks[1]: task 'odometry': needs exactly one of rate_hz (periodic) or trigger (event)");
+  const std::string both =
+      simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: x, rate_hz: 100,");
+  EXPECT_EQ(errorOf(both),
+            at(both, "{name: odometry") +
+                ": tasks[1]: task 'odometry': needs exactly one of rate_hz (periodic) or trigger (event)");
   const std::string twice = simYamlWith("{name: odometry, ", "{name: sim_world, ");
   EXPECT_EQ(errorOf(twice), at(twice, "  - {name: sim_world") + ": tasks: task 'sim_world' appears twice in the table");
 }
@@ -111,7 +115,9 @@ TEST(System, GivenUnknownTaskNameThenErrorNamesTheRow) {
 }
 
 TEST(System, GivenSimBackendWithoutWorldTaskThenError) {
-  const auto c = parseAppConfig(simYamlWith("  - {name: sim_world,         rate_hz: 500, budget_ms: 0.5, priority: 90, cpu: -1}\n", ""), "sim.yaml");
+  const auto c = parseAppConfig(
+      simYamlWith("  - {name: sim_world,         rate_hz: 500, budget_ms: 0.5, priority: 90, cpu: -1}\n", ""),
+      "sim.yaml");
   ASSERT_TRUE(c);
   const auto s = System::build(*c, 0);
   ASSERT_FALSE(s);
@@ -119,7 +125,8 @@ TEST(System, GivenSimBackendWithoutWorldTaskThenError) {
 }
 
 TEST(System, GivenEventTaskOnUnknownChannelThenError) {
-  const auto c = parseAppConfig(simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: imu,"), "sim.yaml");
+  const auto c = parseAppConfig(
+      simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: imu,"), "sim.yaml");
   ASSERT_TRUE(c) << c.error().message;
   const auto s = System::build(*c, 0);
   ASSERT_FALSE(s);

@@ -6,7 +6,9 @@
 namespace aerotrack::app {
 namespace {
 
-rt::Expected<ParsedArgs> parse(std::vector<std::string> args) { return parseArgs(args, commandTable()); }
+rt::Expected<ParsedArgs> parse(std::vector<std::string> args) {
+  return parseArgs(args, commandTable());
+}
 
 TEST(Cli, GivenNoArgumentsThenErrorSuggestsHelp) {
   const auto a = parse({});
@@ -41,8 +43,10 @@ TEST(Cli, GivenBadOptionsThenOneLineErrors) {
   EXPECT_EQ(parse({"sim", "--scenario", "open", "--sead", "1"}).error().message, "sim: unknown option '--sead'");
   EXPECT_EQ(parse({"sim", "--scenario"}).error().message, "sim: option '--scenario' needs a value NAME|FILE");
   EXPECT_EQ(parse({"sim"}).error().message, "sim: missing required option --scenario NAME|FILE");
-  EXPECT_EQ(parse({"sim", "--scenario", "a", "--scenario", "b"}).error().message, "sim: option '--scenario' given twice");
-  EXPECT_EQ(parse({"sim", "--scenario", "a", "--realtime=yes"}).error().message, "sim: option '--realtime' takes no value");
+  EXPECT_EQ(parse({"sim", "--scenario", "a", "--scenario", "b"}).error().message,
+            "sim: option '--scenario' given twice");
+  EXPECT_EQ(parse({"sim", "--scenario", "a", "--realtime=yes"}).error().message,
+            "sim: option '--realtime' takes no value");
   EXPECT_EQ(parse({"run", "--config", "a", "extra"}).error().message, "run: unexpected argument 'extra'");
   EXPECT_EQ(parse({"detect"}).error().message, "detect: missing argument IMAGE|VIDEO");
 }

@@ -35,7 +35,8 @@ TEST(ConfigNode, GivenMissingKeyThenErrorNamesFileAndKey) {
 }
 
 TEST(ConfigNode, GivenNestedMissingKeyThenErrorNamesFullPath) {
-  const std::string e = errorOf("vehicle:\n  radius_m: 1\n", [](const ConfigNode& n) { n.child("vehicle").getDouble("max_speed_mps", 0, 9); });
+  const std::string e = errorOf("vehicle:\n  radius_m: 1\n",
+                                [](const ConfigNode& n) { n.child("vehicle").getDouble("max_speed_mps", 0, 9); });
   EXPECT_EQ(e, "test.yaml:2: vehicle.max_speed_mps: missing required key");
 }
 
@@ -67,7 +68,10 @@ TEST(ConfigNode, GivenOutOfRangeThenErrorGivesValueAndRange) {
 }
 
 TEST(ConfigNode, GivenBadEnumThenErrorListsAllowedNames) {
-  EXPECT_EQ(errorOf("backend: real\n", [](const ConfigNode& n) { n.getEnum("backend", {"null", "sim"}); }),
+  EXPECT_EQ(errorOf("backend: real\n",
+                    [](const ConfigNode& n) {
+                      n.getEnum("backend", {"null", "sim"});
+                    }),
             "test.yaml:1: backend: 'real' is not one of: null, sim");
 }
 

@@ -33,9 +33,9 @@ struct CameraIntrinsics {
 
 /// One gimbal-camera image. Immutable once published; shared by handle.
 struct ImageFrame {
-  TimeNs stamp_ns = 0;        ///< Exposure time.
-  std::uint64_t sequence = 0; ///< Frame counter from the device; gaps mean dropped frames.
-  cv::Mat bgr;                ///< 8-bit BGR.
+  TimeNs stamp_ns = 0;         ///< Exposure time.
+  std::uint64_t sequence = 0;  ///< Frame counter from the device; gaps mean dropped frames.
+  cv::Mat bgr;                 ///< 8-bit BGR.
   CameraIntrinsics intrinsics;
 };
 using ImageFrameHandle = std::shared_ptr<const ImageFrame>;
@@ -44,7 +44,7 @@ using ImageFrameHandle = std::shared_ptr<const ImageFrame>;
 struct DepthFrame {
   TimeNs stamp_ns = 0;
   std::uint64_t sequence = 0;
-  cv::Mat depth_m;                 ///< CV_32FC1 range along the optical axis, metres; 0 or NaN: no data.
+  cv::Mat depth_m;  ///< CV_32FC1 range along the optical axis, metres; 0 or NaN: no data.
   CameraIntrinsics intrinsics;
   Eigen::Isometry3d T_BC = Eigen::Isometry3d::Identity();  ///< Depth camera C (z forward) in body B.
 };
@@ -62,8 +62,8 @@ struct GimbalCommand {
   enum class Mode : std::uint8_t { kRate, kAngle };
   TimeNs stamp_ns = 0;
   Mode mode = Mode::kRate;
-  double rate_radps = 0.0;   ///< kRate: commanded rate.
-  double angle_rad = 0.0;    ///< kAngle: target unwrapped angle.
+  double rate_radps = 0.0;      ///< kRate: commanded rate.
+  double angle_rad = 0.0;       ///< kAngle: target unwrapped angle.
   double max_rate_radps = 0.0;  ///< kAngle: speed limit (0: the device's default).
 };
 
@@ -72,8 +72,8 @@ struct OdometrySample {
   TimeNs stamp_ns = 0;
   Eigen::Vector3d p_WB_m = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d v_WB_mps = Eigen::Vector3d::Zero();   ///< Velocity of B in W, expressed in W.
-  Eigen::Vector3d w_WB_B_radps = Eigen::Vector3d::Zero(); ///< Angular velocity, expressed in B.
+  Eigen::Vector3d v_WB_mps = Eigen::Vector3d::Zero();      ///< Velocity of B in W, expressed in W.
+  Eigen::Vector3d w_WB_B_radps = Eigen::Vector3d::Zero();  ///< Angular velocity, expressed in B.
 };
 
 /// Full-state setpoint for the flight controller (PX4 offboard / ArduPilot guided style).
@@ -104,8 +104,8 @@ struct DeviceHealth {
     kAbsent,    ///< Null backend: there is no such device on this vehicle.
   };
   State state = State::kAbsent;
-  std::string detail;           ///< One line for a person.
-  TimeNs last_sample_ns = 0;    ///< Stamp of the newest sample delivered (0: none yet).
+  std::string detail;         ///< One line for a person.
+  TimeNs last_sample_ns = 0;  ///< Stamp of the newest sample delivered (0: none yet).
   std::uint64_t error_count = 0;
 };
 
@@ -116,9 +116,9 @@ const char* toString(FlightMode mode);
 
 // The small state messages travel through rt::LatestSlot: Eigen members are fixed-size arrays of
 // doubles (see rt/bitwise_copyable.hpp).
-#define AEROTRACK_HAL_BITWISE(Type)                                               \
-  static_assert(std::is_standard_layout_v<aerotrack::hal::Type>);                 \
-  template <>                                                                     \
+#define AEROTRACK_HAL_BITWISE(Type)                               \
+  static_assert(std::is_standard_layout_v<aerotrack::hal::Type>); \
+  template <>                                                     \
   struct aerotrack::rt::IsBitwiseCopyable<aerotrack::hal::Type> : std::true_type {};
 AEROTRACK_HAL_BITWISE(OdometrySample)
 AEROTRACK_HAL_BITWISE(Setpoint)

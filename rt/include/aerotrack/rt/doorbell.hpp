@@ -17,9 +17,7 @@ class Doorbell {
   void ring();
 
   /// True if ring() was called since the last consume(). Any thread.
-  bool pending() const {
-    return rings_.load(std::memory_order_acquire) != consumed_.load(std::memory_order_relaxed);
-  }
+  bool pending() const { return rings_.load(std::memory_order_acquire) != consumed_.load(std::memory_order_relaxed); }
 
   /// Consumer side: clears pending() before the task drains its inputs, so that a ring() that
   /// races with the drain is never lost (it leaves pending() true for the next wait).

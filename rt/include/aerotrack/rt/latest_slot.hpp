@@ -22,8 +22,9 @@ namespace aerotrack::rt {
 
 template <class T>
 class LatestSlot {
-  static_assert(kIsBitwiseCopyable<T>, "LatestSlot copies T word by word (see bitwise_copyable.hpp); "
-                                       "pass large data as a SharedSlot handle");
+  static_assert(kIsBitwiseCopyable<T>,
+                "LatestSlot copies T word by word (see bitwise_copyable.hpp); "
+                "pass large data as a SharedSlot handle");
   static_assert(std::is_default_constructible_v<T>);
   static constexpr std::size_t kWords = (sizeof(T) + 7) / 8;
 

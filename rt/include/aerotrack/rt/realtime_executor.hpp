@@ -21,9 +21,9 @@
 namespace aerotrack::rt {
 
 struct RealtimeOptions {
-  bool use_realtime_priority = true;  ///< Try SCHED_FIFO with each task's priority (> 0).
-  bool use_affinity = true;           ///< Pin tasks whose cpu >= 0.
-  bool lock_memory = true;            ///< Try mlockall(MCL_CURRENT | MCL_FUTURE).
+  bool use_realtime_priority = true;                 ///< Try SCHED_FIFO with each task's priority (> 0).
+  bool use_affinity = true;                          ///< Pin tasks whose cpu >= 0.
+  bool lock_memory = true;                           ///< Try mlockall(MCL_CURRENT | MCL_FUTURE).
   DurationNs stop_poll_ns = 50 * kNsPerMillisecond;  ///< Longest sleep before re-checking stop.
 };
 

@@ -16,11 +16,11 @@ class Doorbell;
 /// One row of the task table.
 struct TaskSpec {
   std::string name;
-  double rate_hz = 0.0;   ///< > 0: periodic at this rate. 0: event-triggered.
-  std::string trigger;    ///< Event-triggered: name of the channel whose data wakes the task.
-  double budget_ms = 0.0; ///< Execution-time budget per run; a longer run counts as an overrun.
-  int priority = 0;       ///< SCHED_FIFO priority 1..99 on the real-time executor; 0: normal.
-  int cpu = -1;           ///< CPU to pin the task's thread to; -1: any.
+  double rate_hz = 0.0;    ///< > 0: periodic at this rate. 0: event-triggered.
+  std::string trigger;     ///< Event-triggered: name of the channel whose data wakes the task.
+  double budget_ms = 0.0;  ///< Execution-time budget per run; a longer run counts as an overrun.
+  int priority = 0;        ///< SCHED_FIFO priority 1..99 on the real-time executor; 0: normal.
+  int cpu = -1;            ///< CPU to pin the task's thread to; -1: any.
 
   bool periodic() const { return rate_hz > 0.0; }
 };

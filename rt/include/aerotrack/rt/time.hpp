@@ -15,15 +15,25 @@ inline constexpr DurationNs kNsPerSecond = 1'000'000'000;
 inline constexpr DurationNs kNsPerMillisecond = 1'000'000;
 
 /// Seconds to nanoseconds, rounded to the nearest nanosecond.
-inline DurationNs secondsToNs(double seconds) { return std::llround(seconds * 1e9); }
+inline DurationNs secondsToNs(double seconds) {
+  return std::llround(seconds * 1e9);
+}
 
 /// Milliseconds to nanoseconds, rounded to the nearest nanosecond.
-inline DurationNs millisecondsToNs(double milliseconds) { return std::llround(milliseconds * 1e6); }
+inline DurationNs millisecondsToNs(double milliseconds) {
+  return std::llround(milliseconds * 1e6);
+}
 
-inline constexpr double nsToSeconds(DurationNs ns) { return static_cast<double>(ns) * 1e-9; }
-inline constexpr double nsToMilliseconds(DurationNs ns) { return static_cast<double>(ns) * 1e-6; }
+inline constexpr double nsToSeconds(DurationNs ns) {
+  return static_cast<double>(ns) * 1e-9;
+}
+inline constexpr double nsToMilliseconds(DurationNs ns) {
+  return static_cast<double>(ns) * 1e-6;
+}
 
 /// The period of a task that runs at rate_hz, rounded to whole nanoseconds. rate_hz must be > 0.
-inline DurationNs periodFromRateHz(double rate_hz) { return std::llround(1e9 / rate_hz); }
+inline DurationNs periodFromRateHz(double rate_hz) {
+  return std::llround(1e9 / rate_hz);
+}
 
 }  // namespace aerotrack::rt

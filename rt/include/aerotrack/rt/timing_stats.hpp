@@ -18,8 +18,8 @@ namespace aerotrack::rt {
 /// A copy of a TimingStats at one moment, in milliseconds.
 struct TimingSnapshot {
   std::uint64_t runs = 0;
-  std::uint64_t overruns = 0;         ///< Runs whose execution time exceeded the budget.
-  std::uint64_t missed_deadlines = 0; ///< Periods skipped because a run ended after the next release.
+  std::uint64_t overruns = 0;          ///< Runs whose execution time exceeded the budget.
+  std::uint64_t missed_deadlines = 0;  ///< Periods skipped because a run ended after the next release.
   double p50_ms = 0.0;
   double p99_ms = 0.0;
   double max_ms = 0.0;

@@ -7,7 +7,9 @@
 
 namespace aerotrack::hal::null {
 
-inline DeviceHealth absentHealth() { return {DeviceHealth::State::kAbsent, "null backend: no device", 0, 0}; }
+inline DeviceHealth absentHealth() {
+  return {DeviceHealth::State::kAbsent, "null backend: no device", 0, 0};
+}
 
 class NullGimbalCamera final : public GimbalCamera {
  public:

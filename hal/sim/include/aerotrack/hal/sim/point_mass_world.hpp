@@ -20,11 +20,11 @@ namespace aerotrack::hal::sim {
 struct PointMassParams {
   Eigen::Vector3d start_p_W_m = Eigen::Vector3d::Zero();
   double start_yaw_rad = 0.0;
-  double position_gain_per_s2 = 6.0;   ///< Acceleration per metre of position error.
-  double velocity_gain_per_s = 4.0;    ///< Acceleration per m/s of velocity error.
-  double max_accel_mps2 = 8.0;         ///< Norm limit of the commanded acceleration.
+  double position_gain_per_s2 = 6.0;  ///< Acceleration per metre of position error.
+  double velocity_gain_per_s = 4.0;   ///< Acceleration per m/s of velocity error.
+  double max_accel_mps2 = 8.0;        ///< Norm limit of the commanded acceleration.
   double max_yaw_rate_radps = 3.0;
-  double substep_s = 0.001;            ///< Integration step (<= the physics task period).
+  double substep_s = 0.001;  ///< Integration step (<= the physics task period).
 };
 
 /// Ground truth of the simulated vehicle.
