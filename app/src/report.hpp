@@ -20,6 +20,7 @@ struct TaskTiming {
 template <class NamedStatsList>
 std::vector<TaskTiming> snapshotTimings(const NamedStatsList& stats) {
   std::vector<TaskTiming> out;
+  out.reserve(stats.size());
   for (const auto& s : stats) out.push_back({s.name, s.stats->snapshot()});
   return out;
 }

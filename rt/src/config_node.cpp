@@ -24,8 +24,8 @@ std::string formatNumber(double v) {
 
 }  // namespace
 
-ConfigNode::ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path)
-    : node_(std::move(node)),
+ConfigNode::ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path)
+    : node_(node),
       source_(std::move(source)),
       path_(std::move(path)),
       used_(std::make_shared<std::set<std::string>>()) {}
@@ -136,7 +136,7 @@ std::string ConfigNode::getEnum(const std::string& key, std::initializer_list<co
     used_->insert(key);
     return "null";
   }
-  const std::string v = getString(key);
+  std::string v = getString(key);
   std::string list;
   for (const char* a : allowed) {
     if (v == a) return v;

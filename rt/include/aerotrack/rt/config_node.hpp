@@ -74,7 +74,7 @@ class ConfigNode {
   const std::string& sourceName() const { return *source_; }
 
  private:
-  ConfigNode(YAML::Node node, std::shared_ptr<const std::string> source, std::string path);
+  ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path);
   YAML::Node require(const std::string& key) const;
   std::string keyPath(const std::string& key) const;
   std::string locate(const YAML::Node& node, const std::string& key) const;
