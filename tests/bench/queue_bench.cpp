@@ -19,7 +19,7 @@ constexpr std::size_t kCapacity = 1024;
 constexpr std::int64_t kBatch = 1 << 20;
 
 void BM_SpscQueue_PushPop(benchmark::State& state) {
-  SpscQueue<std::uint64_t> q(kCapacity, OverflowPolicy::kDropOldest);
+  SpscQueue<std::uint64_t> q(kCapacity, static_cast<OverflowPolicy>(state.range(0)));
   std::uint64_t v = 0;
   for (auto _ : state) {
     q.try_push(v);
@@ -27,7 +27,7 @@ void BM_SpscQueue_PushPop(benchmark::State& state) {
     benchmark::DoNotOptimize(v);
   }
 }
-BENCHMARK(BM_SpscQueue_PushPop);
+BENCHMARK(BM_SpscQueue_PushPop)->ArgName("drop_oldest")->Arg(0)->Arg(1);
 
 void BM_ReaderWriterQueue_PushPop(benchmark::State& state) {
   moodycamel::ReaderWriterQueue<std::uint64_t> q(kCapacity);
@@ -59,11 +59,11 @@ void twoThreads(benchmark::State& state, Push push, Pop pop) {
 }
 
 void BM_SpscQueue_TwoThreads(benchmark::State& state) {
-  SpscQueue<std::uint64_t> q(kCapacity, OverflowPolicy::kDropNewest);
+  SpscQueue<std::uint64_t> q(kCapacity, static_cast<OverflowPolicy>(state.range(0)));
   twoThreads(
       state, [&](std::uint64_t i) { return q.try_push(i); }, [&](std::uint64_t& v) { return q.try_pop(v); });
 }
-BENCHMARK(BM_SpscQueue_TwoThreads)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SpscQueue_TwoThreads)->ArgName("drop_oldest")->Arg(0)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_ReaderWriterQueue_TwoThreads(benchmark::State& state) {
   moodycamel::ReaderWriterQueue<std::uint64_t> q(kCapacity);

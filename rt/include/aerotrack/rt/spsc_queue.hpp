@@ -10,7 +10,9 @@
 //
 // Each slot carries a sequence number (as in Vyukov's bounded queue): slot i is free for
 // position p when seq == p, holds position p's item when seq == p + 1, and after a pop of
-// position p becomes free for p + capacity. Positions are 64-bit and never wrap in practice.
+// position p becomes free for p + capacity. Each side learns full/empty from the slot alone, so
+// neither reads the other's index on the hot path; only kDropOldest needs a compare-and-swap on
+// the consumer index. Positions are 64-bit and never wrap in practice.
 //
 // Guarantees: try_push and try_pop never block and never allocate (T's move assignment must not
 // allocate either; shared_ptr's does not). Exactly one producer thread and one consumer thread.
@@ -55,9 +57,9 @@ class SpscQueue {
   /// is reading exactly that item at this instant, in which case the new item is dropped and it
   /// returns false. Every dropped item (old or new) is counted in dropped().
   bool try_push(T item) {
-    const std::uint64_t pos = tail_.load(std::memory_order_relaxed);
+    const std::uint64_t pos = tail_;
     Slot& slot = slots_[pos & mask_];
-    if (slot.seq.load(std::memory_order_acquire) != pos) {  // full
+    if (slot.seq.load(std::memory_order_acquire) != pos) {  // full: the slot holds position pos - capacity
       dropped_.fetch_add(1, std::memory_order_relaxed);
       if (policy_ == OverflowPolicy::kDropNewest) return false;
       std::uint64_t oldest = pos - capacity_;
@@ -66,23 +68,33 @@ class SpscQueue {
     }
     slot.value = std::move(item);
     slot.seq.store(pos + 1, std::memory_order_release);
-    tail_.store(pos + 1, std::memory_order_release);
+    tail_ = pos + 1;
+    published_tail_.store(pos + 1, std::memory_order_relaxed);
     if (doorbell_ != nullptr) doorbell_->ring();
     return true;
   }
 
   /// Consumer thread only. Moves the oldest item into out; false if empty.
   bool try_pop(T& out) {
-    std::uint64_t pos = head_.load(std::memory_order_acquire);
     for (;;) {
-      if (pos == tail_.load(std::memory_order_acquire)) return false;
-      // The CAS fails only if the producer took this item (kDropOldest); pos is then reloaded.
-      if (head_.compare_exchange_weak(pos, pos + 1, std::memory_order_acq_rel, std::memory_order_acquire)) {
-        Slot& slot = slots_[pos & mask_];
-        out = std::move(slot.value);
-        slot.seq.store(pos + capacity_, std::memory_order_release);
-        return true;
+      const std::uint64_t pos = head_.load(std::memory_order_acquire);
+      Slot& slot = slots_[pos & mask_];
+      if (slot.seq.load(std::memory_order_acquire) != pos + 1) {
+        // Not filled for pos: empty -- unless the producer just took pos (kDropOldest), which
+        // moved head_ on; then look again.
+        if (policy_ == OverflowPolicy::kDropNewest || head_.load(std::memory_order_acquire) == pos) return false;
+        continue;
       }
+      if (policy_ == OverflowPolicy::kDropNewest) {
+        head_.store(pos + 1, std::memory_order_relaxed);  // only the consumer moves head_
+      } else {
+        std::uint64_t expected = pos;
+        // Fails only if the producer took this item to make room; then look again.
+        if (!head_.compare_exchange_strong(expected, pos + 1, std::memory_order_acq_rel)) continue;
+      }
+      out = std::move(slot.value);
+      slot.seq.store(pos + capacity_, std::memory_order_release);
+      return true;
     }
   }
 
@@ -92,9 +104,9 @@ class SpscQueue {
     return out;
   }
 
-  /// Approximate number of unread items (exact when neither side is active).
+  /// Approximate number of unread items (exact when neither side is active). Any thread.
   std::size_t size_approx() const {
-    const std::uint64_t tail = tail_.load(std::memory_order_acquire);
+    const std::uint64_t tail = published_tail_.load(std::memory_order_acquire);
     const std::uint64_t head = head_.load(std::memory_order_acquire);
     return tail >= head ? static_cast<std::size_t>(tail - head) : 0;
   }
@@ -114,9 +126,10 @@ class SpscQueue {
   const std::size_t mask_;
   const OverflowPolicy policy_;
   std::unique_ptr<Slot[]> slots_;
-  alignas(64) std::atomic<std::uint64_t> head_{0};  // next position to pop
-  alignas(64) std::atomic<std::uint64_t> tail_{0};  // next position to push (producer-owned)
-  alignas(64) std::atomic<std::uint64_t> dropped_{0};
+  alignas(64) std::atomic<std::uint64_t> head_{0};  // next position to pop (producer CASes it in kDropOldest)
+  alignas(64) std::uint64_t tail_ = 0;              // next position to push; producer thread only
+  std::atomic<std::uint64_t> published_tail_{0};    // tail_ for size_approx(); never read on the hot path
+  std::atomic<std::uint64_t> dropped_{0};
   Doorbell* doorbell_ = nullptr;
 };
 
