@@ -23,22 +23,8 @@ void hashMix(std::uint64_t& hash, std::uint64_t value) {
 LockstepExecutor::LockstepExecutor(ManualClock& sim_clock, const Clock& stats_clock)
     : clock_(sim_clock), stats_clock_(stats_clock) {}
 
-Status LockstepExecutor::add(const TaskBinding& binding) {
-  if (Status s = validate(binding.spec); !s) return s;
-  if (binding.task == nullptr) return Error{"task '" + binding.spec.name + "' has no implementation"};
-  if (!binding.spec.periodic() && binding.doorbell == nullptr)
-    return Error{"event task '" + binding.spec.name + "' has no doorbell for trigger '" + binding.spec.trigger + "'"};
-  for (const Entry& e : entries_)
-    if (e.binding.spec.name == binding.spec.name) return Error{"task '" + binding.spec.name + "' added twice"};
-  Entry entry;
-  entry.binding = binding;
-  entry.period_ns = binding.spec.periodic() ? periodFromRateHz(binding.spec.rate_hz) : 0;
-  entry.stats = std::make_unique<TimingStats>(millisecondsToNs(binding.spec.budget_ms));
-  entries_.push_back(std::move(entry));
-  return ok();
-}
-
-void LockstepExecutor::runOne(Entry& entry, std::size_t index, TimeNs now_ns) {
+void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
+  TaskSet::Entry& entry = tasks_.entries()[index];
   const TimeNs begin = stats_clock_.now();
   entry.binding.task->step(now_ns);
   entry.stats->recordRun(stats_clock_.now() - begin);
@@ -50,11 +36,11 @@ void LockstepExecutor::runOne(Entry& entry, std::size_t index, TimeNs now_ns) {
 Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
   for (int round = 0; round < kMaxEventRoundsPerInstant; ++round) {
     bool ran = false;
-    for (std::size_t i = 0; i < entries_.size(); ++i) {
-      Entry& e = entries_[i];
-      if (e.binding.spec.periodic() || !e.binding.doorbell->pending()) continue;
-      e.binding.doorbell->consume();
-      runOne(e, i, now_ns);
+    for (std::size_t i = 0; i < tasks_.entries().size(); ++i) {
+      const TaskBinding& b = tasks_.entries()[i].binding;
+      if (b.spec.periodic() || !b.doorbell->pending()) continue;
+      b.doorbell->consume();
+      runOne(i, now_ns);
       ran = true;
     }
     if (!ran) return ok();
@@ -63,44 +49,29 @@ Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
 }
 
 Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) {
-  const TimeNs start_ns = clock_.now();
-  for (Entry& e : entries_) {
-    if (!e.started) {
-      e.next_release_ns = start_ns;
-      e.started = true;
-    }
-  }
+  const std::vector<TaskSet::Entry>& entries = tasks_.entries();
+  next_release_ns_.resize(entries.size(), clock_.now());  // new tasks start now
   for (;;) {
     if (stop != nullptr && stop->load(std::memory_order_acquire)) return ok();
-    Entry* next = nullptr;
-    std::size_t next_index = 0;
-    for (std::size_t i = 0; i < entries_.size(); ++i) {
-      Entry& e = entries_[i];
-      if (!e.binding.spec.periodic()) continue;
-      if (next == nullptr || e.next_release_ns < next->next_release_ns ||
-          (e.next_release_ns == next->next_release_ns && e.binding.spec.priority > next->binding.spec.priority)) {
-        next = &e;
-        next_index = i;
-      }
+    std::size_t next = entries.size();
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      if (!entries[i].binding.spec.periodic()) continue;
+      if (next == entries.size() || next_release_ns_[i] < next_release_ns_[next] ||
+          (next_release_ns_[i] == next_release_ns_[next] &&
+           entries[i].binding.spec.priority > entries[next].binding.spec.priority))
+        next = i;
     }
-    if (next == nullptr || next->next_release_ns > end_ns) {
+    if (next == entries.size() || next_release_ns_[next] > end_ns) {
       // Nothing periodic left before the end: advance to it so a later call continues from there.
       if (end_ns > clock_.now()) clock_.set(end_ns);
       return runPendingEvents(clock_.now());
     }
-    const TimeNs release_ns = next->next_release_ns;
+    const TimeNs release_ns = next_release_ns_[next];
     clock_.set(release_ns);
-    runOne(*next, next_index, release_ns);
-    next->next_release_ns += next->period_ns;
+    runOne(next, release_ns);
+    next_release_ns_[next] += entries[next].period_ns;
     if (Status s = runPendingEvents(release_ns); !s) return s;
   }
-}
-
-std::vector<LockstepExecutor::NamedStats> LockstepExecutor::stats() const {
-  std::vector<NamedStats> out;
-  out.reserve(entries_.size());
-  for (const Entry& e : entries_) out.push_back({e.binding.spec.name, e.stats.get()});
-  return out;
 }
 
 }  // namespace aerotrack::rt

@@ -48,18 +48,7 @@ RealtimeExecutor::~RealtimeExecutor() {
 
 Status RealtimeExecutor::add(const TaskBinding& binding) {
   if (!threads_.empty()) return Error{"cannot add task '" + binding.spec.name + "' after start()"};
-  if (Status s = validate(binding.spec); !s) return s;
-  if (binding.task == nullptr) return Error{"task '" + binding.spec.name + "' has no implementation"};
-  if (!binding.spec.periodic() && binding.doorbell == nullptr)
-    return Error{"event task '" + binding.spec.name + "' has no doorbell for trigger '" + binding.spec.trigger + "'"};
-  for (const Entry& e : entries_)
-    if (e.binding.spec.name == binding.spec.name) return Error{"task '" + binding.spec.name + "' added twice"};
-  Entry entry;
-  entry.binding = binding;
-  entry.period_ns = binding.spec.periodic() ? periodFromRateHz(binding.spec.rate_hz) : 0;
-  entry.stats = std::make_unique<TimingStats>(millisecondsToNs(binding.spec.budget_ms));
-  entries_.push_back(std::move(entry));
-  return ok();
+  return tasks_.add(binding);
 }
 
 Expected<std::vector<std::string>> RealtimeExecutor::start() {
@@ -73,7 +62,7 @@ Expected<std::vector<std::string>> RealtimeExecutor::start() {
   std::atomic<bool> go{false};
   TimeNs first_release_ns = 0;
   try {
-    for (Entry& e : entries_) {
+    for (TaskSet::Entry& e : tasks_.entries()) {
       threads_.emplace_back([this, &e, &go, &first_release_ns] {
         go.wait(false, std::memory_order_acquire);
         if (e.binding.spec.periodic())
@@ -90,8 +79,8 @@ Expected<std::vector<std::string>> RealtimeExecutor::start() {
     return Error{std::string("could not start a task thread: ") + ex.what()};
   }
 
-  for (std::size_t i = 0; i < entries_.size(); ++i) {
-    const TaskSpec& spec = entries_[i].binding.spec;
+  for (std::size_t i = 0; i < tasks_.entries().size(); ++i) {
+    const TaskSpec& spec = tasks_.entries()[i].binding.spec;
     const pthread_t handle = threads_[i].native_handle();
     pthread_setname_np(handle, spec.name.substr(0, 15).c_str());
     if (options_.use_realtime_priority && spec.priority > 0) {
@@ -115,13 +104,13 @@ Expected<std::vector<std::string>> RealtimeExecutor::start() {
   go.notify_all();
   // `go` and `first_release_ns` live on this stack frame: wait until every thread has passed the
   // gate before returning. Each thread copies first_release_ns before its first sleep.
-  for (std::size_t n = started_.load(std::memory_order_acquire); n < entries_.size();
+  for (std::size_t n = started_.load(std::memory_order_acquire); n < tasks_.entries().size();
        n = started_.load(std::memory_order_acquire))
     started_.wait(n, std::memory_order_acquire);
   return warnings;
 }
 
-void RealtimeExecutor::runPeriodic(Entry& e, TimeNs first_release_ns) {
+void RealtimeExecutor::runPeriodic(TaskSet::Entry& e, TimeNs first_release_ns) {
   started_.fetch_add(1, std::memory_order_acq_rel);
   started_.notify_all();
   TimingStats& stats = *e.stats;
@@ -142,7 +131,7 @@ void RealtimeExecutor::runPeriodic(Entry& e, TimeNs first_release_ns) {
   }
 }
 
-void RealtimeExecutor::runEvent(Entry& e) {
+void RealtimeExecutor::runEvent(TaskSet::Entry& e) {
   started_.fetch_add(1, std::memory_order_acq_rel);
   started_.notify_all();
   TimingStats& stats = *e.stats;
@@ -159,13 +148,6 @@ void RealtimeExecutor::runEvent(Entry& e) {
 void RealtimeExecutor::join() {
   for (std::thread& t : threads_)
     if (t.joinable()) t.join();
-}
-
-std::vector<RealtimeExecutor::NamedStats> RealtimeExecutor::stats() const {
-  std::vector<NamedStats> out;
-  out.reserve(entries_.size());
-  for (const Entry& e : entries_) out.push_back({e.binding.spec.name, e.stats.get()});
-  return out;
 }
 
 }  // namespace aerotrack::rt

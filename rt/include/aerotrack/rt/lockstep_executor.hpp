@@ -10,14 +10,11 @@
 
 #include <atomic>
 #include <cstdint>
-#include <memory>
-#include <string>
 #include <vector>
 
 #include "aerotrack/rt/clock.hpp"
 #include "aerotrack/rt/expected.hpp"
-#include "aerotrack/rt/task.hpp"
-#include "aerotrack/rt/timing_stats.hpp"
+#include "aerotrack/rt/task_set.hpp"
 
 namespace aerotrack::rt {
 
@@ -27,9 +24,8 @@ class LockstepExecutor {
   /// stats_clock: measures execution time for statistics only (normally a MonotonicClock).
   LockstepExecutor(ManualClock& sim_clock, const Clock& stats_clock);
 
-  /// Adds a task; call before run(). Fails on an invalid spec, a duplicate name, a null task,
-  /// or an event task without a doorbell.
-  Status add(const TaskBinding& binding);
+  /// Adds a task (see TaskSet::add). Tasks added between runs start at the clock's time.
+  Status add(const TaskBinding& binding) { return tasks_.add(binding); }
 
   /// Runs until the simulated clock reaches end_ns (releases at end_ns included) or until *stop
   /// becomes true (checked between steps). May be called again to continue.
@@ -39,27 +35,16 @@ class LockstepExecutor {
   std::uint64_t traceHash() const { return trace_hash_; }
   std::uint64_t steps() const { return steps_; }
 
-  struct NamedStats {
-    std::string name;
-    const TimingStats* stats;
-  };
-  std::vector<NamedStats> stats() const;
+  std::vector<TaskSet::NamedStats> stats() const { return tasks_.stats(); }
 
  private:
-  struct Entry {
-    TaskBinding binding;
-    DurationNs period_ns = 0;
-    TimeNs next_release_ns = 0;
-    bool started = false;
-    std::unique_ptr<TimingStats> stats;
-  };
-
-  void runOne(Entry& entry, std::size_t index, TimeNs now_ns);
+  void runOne(std::size_t index, TimeNs now_ns);
   Status runPendingEvents(TimeNs now_ns);
 
   ManualClock& clock_;
   const Clock& stats_clock_;
-  std::vector<Entry> entries_;
+  TaskSet tasks_;
+  std::vector<TimeNs> next_release_ns_;  // per task, in table order
   std::uint64_t trace_hash_ = 1469598103934665603ULL;
   std::uint64_t steps_ = 0;
 };

@@ -8,15 +8,13 @@
 #pragma once
 
 #include <atomic>
-#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "aerotrack/rt/clock.hpp"
 #include "aerotrack/rt/expected.hpp"
-#include "aerotrack/rt/task.hpp"
-#include "aerotrack/rt/timing_stats.hpp"
+#include "aerotrack/rt/task_set.hpp"
 
 namespace aerotrack::rt {
 
@@ -35,6 +33,7 @@ class RealtimeExecutor {
   RealtimeExecutor(const RealtimeExecutor&) = delete;
   RealtimeExecutor& operator=(const RealtimeExecutor&) = delete;
 
+  /// Adds a task before start() (see TaskSet::add).
   Status add(const TaskBinding& binding);
 
   /// Starts one thread per task. Returns warnings (permissions refused), or an Error if a thread
@@ -48,25 +47,15 @@ class RealtimeExecutor {
   /// Waits for all threads (after requestStop()).
   void join();
 
-  struct NamedStats {
-    std::string name;
-    const TimingStats* stats;
-  };
-  std::vector<NamedStats> stats() const;
+  std::vector<TaskSet::NamedStats> stats() const { return tasks_.stats(); }
 
  private:
-  struct Entry {
-    TaskBinding binding;
-    DurationNs period_ns = 0;
-    std::unique_ptr<TimingStats> stats;
-  };
-
-  void runPeriodic(Entry& entry, TimeNs first_release_ns);
-  void runEvent(Entry& entry);
+  void runPeriodic(TaskSet::Entry& entry, TimeNs first_release_ns);
+  void runEvent(TaskSet::Entry& entry);
 
   const MonotonicClock& clock_;
   RealtimeOptions options_;
-  std::vector<Entry> entries_;
+  TaskSet tasks_;
   std::vector<std::thread> threads_;
   std::atomic<bool> stop_{false};
   std::atomic<std::size_t> started_{0};  // threads that passed the start gate

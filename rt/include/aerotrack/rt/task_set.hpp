@@ -1,0 +1,42 @@
+// The tasks an executor runs, each with its checked spec, its period and its timing statistics.
+// Both executors keep their tasks in a TaskSet, so they accept exactly the same task tables and
+// report statistics the same way. Not thread-safe: filled before the executor starts.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/task.hpp"
+#include "aerotrack/rt/timing_stats.hpp"
+
+namespace aerotrack::rt {
+
+class TaskSet {
+ public:
+  struct Entry {
+    TaskBinding binding;
+    DurationNs period_ns = 0;  ///< 0 for event-triggered tasks.
+    std::unique_ptr<TimingStats> stats;
+  };
+
+  struct NamedStats {
+    std::string name;
+    const TimingStats* stats;
+  };
+
+  /// Adds a task. Fails on an invalid spec, a duplicate name, a null task, or an event task
+  /// without a doorbell.
+  Status add(const TaskBinding& binding);
+
+  std::vector<Entry>& entries() { return entries_; }
+  const std::vector<Entry>& entries() const { return entries_; }
+  /// Statistics in table order; pointers stay valid as long as the set.
+  std::vector<NamedStats> stats() const;
+
+ private:
+  std::vector<Entry> entries_;
+};
+
+}  // namespace aerotrack::rt

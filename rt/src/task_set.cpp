@@ -1,0 +1,29 @@
+// TaskSet: see task_set.hpp.
+#include "aerotrack/rt/task_set.hpp"
+
+namespace aerotrack::rt {
+
+Status TaskSet::add(const TaskBinding& binding) {
+  const TaskSpec& spec = binding.spec;
+  if (Status s = validate(spec); !s) return s;
+  if (binding.task == nullptr) return Error{"task '" + spec.name + "' has no implementation"};
+  if (!spec.periodic() && binding.doorbell == nullptr)
+    return Error{"event task '" + spec.name + "' has no doorbell for trigger '" + spec.trigger + "'"};
+  for (const Entry& e : entries_)
+    if (e.binding.spec.name == spec.name) return Error{"task '" + spec.name + "' added twice"};
+  Entry entry;
+  entry.binding = binding;
+  entry.period_ns = spec.periodic() ? periodFromRateHz(spec.rate_hz) : 0;
+  entry.stats = std::make_unique<TimingStats>(millisecondsToNs(spec.budget_ms));
+  entries_.push_back(std::move(entry));
+  return ok();
+}
+
+std::vector<TaskSet::NamedStats> TaskSet::stats() const {
+  std::vector<NamedStats> out;
+  out.reserve(entries_.size());
+  for (const Entry& e : entries_) out.push_back({e.binding.spec.name, e.stats.get()});
+  return out;
+}
+
+}  // namespace aerotrack::rt
