@@ -3,6 +3,10 @@
 // tell them apart. All calls are non-blocking: a capture task polls its device at the device's
 // rate. Each device is used by one task thread (calls on one device are not concurrent) unless
 // its backend says otherwise; health() may be called from any thread.
+//
+// The clock is a device too (DESIGN.md rule 2): it is rt::Clock -- rt::MonotonicClock on the drone
+// and in 1x replay, the lockstep executor's rt::ManualClock in simulation -- and every stamp_ns
+// below is on that clock.
 #pragma once
 
 #include <optional>
