@@ -67,6 +67,59 @@ struct GimbalCommand {
   double max_rate_radps = 0.0;  ///< kAngle: speed limit (0: the device's default).
 };
 
+/// COCO body keypoints in the order MoveNet and COCO use (index = enum value).
+enum class CocoKeypoint : std::uint8_t {
+  kNose,
+  kLeftEye,
+  kRightEye,
+  kLeftEar,
+  kRightEar,
+  kLeftShoulder,
+  kRightShoulder,
+  kLeftElbow,
+  kRightElbow,
+  kLeftWrist,
+  kRightWrist,
+  kLeftHip,
+  kRightHip,
+  kLeftKnee,
+  kRightKnee,
+  kLeftAnkle,
+  kRightAnkle,
+};
+inline constexpr std::size_t kNumKeypoints = 17;
+inline constexpr std::size_t index(CocoKeypoint k) {
+  return static_cast<std::size_t>(k);
+}
+
+/// One keypoint in image pixels (u right, v down, origin at the top-left pixel's corner).
+struct Keypoint2D {
+  double u_px = 0.0;
+  double v_px = 0.0;
+  double score = 0.0;  ///< Confidence in [0, 1]; 0: not detected.
+};
+
+/// One person found in an image: what the keypoint detector (issue 5) outputs, and what the
+/// simulator's keypoint-mode camera produces so that everything downstream is exercised.
+struct PersonDetection {
+  std::array<Keypoint2D, kNumKeypoints> keypoints{};
+  double score = 0.0;                                                         ///< Person confidence in [0, 1].
+  double bbox_u_px = 0.0, bbox_v_px = 0.0, bbox_w_px = 0.0, bbox_h_px = 0.0;  ///< Top-left corner, size.
+};
+
+inline constexpr std::size_t kMaxPersons = 6;  ///< MoveNet multipose returns at most six.
+
+/// The persons detected in one gimbal-camera frame. Fixed size (no allocation): travels through
+/// latest-value slots and queues.
+struct DetectionFrame {
+  TimeNs stamp_ns = 0;          ///< Exposure time of the image.
+  TimeNs result_ns = 0;         ///< When the detection was available (stamp_ns + detector latency).
+  std::uint64_t sequence = 0;   ///< Frame counter.
+  CameraIntrinsics intrinsics;  ///< Of the image the pixels refer to.
+  std::size_t person_count = 0;
+  std::array<PersonDetection, kMaxPersons> persons{};
+};
+
 /// Vehicle state estimate from the flight controller or the simulator.
 struct OdometrySample {
   TimeNs stamp_ns = 0;
@@ -126,3 +179,4 @@ AEROTRACK_HAL_BITWISE(Setpoint)
 static_assert(std::is_trivially_copyable_v<aerotrack::hal::GimbalState>);
 static_assert(std::is_trivially_copyable_v<aerotrack::hal::GimbalCommand>);
 static_assert(std::is_trivially_copyable_v<aerotrack::hal::VehicleStatus>);
+static_assert(std::is_trivially_copyable_v<aerotrack::hal::DetectionFrame>);
