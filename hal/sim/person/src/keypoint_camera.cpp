@@ -1,0 +1,141 @@
+// Keypoint-mode camera: pinhole projection of the COCO keypoints with visibility, misses, torso-scaled
+// Gaussian pixel noise and scores, as a MoveNet detector would report them. Model: keypoint_camera.hpp.
+#include "aerotrack/hal/sim/keypoint_camera.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace aerotrack::hal::sim {
+namespace {
+
+constexpr double kMinDepthM = 1e-3;
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// A uniform draw in (0, 1] from the top 53 bits of one engine output (platform independent, unlike
+// std::uniform_real_distribution).
+double uniform01(std::mt19937_64& rng) {
+  return static_cast<double>((rng() >> 11) + 1) * 0x1.0p-53;
+}
+
+std::size_t idx(CocoKeypoint k) {
+  return index(k);
+}
+
+}  // namespace
+
+CameraIntrinsics pinholeIntrinsics(int width_px, int height_px, double horizontal_fov_rad) {
+  CameraIntrinsics k;
+  k.width_px = width_px;
+  k.height_px = height_px;
+  k.fx_px = 0.5 * width_px / std::tan(0.5 * horizontal_fov_rad);
+  k.fy_px = k.fx_px;
+  k.cx_px = 0.5 * width_px;
+  k.cy_px = 0.5 * height_px;
+  return k;
+}
+
+rt::Status validate(const KeypointCameraParams& p) {
+  const CameraIntrinsics& k = p.intrinsics;
+  if (k.width_px <= 0 || k.height_px <= 0) return rt::Error{"KeypointCameraParams.intrinsics: image size must be > 0"};
+  if (!std::isfinite(k.fx_px) || !std::isfinite(k.fy_px) || k.fx_px <= 0.0 || k.fy_px <= 0.0) {
+    return rt::Error{"KeypointCameraParams.intrinsics: focal lengths must be finite and > 0"};
+  }
+  if (!std::isfinite(k.cx_px) || !std::isfinite(k.cy_px)) {
+    return rt::Error{"KeypointCameraParams.intrinsics: principal point must be finite"};
+  }
+  for (double d : k.distortion) {
+    if (d != 0.0) return rt::Error{"KeypointCameraParams.intrinsics: distortion is not modelled; it must be zero"};
+  }
+  if (!std::isfinite(p.pixel_noise_torso_fraction) || p.pixel_noise_torso_fraction < 0.0) {
+    return rt::Error{"KeypointCameraParams.pixel_noise_torso_fraction must be >= 0"};
+  }
+  if (!(p.keypoint_miss_probability >= 0.0 && p.keypoint_miss_probability <= 1.0)) {
+    return rt::Error{"KeypointCameraParams.keypoint_miss_probability must be in [0, 1]"};
+  }
+  if (p.min_visible_keypoints < 1 || p.min_visible_keypoints > static_cast<int>(kNumKeypoints)) {
+    return rt::Error{"KeypointCameraParams.min_visible_keypoints must be in [1, 17], got " +
+                     std::to_string(p.min_visible_keypoints)};
+  }
+  if (!(p.min_score > 0.0 && p.min_score <= p.max_score && p.max_score <= 1.0)) {
+    return rt::Error{"KeypointCameraParams: need 0 < min_score <= max_score <= 1"};
+  }
+  if (!std::isfinite(p.bbox_margin_fraction) || p.bbox_margin_fraction < 0.0) {
+    return rt::Error{"KeypointCameraParams.bbox_margin_fraction must be >= 0"};
+  }
+  return rt::ok();
+}
+
+std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_C_m, const CameraIntrinsics& intrinsics) {
+  if (!(p_C_m.z() > kMinDepthM)) return std::nullopt;
+  return Eigen::Vector2d(intrinsics.cx_px + intrinsics.fx_px * p_C_m.x() / p_C_m.z(),
+                         intrinsics.cy_px + intrinsics.fy_px * p_C_m.y() / p_C_m.z());
+}
+
+std::optional<PersonDetection> observe(const std::array<Eigen::Vector3d, kNumKeypoints>& keypoints_W_m,
+                                       const Eigen::Isometry3d& T_WC, const KeypointCameraParams& params,
+                                       const LineOfSight& line_of_sight, std::mt19937_64& rng) {
+  const CameraIntrinsics& k = params.intrinsics;
+  const Eigen::Isometry3d T_CW = T_WC.inverse(Eigen::Isometry);
+  const Eigen::Vector3d centre_W_m = T_WC.translation();
+
+  std::array<std::optional<Eigen::Vector2d>, kNumKeypoints> uv;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) uv[i] = project(T_CW * keypoints_W_m[i], k);
+
+  // Noise scale: the true projected torso, as the localizer would measure it from 2D keypoints.
+  using K = CocoKeypoint;
+  const std::size_t ls = idx(K::kLeftShoulder), rs = idx(K::kRightShoulder);
+  const std::size_t lh = idx(K::kLeftHip), rh = idx(K::kRightHip);
+  double torso_px = 0.0;
+  if (uv[ls] && uv[rs] && uv[lh] && uv[rh]) {
+    torso_px = (0.5 * (*uv[ls] + *uv[rs]) - 0.5 * (*uv[lh] + *uv[rh])).norm();
+  } else {  // torso partly behind the camera: scale by the torso's mean depth
+    const Eigen::Vector3d neck_C = T_CW * (0.5 * (keypoints_W_m[ls] + keypoints_W_m[rs]));
+    const Eigen::Vector3d hips_C = T_CW * (0.5 * (keypoints_W_m[lh] + keypoints_W_m[rh]));
+    const double z = std::max(0.5 * (neck_C.z() + hips_C.z()), 0.1);
+    torso_px = k.fx_px * (neck_C - hips_C).norm() / z;
+  }
+  const double sigma_px = params.pixel_noise_torso_fraction * torso_px;
+  const double w = k.width_px, h = k.height_px;
+
+  PersonDetection det;
+  int visible = 0;
+  double score_sum = 0.0;
+  double u_min = std::numeric_limits<double>::infinity(), v_min = u_min;
+  double u_max = -u_min, v_max = -u_min;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+    const double miss_draw = uniform01(rng);
+    const double r = std::sqrt(-2.0 * std::log(uniform01(rng)));
+    const double phi = kTwoPi * uniform01(rng);
+    const double score_draw = uniform01(rng);
+    if (!uv[i]) continue;
+    const Eigen::Vector2d& q = *uv[i];
+    if (!(q.x() >= 0.0 && q.x() < w && q.y() >= 0.0 && q.y() < h)) continue;
+    if (miss_draw <= params.keypoint_miss_probability) continue;
+    if (line_of_sight && !line_of_sight(centre_W_m, keypoints_W_m[i])) continue;
+    Keypoint2D& out = det.keypoints[i];
+    out.u_px = std::clamp(q.x() + sigma_px * r * std::cos(phi), 0.0, w);
+    out.v_px = std::clamp(q.y() + sigma_px * r * std::sin(phi), 0.0, h);
+    out.score = params.min_score + (params.max_score - params.min_score) * (score_draw - 0x1.0p-53);
+    ++visible;
+    score_sum += out.score;
+    u_min = std::min(u_min, out.u_px);
+    u_max = std::max(u_max, out.u_px);
+    v_min = std::min(v_min, out.v_px);
+    v_max = std::max(v_max, out.v_px);
+  }
+  if (visible < params.min_visible_keypoints || visible == 0) return std::nullopt;
+
+  const double margin = params.bbox_margin_fraction * std::max(u_max - u_min, v_max - v_min);
+  const double u0 = std::max(0.0, u_min - margin), u1 = std::min(w, u_max + margin);
+  const double v0 = std::max(0.0, v_min - margin), v1 = std::min(h, v_max + margin);
+  det.bbox_u_px = u0;
+  det.bbox_v_px = v0;
+  det.bbox_w_px = u1 - u0;
+  det.bbox_h_px = v1 - v0;
+  det.score = score_sum / visible;
+  return det;
+}
+
+}  // namespace aerotrack::hal::sim

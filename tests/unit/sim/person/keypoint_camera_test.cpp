@@ -1,0 +1,275 @@
+// Tests of the keypoint camera model (hal/sim/person/keypoint_camera.hpp): pinhole projection by
+// hand, visibility (behind, outside the image, occluded, too few), noise statistics against the
+// configured torso fraction, and determinism for a given seed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <string>
+
+#include "aerotrack/hal/sim/keypoint_camera.hpp"
+#include "aerotrack/hal/sim/walking_person.hpp"
+
+namespace aerotrack::hal::sim {
+namespace {
+
+using K = CocoKeypoint;
+using Keypoints = std::array<Eigen::Vector3d, kNumKeypoints>;
+constexpr double kPi = std::numbers::pi;
+
+// Camera at eye_W looking at target_W, OpenCV axes (x right, y down, z forward), world z up.
+Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {
+  const Eigen::Vector3d z = (target_W - eye_W).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = eye_W;
+  return T;
+}
+
+// A person standing at the origin facing -x (towards a camera on the -x axis).
+Keypoints standingFacingMinusX() {
+  auto w = WalkingPerson::create({}, {{{0, 0}, 1.0}, {{-1, 0}, 1.0}});
+  EXPECT_TRUE(w.has_value());
+  return w->state(-1.0).keypoints_W_m;
+}
+
+KeypointCameraParams noiseless() {
+  KeypointCameraParams p;
+  p.pixel_noise_torso_fraction = 0.0;
+  p.keypoint_miss_probability = 0.0;
+  return p;
+}
+
+std::optional<Eigen::Vector2d> trueUv(const Keypoints& kps, std::size_t i, const Eigen::Isometry3d& T_WC,
+                                      const CameraIntrinsics& k) {
+  return project(T_WC.inverse() * kps[i], k);
+}
+
+TEST(KeypointCamera, GivenDefaultParamsThenIntrinsicsAre640x480With87DegreeFov) {
+  const KeypointCameraParams p;
+  EXPECT_EQ(p.intrinsics.width_px, 640);
+  EXPECT_EQ(p.intrinsics.height_px, 480);
+  EXPECT_NEAR(p.intrinsics.fx_px, 320.0 / std::tan(43.5 * kPi / 180.0), 1e-9);
+  EXPECT_NEAR(p.intrinsics.fx_px, 337.2, 0.05);
+  EXPECT_EQ(p.intrinsics.fy_px, p.intrinsics.fx_px);
+  EXPECT_EQ(p.intrinsics.cx_px, 320.0);
+  EXPECT_EQ(p.intrinsics.cy_px, 240.0);
+  EXPECT_TRUE(validate(p).has_value());
+}
+
+TEST(KeypointCamera, GivenInvalidParamsWhenValidatingThenReturnsAnError) {
+  KeypointCameraParams p;
+  p.min_visible_keypoints = 18;
+  EXPECT_FALSE(validate(p).has_value());
+  p = {};
+  p.keypoint_miss_probability = 1.5;
+  EXPECT_FALSE(validate(p).has_value());
+  p = {};
+  p.intrinsics.distortion[0] = 0.1;
+  EXPECT_FALSE(validate(p).has_value());
+  p = {};
+  p.min_score = 0.9;
+  p.max_score = 0.8;
+  EXPECT_FALSE(validate(p).has_value());
+}
+
+TEST(KeypointCamera, GivenPointsInCameraFrameWhenProjectingThenMatchesPinholeByHand) {
+  const CameraIntrinsics k = KeypointCameraParams{}.intrinsics;
+  const auto axis = project({0, 0, 5}, k);
+  ASSERT_TRUE(axis.has_value());
+  EXPECT_NEAR((*axis - Eigen::Vector2d(k.cx_px, k.cy_px)).norm(), 0.0, 1e-12);
+  const auto right = project({1, 0, 5}, k);
+  ASSERT_TRUE(right.has_value());
+  EXPECT_NEAR(right->x(), k.cx_px + k.fx_px / 5.0, 1e-12);
+  EXPECT_NEAR(right->y(), k.cy_px, 1e-12);
+  const auto down = project({0, 1, 2}, k);
+  ASSERT_TRUE(down.has_value());
+  EXPECT_NEAR(down->y(), k.cy_px + k.fy_px / 2.0, 1e-12);
+}
+
+TEST(KeypointCamera, GivenPointBehindOrAtTheCameraWhenProjectingThenNothing) {
+  const CameraIntrinsics k = KeypointCameraParams{}.intrinsics;
+  EXPECT_FALSE(project({0, 0, -1}, k).has_value());
+  EXPECT_FALSE(project({1, 1, 0}, k).has_value());
+  EXPECT_FALSE(project({0, 0, 1e-4}, k).has_value());
+}
+
+TEST(KeypointCamera, GivenNoiselessCameraFacingPersonWhenObservingThenReportsExactProjections) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.5});
+  const KeypointCameraParams p = noiseless();
+  std::mt19937_64 rng(1);
+  const auto det = observe(kps, T_WC, p, {}, rng);
+  ASSERT_TRUE(det.has_value());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+    const auto uv = trueUv(kps, i, T_WC, p.intrinsics);
+    ASSERT_TRUE(uv.has_value());
+    const Keypoint2D& q = det->keypoints[i];
+    EXPECT_NEAR(q.u_px, uv->x(), 1e-9);
+    EXPECT_NEAR(q.v_px, uv->y(), 1e-9);
+    EXPECT_GE(q.score, 0.5);
+    EXPECT_LE(q.score, 0.95);
+    sum += q.score;
+    EXPECT_GE(q.u_px, det->bbox_u_px);
+    EXPECT_LE(q.u_px, det->bbox_u_px + det->bbox_w_px);
+    EXPECT_GE(q.v_px, det->bbox_v_px);
+    EXPECT_LE(q.v_px, det->bbox_v_px + det->bbox_h_px);
+  }
+  EXPECT_NEAR(det->score, sum / kNumKeypoints, 1e-12);
+  // Facing the camera: the person's left appears on the image's right; the head is on top.
+  EXPECT_GT(det->keypoints[index(K::kLeftShoulder)].u_px, det->keypoints[index(K::kRightShoulder)].u_px);
+  EXPECT_LT(det->keypoints[index(K::kNose)].v_px, det->keypoints[index(K::kLeftAnkle)].v_px);
+  // Box: the keypoints' extent plus 8 % of the larger side on each side.
+  const double extent_v = det->keypoints[index(K::kLeftAnkle)].v_px - det->keypoints[index(K::kLeftEye)].v_px;
+  EXPECT_NEAR(det->bbox_h_px, 1.16 * extent_v, 1e-6);
+}
+
+TEST(KeypointCamera, GivenHeadAboveTheImageWhenObservingThenHeadKeypointsHaveScoreZero) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
+  const KeypointCameraParams p = noiseless();
+  std::mt19937_64 rng(2);
+  const auto det = observe(kps, T_WC, p, {}, rng);
+  ASSERT_TRUE(det.has_value());
+  int outside = 0;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+    const auto uv = trueUv(kps, i, T_WC, p.intrinsics);
+    ASSERT_TRUE(uv.has_value());
+    const bool inside = uv->x() >= 0 && uv->x() < 640 && uv->y() >= 0 && uv->y() < 480;
+    if (!inside) {
+      ++outside;
+      EXPECT_EQ(det->keypoints[i].score, 0.0) << i;
+      EXPECT_EQ(det->keypoints[i].u_px, 0.0);
+      EXPECT_EQ(det->keypoints[i].v_px, 0.0);
+    } else {
+      EXPECT_GT(det->keypoints[i].score, 0.0) << i;
+    }
+  }
+  EXPECT_GE(outside, 5);
+  EXPECT_EQ(det->keypoints[index(K::kNose)].score, 0.0);
+  EXPECT_GT(det->keypoints[index(K::kLeftAnkle)].score, 0.0);
+  EXPECT_GE(det->bbox_v_px, 0.0);
+}
+
+TEST(KeypointCamera, GivenLegsOccludedWhenObservingThenOnlyLegKeypointsHaveScoreZero) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Vector3d eye(-6, 0, 1.5);
+  const Eigen::Isometry3d T_WC = lookAt(eye, {0, 0, 1.0});
+  std::mt19937_64 rng(3);
+  int calls = 0;
+  const LineOfSight below_0_7_blocked = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+    ++calls;
+    EXPECT_NEAR((from - eye).norm(), 0.0, 1e-12);
+    return to.z() > 0.7;  // a low wall: knees (0.50 m) and ankles (0.07 m) hidden
+  };
+  const auto det = observe(kps, T_WC, noiseless(), below_0_7_blocked, rng);
+  ASSERT_TRUE(det.has_value());
+  EXPECT_EQ(calls, 17);
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+    const bool leg = i >= index(K::kLeftKnee);
+    EXPECT_EQ(det->keypoints[i].score == 0.0, leg) << i;
+  }
+}
+
+TEST(KeypointCamera, GivenFewerThanMinVisibleWhenObservingThenNoDetection) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.0});
+  // Only the head (nose, eyes, ears: 5 keypoints) above 1.55 m is visible: exactly the minimum.
+  std::mt19937_64 rng(4);
+  const auto five = observe(
+      kps, T_WC, noiseless(), [](const auto&, const auto& to) { return to.z() > 1.55; }, rng);
+  ASSERT_TRUE(five.has_value());
+  int visible = 0;
+  for (const Keypoint2D& q : five->keypoints) visible += q.score > 0.0 ? 1 : 0;
+  EXPECT_EQ(visible, 5);
+  // Four: the eyes (1.63 m) and ears (1.61 m); the nose tip (1.609 m) is hidden.
+  const auto four = observe(
+      kps, T_WC, noiseless(), [](const auto&, const auto& to) { return to.z() > 1.612; }, rng);
+  EXPECT_FALSE(four.has_value());
+  // All behind the camera.
+  EXPECT_FALSE(observe(kps, lookAt({-6, 0, 1.5}, {-12, 0, 1.5}), noiseless(), {}, rng).has_value());
+}
+
+TEST(KeypointCamera, GivenStaticPersonWhenObservedManyTimesThenNoiseAndMissesMatchParameters) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-5, 0.5, 1.6}, {0, 0, 1.0});
+  const KeypointCameraParams p;  // defaults: 0.028 torso, 3 % misses, scores 0.5-0.95
+  std::array<Eigen::Vector2d, kNumKeypoints> uv;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) uv[i] = *trueUv(kps, i, T_WC, p.intrinsics);
+  const auto mid = [&](K a, K b) { return 0.5 * (uv[index(a)] + uv[index(b)]); };
+  const double torso_px = (mid(K::kLeftShoulder, K::kRightShoulder) - mid(K::kLeftHip, K::kRightHip)).norm();
+  ASSERT_GT(torso_px, 20.0);
+
+  std::mt19937_64 rng(42);
+  double su = 0, suu = 0, sv = 0, svv = 0, score_sum = 0;
+  int reported = 0, missed = 0;
+  const int n_obs = 2000;
+  for (int k = 0; k < n_obs; ++k) {
+    const auto det = observe(kps, T_WC, p, {}, rng);
+    ASSERT_TRUE(det.has_value());
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+      const Keypoint2D& q = det->keypoints[i];
+      if (q.score == 0.0) {
+        ++missed;
+        continue;
+      }
+      const double eu = (q.u_px - uv[i].x()) / torso_px, ev = (q.v_px - uv[i].y()) / torso_px;
+      su += eu, suu += eu * eu, sv += ev, svv += ev * ev;
+      score_sum += q.score;
+      EXPECT_GE(q.score, 0.5);
+      EXPECT_LE(q.score, 0.95);
+      ++reported;
+    }
+  }
+  const double n = reported;
+  const double std_u = std::sqrt(suu / n - (su / n) * (su / n));
+  const double std_v = std::sqrt(svv / n - (sv / n) * (sv / n));
+  EXPECT_NEAR(std_u, 0.028, 0.1 * 0.028);
+  EXPECT_NEAR(std_v, 0.028, 0.1 * 0.028);
+  EXPECT_NEAR(su / n, 0.0, 0.001);  // standard error 0.028 / sqrt(33000) = 1.5e-4
+  EXPECT_NEAR(sv / n, 0.0, 0.001);
+  // Misses: 3 % of 34000 keypoints, binomial standard deviation 0.09 %.
+  EXPECT_NEAR(missed / (17.0 * n_obs), 0.03, 0.005);
+  EXPECT_NEAR(score_sum / n, 0.725, 0.01);
+  RecordProperty("std_u_over_torso", std::to_string(std_u));
+}
+
+TEST(KeypointCamera, GivenSameSeedWhenObservingThenSameDetection) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-5, 1, 1.6}, {0, 0, 1.0});
+  const KeypointCameraParams p;
+  std::mt19937_64 a(7), b(7), c(8);
+  for (int k = 0; k < 20; ++k) {
+    const auto da = observe(kps, T_WC, p, {}, a);
+    const auto db = observe(kps, T_WC, p, {}, b);
+    const auto dc = observe(kps, T_WC, p, {}, c);
+    ASSERT_TRUE(da && db && dc);
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+      EXPECT_EQ(da->keypoints[i].u_px, db->keypoints[i].u_px);
+      EXPECT_EQ(da->keypoints[i].v_px, db->keypoints[i].v_px);
+      EXPECT_EQ(da->keypoints[i].score, db->keypoints[i].score);
+    }
+    EXPECT_EQ(da->score, db->score);
+    EXPECT_EQ(da->bbox_u_px, db->bbox_u_px);
+    EXPECT_EQ(da->bbox_h_px, db->bbox_h_px);
+    EXPECT_NE(da->keypoints[0].u_px, dc->keypoints[0].u_px);
+  }
+}
+
+TEST(KeypointCamera, GivenAnyVisibilityWhenObservingThenDrawsTheSameAmountOfRandomness) {
+  const Keypoints kps = standingFacingMinusX();
+  std::mt19937_64 seen(9), unseen(9);
+  EXPECT_TRUE(observe(kps, lookAt({-5, 0, 1.5}, {0, 0, 1.0}), {}, {}, seen).has_value());
+  EXPECT_FALSE(observe(kps, lookAt({-5, 0, 1.5}, {-10, 0, 1.0}), {}, {}, unseen).has_value());
+  EXPECT_EQ(seen(), unseen());  // the stream stays aligned: 4 draws per keypoint either way
+}
+
+}  // namespace
+}  // namespace aerotrack::hal::sim
