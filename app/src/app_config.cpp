@@ -29,8 +29,8 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   vehicle.finish();
 
   c.hal = hal::parseHalConfig(root.child("hal"));
-  // The simulated vehicle's controller; only a config that simulates needs the section.
-  if (root.has("sim") || c.hal.usesSim()) c.sim = hal::parsePointMassParams(root.child("sim"));
+  // Which scenario the sim backends fly; only a config that simulates needs the section.
+  if (root.has("sim") || c.hal.usesSim()) c.sim = hal::parseSimConfig(root.child("sim"));
 
   const rt::ConfigNode server = root.child("trajectory_server");
   c.trajectory_server.yaw_min_speed_mps = server.getDouble("yaw_min_speed_mps", 0.0, 10.0);

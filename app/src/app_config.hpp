@@ -24,7 +24,7 @@ struct AppConfig {
   std::string source;  ///< The file it was read from.
   VehicleConfig vehicle;
   hal::HalConfig hal;
-  hal::sim::PointMassParams sim;
+  hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.
   trajectory_server::TrajectoryServerParams trajectory_server;
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;

@@ -8,5 +8,6 @@ namespace aerotrack::app {
 
 int runCommand(const ParsedArgs& args);
 int simCommand(const ParsedArgs& args);
+int benchCommand(const ParsedArgs& args);
 
 }  // namespace aerotrack::app

@@ -1,11 +1,15 @@
-// Tasks that connect devices to channels: the capture side of the HAL. Thin by design.
+// Tasks that connect devices to channels (the capture side of the HAL), the simulation's physics
+// step, and the simulator's truth-fed baseline_follow stand-in. Thin by design.
 #pragma once
 
 #include <memory>
 
 #include "aerotrack/hal/devices.hpp"
-#include "aerotrack/hal/sim/point_mass_world.hpp"
+#include "aerotrack/hal/sim/baseline_follower.hpp"
+#include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
+#include "aerotrack/rt/shared_slot.hpp"
+#include "aerotrack/rt/spsc_queue.hpp"
 #include "aerotrack/rt/task.hpp"
 
 namespace aerotrack::app {
@@ -27,14 +31,78 @@ class OdometryTask final : public rt::Task {
   rt::TimeNs last_stamp_ns_ = -1;
 };
 
-/// Advances the simulated world to the executor's time (the physics step of sim backends).
-class SimWorldTask final : public rt::Task {
+/// Moves detection results from a keypoint-mode gimbal camera to the detections stream.
+class GimbalCameraTask final : public rt::Task {
  public:
-  explicit SimWorldTask(std::shared_ptr<hal::sim::PointMassWorld> world) : world_(std::move(world)) {}
-  void step(rt::TimeNs now_ns) override { world_->step(now_ns); }
+  GimbalCameraTask(hal::GimbalCamera& device, rt::SpscQueue<hal::DetectionFrame>& out) : device_(device), out_(out) {}
+  void step(rt::TimeNs now_ns) override {
+    while (const auto frame = device_.grabDetections(now_ns)) out_.try_push(*frame);
+  }
 
  private:
-  std::shared_ptr<hal::sim::PointMassWorld> world_;
+  hal::GimbalCamera& device_;
+  rt::SpscQueue<hal::DetectionFrame>& out_;
+};
+
+/// Publishes each new depth frame on the depth channel.
+class DepthCameraTask final : public rt::Task {
+ public:
+  DepthCameraTask(hal::DepthCamera& device, rt::SharedSlot<hal::DepthFrame>& out) : device_(device), out_(out) {}
+  void step(rt::TimeNs now_ns) override {
+    if (auto frame = device_.grab(now_ns)) out_.write(std::move(frame));
+  }
+
+ private:
+  hal::DepthCamera& device_;
+  rt::SharedSlot<hal::DepthFrame>& out_;
+};
+
+/// Publishes the gimbal encoder's newest reading.
+class GimbalEncoderTask final : public rt::Task {
+ public:
+  GimbalEncoderTask(hal::Gimbal& device, rt::LatestSlot<hal::GimbalState>& out) : device_(device), out_(out) {}
+  void step(rt::TimeNs now_ns) override {
+    if (const auto state = device_.read(now_ns)) out_.write(*state);
+  }
+
+ private:
+  hal::Gimbal& device_;
+  rt::LatestSlot<hal::GimbalState>& out_;
+};
+
+/// Advances the simulation to the executor's time (the physics of sim backends).
+class SimWorldTask final : public rt::Task {
+ public:
+  explicit SimWorldTask(std::shared_ptr<hal::sim::Simulation> sim) : sim_(std::move(sim)) {}
+  void step(rt::TimeNs now_ns) override { sim_->step(now_ns); }
+
+ private:
+  std::shared_ptr<hal::sim::Simulation> sim_;
+};
+
+/// The simulator's truth-fed stand-in for planner and gimbal control (see baseline_follower.hpp):
+/// reads ground truth, commands the vehicle and the gimbal through their devices.
+class BaselineFollowTask final : public rt::Task {
+ public:
+  BaselineFollowTask(std::shared_ptr<hal::sim::Simulation> sim, hal::VehicleLink& vehicle, hal::Gimbal& gimbal)
+      : sim_(std::move(sim)),
+        follower_(hal::sim::BaselineFollowerParams{}, sim_->scenario().spec.drone.start_m,
+                  sim_->scenario().spec.drone.start_yaw_rad),
+        vehicle_(vehicle),
+        gimbal_(gimbal) {}
+  void step(rt::TimeNs now_ns) override {
+    const auto truth = sim_->truthOut().read();
+    if (!truth) return;
+    const hal::sim::FollowCommand command = follower_.update(*truth, now_ns);
+    vehicle_.send(command.setpoint);
+    gimbal_.command(command.gimbal);
+  }
+
+ private:
+  std::shared_ptr<hal::sim::Simulation> sim_;
+  hal::sim::BaselineFollower follower_;
+  hal::VehicleLink& vehicle_;
+  hal::Gimbal& gimbal_;
 };
 
 }  // namespace aerotrack::app

@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
     }
     if (args->command == "run") return runCommand(*args);
     if (args->command == "sim") return simCommand(*args);
+    if (args->command == "bench") return benchCommand(*args);
     std::fprintf(stderr, "aerotrack: command '%s' has no handler\n", args->command.c_str());
     return 1;
   } catch (const std::exception& e) {

@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "report.hpp"
 #include "signals.hpp"
+#include "sim_report.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -35,7 +36,16 @@ int runCommand(const ParsedArgs& args) {
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);  // before any thread starts
   const rt::MonotonicClock clock;
-  auto system = System::build(*config, clock.now());
+  std::optional<hal::sim::ScenarioInstance> trial;
+  if (config->hal.usesSim()) {
+    auto loaded = loadTrial(config->sim.scenario, config->sim.seed, std::nullopt);
+    if (!loaded) {
+      std::fprintf(stderr, "aerotrack run: %s\n", loaded.error().message.c_str());
+      return 1;
+    }
+    trial = std::move(loaded.value());
+  }
+  auto system = System::build(*config, trial ? &*trial : nullptr, clock.now());
   if (!system) {
     std::fprintf(stderr, "aerotrack run: %s\n", system.error().message.c_str());
     return 1;

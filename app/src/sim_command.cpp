@@ -1,9 +1,8 @@
-// `aerotrack sim --scenario NAME|FILE [--seed N] [--out DIR] [--realtime] [--config FILE]`.
-//
-// Foundation version: the scenario's drone flies a minimum-jerk tour of waypoints through the
-// trajectory server and the simulated flight controller, on the lockstep executor (or at 1x on
-// threads with --realtime), and the run is summarised in DIR/summary.json. The person, obstacles,
-// sensors and planner replace the tour as later issues land (README, "Status").
+// `aerotrack sim --scenario NAME|FILE [--seed N] [--speed MPS] [--out DIR] [--realtime] [--config FILE]`:
+// one closed-loop trial in the built-in simulator, on the lockstep executor (deterministic, as
+// fast as the CPU allows) or at 1x on threads with --realtime. Writes DIR/summary.json and
+// DIR/topdown.png. Until the planner and gimbal controller land, the drone is flown by the
+// simulator's truth-fed baseline_follow stand-in (README, "Status").
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -13,12 +12,11 @@
 
 #include "aerotrack/rt/lockstep_executor.hpp"
 #include "aerotrack/rt/realtime_executor.hpp"
-#include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 #include "commands.hpp"
 #include "paths.hpp"
 #include "report.hpp"
-#include "scenario.hpp"
 #include "signals.hpp"
+#include "sim_report.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -29,52 +27,42 @@ int fail(const std::string& message) {
   return 1;
 }
 
-struct RunOutcome {
-  std::vector<TaskTiming> timings;
-  double sim_time_s = 0.0;
-  double wall_time_s = 0.0;
-  std::uint64_t trace_hash = 0;  // lockstep only
-  bool interrupted = false;
-};
-
 rt::Status addAll(const System& system, auto& executor) {
   for (const rt::TaskBinding& b : system.bindings())
     if (rt::Status s = executor.add(b); !s) return s;
   return rt::ok();
 }
 
-rt::Expected<RunOutcome> runLockstep(System& system, rt::ManualClock& clock, rt::TimeNs end_ns,
-                                     const std::atomic<bool>& stop) {
+rt::Status runLockstep(System& system, rt::ManualClock& clock, rt::TimeNs end_ns, const std::atomic<bool>& stop,
+                       RunInfo& info) {
   const rt::MonotonicClock wall;
   rt::LockstepExecutor executor(clock, wall);
-  if (rt::Status s = addAll(system, executor); !s) return s.error();
+  if (rt::Status s = addAll(system, executor); !s) return s;
   const rt::TimeNs wall_start = wall.now();
-  if (rt::Status s = executor.runUntil(end_ns, &stop); !s) return s.error();
-  RunOutcome out;
-  out.wall_time_s = rt::nsToSeconds(wall.now() - wall_start);
-  out.sim_time_s = rt::nsToSeconds(clock.now());
-  out.timings = snapshotTimings(executor.stats());
-  out.trace_hash = executor.traceHash();
-  out.interrupted = stop.load();
-  return out;
+  if (rt::Status s = executor.runUntil(end_ns, &stop); !s) return s;
+  info.wall_time_s = rt::nsToSeconds(wall.now() - wall_start);
+  info.sim_time_s = rt::nsToSeconds(clock.now());
+  info.timings = snapshotTimings(executor.stats());
+  char hash[32];
+  std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(executor.traceHash()));
+  info.trace_hash = hash;
+  return rt::ok();
 }
 
-rt::Expected<RunOutcome> runRealtime(System& system, const rt::MonotonicClock& clock, rt::TimeNs start_ns,
-                                     rt::TimeNs end_ns, const std::atomic<bool>& stop) {
+rt::Status runRealtime(System& system, const rt::MonotonicClock& clock, rt::TimeNs start_ns, rt::TimeNs end_ns,
+                       const std::atomic<bool>& stop, RunInfo& info) {
   rt::RealtimeExecutor executor(clock, system.config().realtime);
-  if (rt::Status s = addAll(system, executor); !s) return s.error();
+  if (rt::Status s = addAll(system, executor); !s) return s;
   const auto warnings = executor.start();
   if (!warnings) return warnings.error();
   for (const std::string& w : *warnings) std::fprintf(stderr, "aerotrack sim: warning: %s\n", w.c_str());
   while (!stop.load() && clock.now() < end_ns) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   executor.requestStop();
   executor.join();
-  RunOutcome out;
-  out.sim_time_s = rt::nsToSeconds(clock.now() - start_ns);
-  out.wall_time_s = out.sim_time_s;
-  out.timings = snapshotTimings(executor.stats());
-  out.interrupted = stop.load();
-  return out;
+  info.sim_time_s = rt::nsToSeconds(clock.now() - start_ns);
+  info.wall_time_s = info.sim_time_s;
+  info.timings = snapshotTimings(executor.stats());
+  return rt::ok();
 }
 
 }  // namespace
@@ -84,84 +72,65 @@ int simCommand(const ParsedArgs& args) {
     return std::fprintf(stderr, "aerotrack sim: --mode is not available yet: planner modes arrive with issue 9\n"), 2;
   const auto seed = parseInt("seed", args.valueOr("seed", "1"), 0, INT64_MAX);
   if (!seed) return fail(seed.error().message);
-  const auto scenario = loadScenario(resolveScenario(args.values.at("scenario")));
-  if (!scenario) return fail(scenario.error().message);
+  std::optional<double> speed;
+  if (args.has("speed")) {
+    const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0);
+    if (!s) return fail(s.error().message);
+    speed = *s;
+  }
   auto config = loadAppConfig(args.valueOr("config", configDir() + "/sim.yaml"));
   if (!config) return fail(config.error().message);
   if (!config->hal.usesSim()) return fail(config->source + ": hal: no device uses the sim backend");
-  config->sim.start_p_W_m = scenario->drone_start_m;
-  config->sim.start_yaw_rad = scenario->drone_start_yaw_rad;
-  config->trajectory_server.initial_yaw_rad = scenario->drone_start_yaw_rad;
-  const std::string out_dir = args.valueOr("out", "out/sim-" + scenario->name + "-" + std::to_string(*seed));
+  const std::string scenario_name = args.values.at("scenario");
+  const auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
+  if (!trial) return fail(trial.error().message);
+  config->sim.scenario = scenario_name;
+  config->sim.seed = static_cast<std::uint64_t>(*seed);
+  const std::string out_dir = args.valueOr("out", "out/sim-" + trial->spec.name + "-" + std::to_string(*seed));
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) return fail(out_dir + ": cannot create directory: " + ec.message());
 
   const bool realtime = args.flags.count("realtime") != 0;
   rt::ManualClock sim_clock(0);
   const rt::MonotonicClock mono_clock;
   const rt::TimeNs start_ns = realtime ? mono_clock.now() : 0;
-
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);
-  auto system = System::build(*config, start_ns);
+  auto system = System::build(*config, &trial.value(), start_ns);
   if (!system) return fail(system.error().message);
 
-  // The tour starts at the drone's start position; the vehicle's limits cap the scenario's.
-  std::vector<Eigen::Vector3d> waypoints{scenario->drone_start_m};
-  waypoints.insert(waypoints.end(), scenario->tour_waypoints_m.begin(), scenario->tour_waypoints_m.end());
-  auto tour = trajectory_server::MinJerkTour::create(
-      waypoints, std::min(scenario->tour_max_speed_mps, config->vehicle.max_speed_mps),
-      std::min(scenario->tour_max_accel_mps2, config->vehicle.max_accel_mps2));
-  if (!tour) return fail(scenario->source + ": tour: " + tour.error().message);
-  const auto tour_handle = std::make_shared<const trajectory_server::MinJerkTour>(std::move(tour.value()));
-  (*system)->channels().trajectories.write(std::make_shared<const trajectory_server::TimedTrajectory>(
-      trajectory_server::TimedTrajectory{tour_handle, start_ns + rt::secondsToNs(scenario->tour_start_delay_s)}));
+  RunInfo info;
+  info.executor = realtime ? "realtime" : "lockstep";
+  info.controller = "baseline_follow (truth-fed stand-in until the planner lands)";
+  const rt::TimeNs end_ns = start_ns + rt::secondsToNs(trial->duration_s);
+  const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info)
+                                  : runLockstep(**system, sim_clock, end_ns, stop, info);
+  if (!ran) return fail(ran.error().message);
+  info.interrupted = stop.load();
 
-  const rt::TimeNs end_ns = start_ns + rt::secondsToNs(scenario->duration_s);
-  auto outcome = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop)
-                          : runLockstep(**system, sim_clock, end_ns, stop);
-  if (!outcome) return fail(outcome.error().message);
-
-  const hal::sim::PointMassWorld& world = *(*system)->devices().world;
-  const hal::sim::PointMassTruth truth = world.truth();
-  const double final_error_m = (truth.p_W_m - waypoints.back()).norm();
-  const double rtf = outcome->wall_time_s > 0.0 ? outcome->sim_time_s / outcome->wall_time_s : 0.0;
-  nlohmann::json summary = {
-      {"scenario", scenario->name},
-      {"seed", *seed},
-      {"executor", realtime ? "realtime" : "lockstep"},
-      {"interrupted", outcome->interrupted},
-      {"sim_time_s", outcome->sim_time_s},
-      {"wall_time_s", outcome->wall_time_s},
-      {"realtime_factor", rtf},
-      {"tour_duration_s", tour_handle->durationS()},
-      {"setpoints_received", world.setpointsReceived()},
-      {"tracking_error_mean_m", world.trackingStats().meanErrorM()},
-      {"tracking_error_max_m", world.trackingStats().max_error_m},
-      {"final_position_error_m", final_error_m},
-      {"tasks", timingJson(outcome->timings)},
-  };
-  if (!realtime) {
-    char hash[32];
-    std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(outcome->trace_hash));
-    summary["trace_hash"] = hash;
-  }
-
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return fail(out_dir + ": cannot create directory: " + ec.message());
+  const hal::sim::Simulation& sim = *(*system)->devices().simulation;
+  const nlohmann::json summary = simSummary(sim, info);
   const std::string summary_path = out_dir + "/summary.json";
   std::ofstream file(summary_path);
   file << summary.dump(2) << "\n";
   file.close();
   if (!file) return fail(summary_path + ": write failed");
+  const std::string topdown_path = out_dir + "/topdown.png";
+  if (const rt::Status s = drawTopdown(sim, topdown_path); !s) return fail(s.error().message);
 
-  std::printf("scenario %s, seed %lld, %s: %.1f s simulated in %.3f s wall (%.0fx real time)\n", scenario->name.c_str(),
-              static_cast<long long>(*seed), realtime ? "realtime" : "lockstep", outcome->sim_time_s,
-              outcome->wall_time_s, rtf);
-  std::printf("setpoint tracking error: mean %.3f m, max %.3f m; final distance to the last waypoint %.3f m\n",
-              world.trackingStats().meanErrorM(), world.trackingStats().max_error_m, final_error_m);
-  std::fputs(timingTable(outcome->timings).c_str(), stdout);
-  std::printf("summary: %s\n", summary_path.c_str());
-  return outcome->interrupted ? 130 : 0;
+  const hal::sim::SimMetrics& m = sim.metrics();
+  std::printf("%s seed %lld (%s): %s%s\n", trial->spec.name.c_str(), static_cast<long long>(*seed),
+              info.executor.c_str(), m.success() ? "success" : "FAILURE: ", m.failureReason().c_str());
+  std::printf(
+      "  %.1f s simulated in %.2f s wall (%.0fx real time); person visible %.0f%% of the time, longest loss %.1f s\n",
+      info.sim_time_s, info.wall_time_s, summary["realtime_factor"].get<double>(), 100.0 * m.visibleRatio(),
+      m.longestLossS());
+  std::printf("  distance to the person: mean %.2f m, max %.2f m, final %.2f m; min clearance %.2f m, collisions %d\n",
+              m.distanceMeanM(), m.distanceMaxM(), m.finalDistanceM(), m.minClearanceM(), m.collisions());
+  std::fputs(timingTable(info.timings).c_str(), stdout);
+  std::printf("results: %s, %s\n", summary_path.c_str(), topdown_path.c_str());
+  return info.interrupted ? 130 : 0;
 }
 
 }  // namespace aerotrack::app

@@ -7,12 +7,16 @@
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry", "trajectory_server"};
+  return {"sim_world", "odometry", "gimbal_camera", "depth_camera", "gimbal", "trajectory_server", "baseline_follow"};
 }
 
-rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, rt::TimeNs start_ns) {
+rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
+                                                    rt::TimeNs start_ns) {
   std::unique_ptr<System> system(new System(config));
-  auto devices = hal::makeDevices(config.hal, config.sim, start_ns);
+  hal::sim::SimulationOptions sim_options;
+  sim_options.physics_step_s = config.sim.physics_step_s;
+  sim_options.render_depth = config.sim.render_depth;
+  auto devices = hal::makeDevices(config.hal, scenario, sim_options, start_ns);
   if (!devices) return rt::Error{config.source + ": " + devices.error().message};
   system->devices_ = std::move(devices.value());
 
@@ -21,7 +25,7 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, rt:
     if (const rt::Status s = system->addTask(config.tasks[i], i); !s) return s.error();
     has_world_task = has_world_task || config.tasks[i].name == "sim_world";
   }
-  if (system->devices_.world && !has_world_task)
+  if (system->devices_.simulation && !has_world_task)
     return rt::Error{config.source +
                      ": tasks: sim backends are configured but no 'sim_world' task steps the simulation"};
   return system;
@@ -30,11 +34,20 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, rt:
 rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   const std::string where = config_.source + ": tasks[" + std::to_string(index) + "]";
   std::unique_ptr<rt::Task> task;
-  if (spec.name == "sim_world") {
-    if (!devices_.world) return rt::Error{where + ": task 'sim_world' needs a sim backend in hal"};
-    task = std::make_unique<SimWorldTask>(devices_.world);
+  if (spec.name == "sim_world" || spec.name == "baseline_follow") {
+    if (!devices_.simulation) return rt::Error{where + ": task '" + spec.name + "' needs a sim backend in hal"};
+    if (spec.name == "sim_world")
+      task = std::make_unique<SimWorldTask>(devices_.simulation);
+    else
+      task = std::make_unique<BaselineFollowTask>(devices_.simulation, *devices_.vehicle_link, *devices_.gimbal);
   } else if (spec.name == "odometry") {
     task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry);
+  } else if (spec.name == "gimbal_camera") {
+    task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections);
+  } else if (spec.name == "depth_camera") {
+    task = std::make_unique<DepthCameraTask>(*devices_.depth_camera, channels_.depth);
+  } else if (spec.name == "gimbal") {
+    task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state);
   } else if (spec.name == "trajectory_server") {
     auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
         config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);

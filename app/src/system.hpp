@@ -12,6 +12,7 @@
 #include "aerotrack/rt/doorbell.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
+#include "aerotrack/rt/spsc_queue.hpp"
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 #include "app_config.hpp"
@@ -23,12 +24,17 @@ struct Channels {
   rt::LatestSlot<hal::OdometrySample> odometry;
   rt::LatestSlot<hal::Setpoint> setpoints;
   rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
+  rt::SpscQueue<hal::DetectionFrame> detections{16, rt::OverflowPolicy::kDropOldest};
+  rt::SharedSlot<hal::DepthFrame> depth;
+  rt::LatestSlot<hal::GimbalState> gimbal_state;
 };
 
 class System {
  public:
-  /// Builds devices and tasks. start_ns: the executor clock's time at start (sim world epoch).
-  static rt::Expected<std::unique_ptr<System>> build(const AppConfig& config, rt::TimeNs start_ns);
+  /// Builds devices and tasks. scenario: the trial the sim backends fly (needed only if a
+  /// backend is "sim"). start_ns: the executor clock's time at start (the simulation's epoch).
+  static rt::Expected<std::unique_ptr<System>> build(const AppConfig& config,
+                                                     const hal::sim::ScenarioInstance* scenario, rt::TimeNs start_ns);
 
   const std::vector<rt::TaskBinding>& bindings() const { return bindings_; }
   Channels& channels() { return channels_; }

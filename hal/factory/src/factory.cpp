@@ -1,5 +1,5 @@
 // Device factory: see factory.hpp. Adding a backend means one more name in the allowed list of
-// its device and one more branch in make*(); nothing else in the tree changes.
+// its device and one more branch in makeDevices(); nothing else in the tree changes.
 #include "aerotrack/hal/factory.hpp"
 
 #include "aerotrack/hal/null/devices.hpp"
@@ -15,9 +15,9 @@ bool HalConfig::usesSim() const {
 
 HalConfig parseHalConfig(const rt::ConfigNode& node) {
   HalConfig c;
-  c.gimbal_camera = node.getEnum("gimbal_camera", {"null"});
-  c.depth_camera = node.getEnum("depth_camera", {"null"});
-  c.gimbal = node.getEnum("gimbal", {"null"});
+  c.gimbal_camera = node.getEnum("gimbal_camera", {"null", "sim"});
+  c.depth_camera = node.getEnum("depth_camera", {"null", "sim"});
+  c.gimbal = node.getEnum("gimbal", {"null", "sim"});
   c.odometry = node.getEnum("odometry", {"null", "sim"});
   c.vehicle_link = node.getEnum("vehicle_link", {"null", "sim"});
   node.finish();
@@ -34,50 +34,55 @@ void emitYaml(YAML::Emitter& out, const HalConfig& c) {
   out << YAML::EndMap;
 }
 
-sim::PointMassParams parsePointMassParams(const rt::ConfigNode& node) {
-  sim::PointMassParams p;
-  p.position_gain_per_s2 = node.getDouble("position_gain_per_s2", 0.0, 100.0);
-  p.velocity_gain_per_s = node.getDouble("velocity_gain_per_s", 0.0, 100.0);
-  p.max_accel_mps2 = node.getDouble("max_accel_mps2", 0.1, 100.0);
-  p.max_yaw_rate_radps = node.getDouble("max_yaw_rate_radps", 0.1, 50.0);
-  p.substep_s = node.getDouble("substep_s", 1e-5, 0.01);
+SimConfig parseSimConfig(const rt::ConfigNode& node) {
+  SimConfig c;
+  c.scenario = node.getString("scenario");
+  c.seed = node.getUint64("seed");
+  c.physics_step_s = node.getDouble("physics_step_s", 1e-4, 0.01);
+  c.render_depth = node.getBool("render_depth");
   node.finish();
-  return p;
+  return c;
 }
 
-void emitYaml(YAML::Emitter& out, const sim::PointMassParams& p) {
+void emitYaml(YAML::Emitter& out, const SimConfig& c) {
   out << YAML::BeginMap;
-  out << YAML::Key << "position_gain_per_s2" << YAML::Value << p.position_gain_per_s2;
-  out << YAML::Key << "velocity_gain_per_s" << YAML::Value << p.velocity_gain_per_s;
-  out << YAML::Key << "max_accel_mps2" << YAML::Value << p.max_accel_mps2;
-  out << YAML::Key << "max_yaw_rate_radps" << YAML::Value << p.max_yaw_rate_radps;
-  out << YAML::Key << "substep_s" << YAML::Value << p.substep_s;
+  out << YAML::Key << "scenario" << YAML::Value << c.scenario;
+  out << YAML::Key << "seed" << YAML::Value << c.seed;
+  out << YAML::Key << "physics_step_s" << YAML::Value << c.physics_step_s;
+  out << YAML::Key << "render_depth" << YAML::Value << c.render_depth;
   out << YAML::EndMap;
 }
 
-rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::PointMassParams& sim_params, TimeNs start_ns) {
+rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioInstance* scenario,
+                                  const sim::SimulationOptions& sim_options, TimeNs start_ns) {
   Devices d;
-  if (config.usesSim()) d.world = std::make_shared<sim::PointMassWorld>(sim_params, start_ns);
-
-  // Backends without a sim or real implementation yet accept only "null" in parseHalConfig.
-  d.gimbal_camera = std::make_unique<null::NullGimbalCamera>();
-  d.depth_camera = std::make_unique<null::NullDepthCamera>();
-  d.gimbal = std::make_unique<null::NullGimbal>();
-
+  if (config.usesSim()) {
+    if (scenario == nullptr) return rt::Error{"hal: sim backends need a scenario"};
+    auto simulation = sim::Simulation::create(*scenario, sim_options, start_ns);
+    if (!simulation) return simulation.error();
+    d.simulation = std::move(simulation.value());
+  }
+  const bool sim_camera = config.gimbal_camera == "sim";
+  if (sim_camera)
+    d.gimbal_camera = std::make_unique<sim::SimGimbalCamera>(d.simulation);
+  else
+    d.gimbal_camera = std::make_unique<null::NullGimbalCamera>();
+  if (config.depth_camera == "sim")
+    d.depth_camera = std::make_unique<sim::SimDepthCamera>(d.simulation);
+  else
+    d.depth_camera = std::make_unique<null::NullDepthCamera>();
+  if (config.gimbal == "sim")
+    d.gimbal = std::make_unique<sim::SimGimbal>(d.simulation);
+  else
+    d.gimbal = std::make_unique<null::NullGimbal>();
   if (config.odometry == "sim")
-    d.odometry = std::make_unique<sim::SimOdometry>(d.world);
-  else if (config.odometry == "null")
+    d.odometry = std::make_unique<sim::SimOdometry>(d.simulation);
+  else
     d.odometry = std::make_unique<null::NullOdometry>();
-  else
-    return rt::Error{"hal.odometry: unknown backend '" + config.odometry + "'"};
-
   if (config.vehicle_link == "sim")
-    d.vehicle_link = std::make_unique<sim::SimVehicleLink>(d.world);
-  else if (config.vehicle_link == "null")
-    d.vehicle_link = std::make_unique<null::NullVehicleLink>();
+    d.vehicle_link = std::make_unique<sim::SimVehicleLink>(d.simulation);
   else
-    return rt::Error{"hal.vehicle_link: unknown backend '" + config.vehicle_link + "'"};
-
+    d.vehicle_link = std::make_unique<null::NullVehicleLink>();
   return d;
 }
 

@@ -1,25 +1,43 @@
-// Sim device views onto the point-mass world.
+// Sim device views onto the simulation.
 #include "aerotrack/hal/sim/devices.hpp"
 
 namespace aerotrack::hal::sim {
+namespace {
 
-DeviceHealth SimOdometry::health(TimeNs) const {
-  return {DeviceHealth::State::kOk, "simulated ground truth", world_->truth().stamp_ns, 0};
+DeviceHealth simulated(const char* what, TimeNs last_ns) {
+  return {DeviceHealth::State::kOk, what, last_ns, 0};
 }
 
-std::optional<OdometrySample> SimOdometry::read(TimeNs) {
-  const PointMassTruth truth = world_->truth();
-  OdometrySample sample;
-  sample.stamp_ns = truth.stamp_ns;
-  sample.p_WB_m = truth.p_W_m;
-  sample.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(truth.yaw_rad, Eigen::Vector3d::UnitZ()));
-  sample.v_WB_mps = truth.v_W_mps;
-  sample.w_WB_B_radps = Eigen::Vector3d(0.0, 0.0, truth.yaw_rate_radps);
-  return sample;
+}  // namespace
+
+DeviceHealth SimOdometry::health(TimeNs) const {
+  const auto last = sim_->odometryOut().read();
+  return simulated("simulated odometry (truth + noise, delayed)", last ? last->stamp_ns : 0);
 }
 
 DeviceHealth SimVehicleLink::health(TimeNs now_ns) const {
-  return {DeviceHealth::State::kOk, "simulated flight controller", now_ns, 0};
+  return simulated("simulated flight controller", now_ns);
+}
+
+DeviceHealth SimGimbal::health(TimeNs) const {
+  const auto last = sim_->gimbalOut().read();
+  return simulated("simulated gimbal motor", last ? last->stamp_ns : 0);
+}
+
+DeviceHealth SimGimbalCamera::health(TimeNs now_ns) const {
+  return simulated("simulated gimbal camera, keypoint mode", now_ns);
+}
+
+DeviceHealth SimDepthCamera::health(TimeNs) const {
+  const auto last = sim_->depthOut().read();
+  return simulated("simulated depth camera", last ? last->stamp_ns : 0);
+}
+
+DepthFrameHandle SimDepthCamera::grab(TimeNs) {
+  const std::uint64_t version = sim_->depthOut().version();
+  if (version == version_) return {};
+  version_ = version;
+  return sim_->depthOut().read();
 }
 
 }  // namespace aerotrack::hal::sim

@@ -28,6 +28,10 @@ class GimbalCamera : public Device {
  public:
   /// The newest frame not returned before, or an empty handle if there is none.
   virtual ImageFrameHandle grab(TimeNs now_ns) = 0;
+  /// Keypoint-mode cameras (the simulator's) deliver what a detector would output instead of
+  /// images: the oldest detection result not returned before, or nothing. Image cameras return
+  /// nothing here, and their images go through the detector.
+  virtual std::optional<DetectionFrame> grabDetections(TimeNs /*now_ns*/) { return std::nullopt; }
 };
 
 class DepthCamera : public Device {

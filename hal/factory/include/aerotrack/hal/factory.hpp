@@ -3,13 +3,14 @@
 // drivers). Every device slot is filled: a device this vehicle lacks gets a null backend.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
 #include <yaml-cpp/emitter.h>
 
 #include "aerotrack/hal/devices.hpp"
-#include "aerotrack/hal/sim/point_mass_world.hpp"
+#include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
 
@@ -26,26 +27,33 @@ struct HalConfig {
   bool usesSim() const;
 };
 
+/// The `sim:` section: which scenario the sim backends fly and how.
+struct SimConfig {
+  std::string scenario = "open";  ///< Name in config/scenarios/ or a YAML path.
+  std::uint64_t seed = 1;
+  double physics_step_s = 0.002;
+  bool render_depth = true;
+};
+
 /// Reads the `hal:` map (throws rt::ConfigError naming the key; use inside rt::parseConfig).
 HalConfig parseHalConfig(const rt::ConfigNode& node);
 void emitYaml(YAML::Emitter& out, const HalConfig& config);
+SimConfig parseSimConfig(const rt::ConfigNode& node);
+void emitYaml(YAML::Emitter& out, const SimConfig& config);
 
-/// Reads the `sim:` map: the simulated vehicle's controller (its start pose comes from the scenario).
-sim::PointMassParams parsePointMassParams(const rt::ConfigNode& node);
-void emitYaml(YAML::Emitter& out, const sim::PointMassParams& params);
-
-/// The devices of one vehicle. world is set when any backend is "sim": the app must then step it
-/// with the `sim_world` task.
+/// The devices of one vehicle. simulation is set when any backend is "sim": the app must then
+/// step it with the `sim_world` task.
 struct Devices {
   std::unique_ptr<GimbalCamera> gimbal_camera;
   std::unique_ptr<DepthCamera> depth_camera;
   std::unique_ptr<Gimbal> gimbal;
   std::unique_ptr<Odometry> odometry;
   std::unique_ptr<VehicleLink> vehicle_link;
-  std::shared_ptr<sim::PointMassWorld> world;
+  std::shared_ptr<sim::Simulation> simulation;
 };
 
-/// Builds every device. sim_params and start_ns are used only if a backend is "sim".
-rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::PointMassParams& sim_params, TimeNs start_ns);
+/// Builds every device. scenario (one instantiated trial) is needed only if a backend is "sim".
+rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioInstance* scenario,
+                                  const sim::SimulationOptions& sim_options, TimeNs start_ns);
 
 }  // namespace aerotrack::hal

@@ -1,36 +1,73 @@
-// Sim backends of the HAL devices, views onto the simulated world. Odometry is the world's truth
-// (noise and latency arrive with the full simulator, issue 3); the vehicle link forwards
-// setpoints to the world's flight controller and reports an armed, offboard vehicle.
+// Sim backends of the HAL devices: views onto one Simulation through its thread-safe channels,
+// so the modules cannot tell them from real devices.
 #pragma once
 
 #include <memory>
 
 #include "aerotrack/hal/devices.hpp"
-#include "aerotrack/hal/sim/point_mass_world.hpp"
+#include "aerotrack/hal/sim/simulation.hpp"
 
 namespace aerotrack::hal::sim {
 
 class SimOdometry final : public Odometry {
  public:
-  explicit SimOdometry(std::shared_ptr<PointMassWorld> world) : world_(std::move(world)) {}
+  explicit SimOdometry(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
-  std::optional<OdometrySample> read(TimeNs now_ns) override;
+  std::optional<OdometrySample> read(TimeNs) override { return sim_->odometryOut().read(); }
 
  private:
-  std::shared_ptr<PointMassWorld> world_;
+  std::shared_ptr<Simulation> sim_;
 };
 
 class SimVehicleLink final : public VehicleLink {
  public:
-  explicit SimVehicleLink(std::shared_ptr<PointMassWorld> world) : world_(std::move(world)) {}
+  explicit SimVehicleLink(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
-  void send(const Setpoint& setpoint) override { world_->setSetpoint(setpoint); }
+  void send(const Setpoint& setpoint) override { sim_->setpointInbox().write(setpoint); }
   VehicleStatus status(TimeNs now_ns) override { return {now_ns, true, true, FlightMode::kOffboard}; }
 
  private:
-  std::shared_ptr<PointMassWorld> world_;
+  std::shared_ptr<Simulation> sim_;
+};
+
+class SimGimbal final : public Gimbal {
+ public:
+  explicit SimGimbal(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
+  std::string_view backend() const override { return "sim"; }
+  DeviceHealth health(TimeNs now_ns) const override;
+  void command(const GimbalCommand& command) override { sim_->gimbalInbox().write(command); }
+  std::optional<GimbalState> read(TimeNs) override { return sim_->gimbalOut().read(); }
+
+ private:
+  std::shared_ptr<Simulation> sim_;
+};
+
+/// Keypoint mode: grabDetections() delivers the simulated detector output; no images.
+class SimGimbalCamera final : public GimbalCamera {
+ public:
+  explicit SimGimbalCamera(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
+  std::string_view backend() const override { return "sim"; }
+  DeviceHealth health(TimeNs now_ns) const override;
+  ImageFrameHandle grab(TimeNs) override { return {}; }
+  std::optional<DetectionFrame> grabDetections(TimeNs) override { return sim_->detectionsOut().try_pop(); }
+
+ private:
+  std::shared_ptr<Simulation> sim_;
+  // detectionsOut() has one consumer: this device, used by one task.
+};
+
+class SimDepthCamera final : public DepthCamera {
+ public:
+  explicit SimDepthCamera(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
+  std::string_view backend() const override { return "sim"; }
+  DeviceHealth health(TimeNs now_ns) const override;
+  DepthFrameHandle grab(TimeNs now_ns) override;
+
+ private:
+  std::shared_ptr<Simulation> sim_;
+  std::uint64_t version_ = 0;
 };
 
 }  // namespace aerotrack::hal::sim

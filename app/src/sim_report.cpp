@@ -1,0 +1,100 @@
+// summary.json and topdown.png of a simulated run: see sim_report.hpp.
+#include "sim_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "paths.hpp"
+
+namespace aerotrack::app {
+
+nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
+  const hal::sim::SimMetrics& m = sim.metrics();
+  const hal::sim::ScenarioInstance& trial = sim.scenario();
+  const std::string reason = m.failureReason();
+  nlohmann::json out = {
+      {"scenario", trial.spec.name},
+      {"seed", trial.seed},
+      {"success", reason.empty()},
+      {"failure_reason", reason.empty() ? nlohmann::json(nullptr) : nlohmann::json(reason)},
+      {"collisions", m.collisions()},
+      {"min_clearance_m", m.minClearanceM()},
+      {"visible_ratio", m.visibleRatio()},
+      {"losses", m.losses().size()},
+      {"longest_loss_s", m.longestLossS()},
+      {"distance_mean_m", m.distanceMeanM()},
+      {"distance_max_m", m.distanceMaxM()},
+      {"final_distance_m", m.finalDistanceM()},
+      {"person_speed_scale", trial.speed_scale},
+      {"mirrored", trial.mirrored},
+      {"controller", run.controller},
+      {"executor", run.executor},
+      {"interrupted", run.interrupted},
+      {"sim_time_s", run.sim_time_s},
+      {"wall_time_s", run.wall_time_s},
+      {"realtime_factor", run.wall_time_s > 0.0 ? run.sim_time_s / run.wall_time_s : 0.0},
+      {"tasks", timingJson(run.timings)},
+  };
+  if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
+  return out;
+}
+
+rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_path) {
+  const hal::sim::ScenarioSpec& spec = sim.scenario().spec;
+  const Eigen::Vector2d lo = spec.bounds_min_m.head<2>(), hi = spec.bounds_max_m.head<2>();
+  const double scale = std::min(1400.0 / (hi.x() - lo.x()), 1000.0 / (hi.y() - lo.y()));  // px per metre
+  const int margin = 40;
+  const int width = static_cast<int>(std::ceil((hi.x() - lo.x()) * scale)) + 2 * margin;
+  const int height = static_cast<int>(std::ceil((hi.y() - lo.y()) * scale)) + 2 * margin + 30;
+  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  const auto px = [&](const Eigen::Vector3d& p) {
+    return cv::Point(static_cast<int>(std::lround(margin + (p.x() - lo.x()) * scale)),
+                     static_cast<int>(std::lround(margin + 30 + (hi.y() - p.y()) * scale)));
+  };
+  cv::rectangle(image, px({lo.x(), hi.y(), 0}), px({hi.x(), lo.y(), 0}), cv::Scalar(200, 200, 200), 1);
+  for (const auto& b : sim.obstacles().boxes())
+    cv::rectangle(image, px({b.min_W_m.x(), b.max_W_m.y(), 0}), px({b.max_W_m.x(), b.min_W_m.y(), 0}),
+                  cv::Scalar(150, 150, 150), cv::FILLED);
+  for (const auto& c : sim.obstacles().cylinders())
+    cv::circle(image, px({c.center_W_m.x(), c.center_W_m.y(), 0}), std::max(1, static_cast<int>(c.radius_m * scale)),
+               cv::Scalar(90, 110, 90), cv::FILLED);
+
+  const auto& track = sim.metrics().track();
+  for (std::size_t i = 1; i < track.size(); ++i)
+    cv::line(image, px(track[i - 1].person_m), px(track[i].person_m), cv::Scalar(200, 120, 30), 2, cv::LINE_AA);
+  for (std::size_t i = 1; i < track.size(); ++i) {
+    const cv::Scalar colour = track[i].visible ? cv::Scalar(60, 170, 40) : cv::Scalar(40, 40, 220);
+    cv::line(image, px(track[i - 1].drone_m), px(track[i].drone_m), colour, 2, cv::LINE_AA);
+  }
+  for (const auto& loss : sim.metrics().losses()) cv::circle(image, px(loss.drone_m), 7, cv::Scalar(0, 140, 255), 2);
+  if (!track.empty()) {
+    cv::drawMarker(image, px(track.front().drone_m), cv::Scalar(0, 0, 0), cv::MARKER_TRIANGLE_UP, 14, 2);
+    cv::drawMarker(image, px(track.back().drone_m), cv::Scalar(0, 0, 0), cv::MARKER_SQUARE, 12, 2);
+    cv::drawMarker(image, px(track.back().person_m), cv::Scalar(200, 120, 30), cv::MARKER_SQUARE, 12, 2);
+  }
+  const std::string reason = sim.metrics().failureReason();
+  char title[256];
+  std::snprintf(
+      title, sizeof(title),
+      "%s seed %llu: %s   visible %.0f%%  blue: person  green/red: drone (person visible / not)  orange: loss",
+      spec.name.c_str(), static_cast<unsigned long long>(sim.scenario().seed),
+      reason.empty() ? "success" : reason.c_str(), 100.0 * sim.metrics().visibleRatio());
+  cv::putText(image, title, cv::Point(10, 24), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  try {
+    if (!cv::imwrite(png_path, image)) return rt::Error{png_path + ": cannot write image"};
+  } catch (const cv::Exception& e) {
+    return rt::Error{png_path + ": cannot write image: " + e.what()};
+  }
+  return rt::ok();
+}
+
+rt::Expected<hal::sim::ScenarioInstance> loadTrial(const std::string& name_or_file, std::uint64_t seed,
+                                                   std::optional<double> speed_override_mps) {
+  const auto spec = hal::sim::loadScenarioSpec(resolveScenario(name_or_file));
+  if (!spec) return spec.error();
+  return hal::sim::instantiate(*spec, seed, speed_override_mps);
+}
+
+}  // namespace aerotrack::app

@@ -1,0 +1,36 @@
+// What a simulated run leaves behind (issue 3, README "sim outputs"): summary.json with the
+// verdict and the ground-truth metrics, and topdown.png (obstacles, the person's path, the
+// drone's path coloured by whether the person was visible, loss events marked).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "aerotrack/hal/sim/simulation.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "report.hpp"
+
+namespace aerotrack::app {
+
+struct RunInfo {
+  std::string executor;    ///< "lockstep" or "realtime"
+  std::string controller;  ///< what flew the drone, e.g. "baseline_follow"
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  bool interrupted = false;
+  std::string trace_hash;  ///< lockstep only
+  std::vector<TaskTiming> timings;
+};
+
+nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run);
+
+/// Draws the top view of the run; error if the file cannot be written.
+rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_path);
+
+/// Loads a scenario (name in config/scenarios/ or a file) and instantiates one trial.
+rt::Expected<hal::sim::ScenarioInstance> loadTrial(const std::string& name_or_file, std::uint64_t seed,
+                                                   std::optional<double> speed_override_mps);
+
+}  // namespace aerotrack::app

@@ -1,0 +1,154 @@
+// The closed-loop simulator (DESIGN.md: hal/sim): one scenario instance in motion. A rigid-body
+// quadrotor under a geometric tracking controller follows the setpoints arriving through the
+// vehicle link, as a flight controller would; the person walks their path; the gimbal motor turns
+// the camera; the sensors sample at their rates with their noise and latency:
+//   - gimbal camera in keypoint mode: the person's 17 keypoints projected, occluded by obstacles,
+//     noisy, sometimes missed, delivered after the detector's latency (hal::DetectionFrame);
+//   - depth camera fixed to the body, ray cast against the obstacles (hal::DepthFrame);
+//   - odometry: truth plus noise, delayed;
+//   - gimbal encoder.
+// It also keeps the ground-truth metrics a run is judged by (metrics.hpp).
+//
+// Threads: step() is called from one thread (the sim_world task). The device-facing channels are
+// the rt channels below, so device tasks may run on other threads (`aerotrack sim --realtime`).
+// truth(), metrics() and scenario() belong to the stepping thread (or to anyone after the run).
+#pragma once
+
+#include <array>
+#include <memory>
+#include <random>
+
+#include "aerotrack/hal/sim/geometric_controller.hpp"
+#include "aerotrack/hal/sim/gimbal_motor.hpp"
+#include "aerotrack/hal/sim/metrics.hpp"
+#include "aerotrack/hal/sim/obstacle_world.hpp"
+#include "aerotrack/hal/sim/quadrotor.hpp"
+#include "aerotrack/hal/sim/scenario.hpp"
+#include "aerotrack/hal/sim/walking_person.hpp"
+#include "aerotrack/rt/latest_slot.hpp"
+#include "aerotrack/rt/shared_slot.hpp"
+#include "aerotrack/rt/spsc_queue.hpp"
+
+namespace aerotrack::hal::sim {
+
+using rt::DurationNs;
+
+struct SimulationOptions {
+  double physics_step_s = 0.002;  ///< Controller and dynamics step (500 Hz, like a flight controller's attitude loop).
+  bool render_depth = true;       ///< Off: no depth frames (tests and runs that need no mapping).
+  double metrics_rate_hz = 50.0;
+};
+
+/// Ground truth at one instant.
+struct SimTruth {
+  TimeNs stamp_ns = 0;
+  QuadrotorState drone;
+  PersonState person;
+  double gimbal_angle_rad = 0.0;
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();  ///< Gimbal camera (OpenCV axes).
+};
+
+/// The truth other threads may read (through Simulation::truthOut()): small and fixed-size.
+struct TruthSnapshot {
+  TimeNs stamp_ns = 0;
+  Eigen::Vector3d drone_p_W_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d drone_v_W_mps = Eigen::Vector3d::Zero();
+  double drone_yaw_rad = 0.0;
+  Eigen::Vector3d person_p_W_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d person_v_W_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d camera_p_W_m = Eigen::Vector3d::Zero();
+  double gimbal_angle_rad = 0.0;
+  bool person_walking = false;  ///< The person's start delay has passed.
+};
+
+}  // namespace aerotrack::hal::sim
+
+static_assert(std::is_standard_layout_v<aerotrack::hal::sim::TruthSnapshot>);
+template <>
+struct aerotrack::rt::IsBitwiseCopyable<aerotrack::hal::sim::TruthSnapshot> : std::true_type {};
+
+namespace aerotrack::hal::sim {
+
+class Simulation {
+ public:
+  static rt::Expected<std::unique_ptr<Simulation>> create(const ScenarioInstance& scenario,
+                                                          const SimulationOptions& options, TimeNs start_ns);
+
+  /// Advances everything to now_ns in physics steps, sampling sensors when due. One thread.
+  void step(TimeNs now_ns);
+
+  // Device-facing channels (thread-safe; see the header paragraph).
+  rt::LatestSlot<Setpoint>& setpointInbox() { return setpoint_in_; }
+  rt::LatestSlot<GimbalCommand>& gimbalInbox() { return gimbal_in_; }
+  const rt::LatestSlot<OdometrySample>& odometryOut() const { return odometry_out_; }
+  const rt::LatestSlot<GimbalState>& gimbalOut() const { return gimbal_out_; }
+  rt::SpscQueue<DetectionFrame>& detectionsOut() { return detections_out_; }
+  const rt::SharedSlot<DepthFrame>& depthOut() const { return depth_out_; }
+  const rt::LatestSlot<TruthSnapshot>& truthOut() const { return truth_out_; }
+
+  // The stepping thread's view.
+  const SimTruth& truth() const { return truth_; }
+  const SimMetrics& metrics() const { return metrics_; }
+  const ScenarioInstance& scenario() const { return scenario_; }
+  const ObstacleWorld& obstacles() const { return obstacles_; }
+  const WalkingPerson& person() const { return person_; }
+  double personStartS() const { return scenario_.spec.person_start_delay_s; }
+  TimeNs startNs() const { return start_ns_; }
+  /// Camera pose for a body pose and gimbal angle (OpenCV axes: z along the gimbal's x).
+  Eigen::Isometry3d cameraPose(const QuadrotorState& drone, double gimbal_angle_rad) const;
+  /// The person's state at sim time t_ns (standing at the start before their delay).
+  PersonState personAt(TimeNs t_ns) const;
+  /// Whether the person's torso is in the gimbal camera's view and line of sight.
+  bool personVisible(const Eigen::Isometry3d& T_WC, const PersonState& person) const;
+
+ private:
+  Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
+             WalkingPerson person, Quadrotor quad, GeometricController controller, TimeNs start_ns);
+  void physicsStep(double dt_s);
+  void captureCamera();
+  void captureDepth();
+  void sampleOdometry();
+  void releaseDetections();
+  void publishTruth();
+
+  ScenarioInstance scenario_;
+  SimulationOptions options_;
+  ObstacleWorld obstacles_;
+  WalkingPerson person_;
+  Quadrotor quad_;
+  GeometricController controller_;
+  GimbalMotor gimbal_;
+  TimeNs start_ns_;
+  TimeNs now_ns_;
+  DurationNs physics_step_ns_;
+  std::mt19937_64 camera_rng_, depth_rng_, odometry_rng_;
+
+  Setpoint active_setpoint_;
+  std::uint64_t setpoint_version_ = 0;
+  GimbalCommand active_gimbal_command_;
+  std::uint64_t gimbal_version_ = 0;
+
+  // Sensor schedules.
+  TimeNs next_camera_ns_, next_depth_ns_, next_odometry_ns_, next_metrics_ns_;
+  DurationNs camera_period_ns_, depth_period_ns_, odometry_period_ns_, metrics_period_ns_;
+  std::uint64_t camera_sequence_ = 0, depth_sequence_ = 0;
+  // Detections waiting for their latency to pass (a small fixed ring).
+  std::array<DetectionFrame, 16> pending_{};
+  std::size_t pending_head_ = 0, pending_count_ = 0;
+  // Odometry delay line.
+  std::array<OdometrySample, 256> odometry_delay_{};
+  std::size_t odometry_head_ = 0, odometry_count_ = 0;
+
+  SimTruth truth_;
+  SimMetrics metrics_;
+
+  rt::LatestSlot<Setpoint> setpoint_in_;
+  rt::LatestSlot<GimbalCommand> gimbal_in_;
+  rt::LatestSlot<OdometrySample> odometry_out_;
+  rt::LatestSlot<GimbalState> gimbal_out_;
+  rt::SpscQueue<DetectionFrame> detections_out_{8, rt::OverflowPolicy::kDropOldest};
+  rt::SharedSlot<DepthFrame> depth_out_;
+  rt::LatestSlot<TruthSnapshot> truth_out_;
+};
+
+}  // namespace aerotrack::hal::sim

@@ -1,0 +1,256 @@
+// The closed-loop simulator: see simulation.hpp.
+#include "aerotrack/hal/sim/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace aerotrack::hal::sim {
+namespace {
+
+/// Camera axes (OpenCV: x right, y down, z forward) in a forward-left-up frame.
+Eigen::Matrix3d opticalAxesInFlu() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return R;
+}
+
+std::mt19937_64 streamRng(std::uint64_t seed, std::uint64_t stream) {
+  std::seed_seq seq{seed, stream, std::uint64_t{0x5eed}};
+  return std::mt19937_64(seq);
+}
+
+Eigen::Vector3d midpoint(const PersonState& p, CocoKeypoint a, CocoKeypoint b) {
+  return 0.5 * (p.keypoints_W_m[index(a)] + p.keypoints_W_m[index(b)]);
+}
+
+}  // namespace
+
+rt::Expected<std::unique_ptr<Simulation>> Simulation::create(const ScenarioInstance& scenario,
+                                                             const SimulationOptions& options, TimeNs start_ns) {
+  const ScenarioSpec& s = scenario.spec;
+  auto obstacles = ObstacleWorld::create(s.boxes, s.cylinders);
+  if (!obstacles) return rt::Error{s.source + ": world: " + obstacles.error().message};
+  auto person = WalkingPerson::create(s.person, s.path);
+  if (!person) return rt::Error{s.source + ": person: " + person.error().message};
+
+  QuadrotorParams quad_params;
+  quad_params.mass_kg = s.drone.mass_kg;
+  quad_params.max_thrust_n = s.drone.thrust_to_weight * s.drone.mass_kg * quad_params.gravity_mps2;
+  QuadrotorState initial;
+  initial.p_W_m = s.drone.start_m;
+  initial.R_WB = Eigen::AngleAxisd(s.drone.start_yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  // On the ground at rest, or hovering (thrust already at weight, so it does not sag at start).
+  initial.on_ground = s.drone.start_m.z() <= 0.0;
+  if (!initial.on_ground) initial.thrust_n = s.drone.mass_kg * quad_params.gravity_mps2;
+  auto quad = Quadrotor::create(quad_params, initial);
+  if (!quad) return rt::Error{s.source + ": drone: " + quad.error().message};
+  auto controller = GeometricController::create(GeometricControllerParams{}, quad_params);
+  if (!controller) return rt::Error{s.source + ": drone controller: " + controller.error().message};
+  if (!(options.physics_step_s > 0.0 && options.physics_step_s <= 0.01))
+    return rt::Error{"simulation: physics_step_s must be in (0, 0.01]"};
+  return std::unique_ptr<Simulation>(new Simulation(scenario, options, std::move(obstacles.value()),
+                                                    std::move(person.value()), std::move(quad.value()),
+                                                    std::move(controller.value()), start_ns));
+}
+
+Simulation::Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
+                       WalkingPerson person, Quadrotor quad, GeometricController controller, TimeNs start_ns)
+    : scenario_(scenario),
+      options_(options),
+      obstacles_(std::move(obstacles)),
+      person_(std::move(person)),
+      quad_(std::move(quad)),
+      controller_(std::move(controller)),
+      gimbal_(scenario.spec.gimbal),
+      start_ns_(start_ns),
+      now_ns_(start_ns),
+      physics_step_ns_(rt::secondsToNs(options.physics_step_s)),
+      camera_rng_(streamRng(scenario.seed, 1)),
+      depth_rng_(streamRng(scenario.seed, 2)),
+      odometry_rng_(streamRng(scenario.seed, 3)),
+      next_camera_ns_(start_ns),
+      next_depth_ns_(start_ns),
+      next_odometry_ns_(start_ns),
+      next_metrics_ns_(start_ns),
+      camera_period_ns_(rt::periodFromRateHz(scenario.spec.gimbal_camera.rate_hz)),
+      depth_period_ns_(rt::periodFromRateHz(scenario.spec.depth_camera.rate_hz)),
+      odometry_period_ns_(rt::periodFromRateHz(scenario.spec.odometry.rate_hz)),
+      metrics_period_ns_(rt::periodFromRateHz(options.metrics_rate_hz)),
+      metrics_(scenario.spec) {
+  const QuadrotorState& drone = quad_.state();
+  active_setpoint_.stamp_ns = start_ns;
+  active_setpoint_.p_W_m = drone.p_W_m;  // hold the start until told otherwise
+  active_setpoint_.yaw_rad = scenario.spec.drone.start_yaw_rad;
+  active_gimbal_command_.mode = GimbalCommand::Mode::kRate;
+  truth_.stamp_ns = start_ns;
+  truth_.drone = drone;
+  truth_.person = personAt(start_ns);
+  truth_.T_WC = cameraPose(drone, 0.0);
+  gimbal_out_.write(gimbal_.encoder(start_ns));
+  publishTruth();
+}
+
+PersonState Simulation::personAt(TimeNs t_ns) const {
+  return person_.state(rt::nsToSeconds(t_ns - start_ns_) - scenario_.spec.person_start_delay_s);
+}
+
+Eigen::Isometry3d Simulation::cameraPose(const QuadrotorState& drone, double gimbal_angle_rad) const {
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  const Eigen::Matrix3d R_BG = Eigen::AngleAxisd(gimbal_angle_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T_WC.linear() = drone.R_WB * R_BG * opticalAxesInFlu();
+  T_WC.translation() = drone.p_W_m + drone.R_WB * scenario_.spec.gimbal_camera.mount_B_m;
+  return T_WC;
+}
+
+bool Simulation::personVisible(const Eigen::Isometry3d& T_WC, const PersonState& person) const {
+  const CameraIntrinsics& k = scenario_.spec.gimbal_camera.camera.intrinsics;
+  const Eigen::Isometry3d T_CW = T_WC.inverse();
+  for (const Eigen::Vector3d& p_W : {midpoint(person, CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder),
+                                     midpoint(person, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip)}) {
+    const auto uv = project(T_CW * p_W, k);
+    if (!uv || uv->x() < 0.0 || uv->y() < 0.0 || uv->x() >= k.width_px || uv->y() >= k.height_px) return false;
+    if (!obstacles_.segmentClear(T_WC.translation(), p_W)) return false;
+  }
+  return true;
+}
+
+void Simulation::step(TimeNs now_ns) {
+  setpoint_in_.readIfNewer(setpoint_version_, active_setpoint_);
+  gimbal_in_.readIfNewer(gimbal_version_, active_gimbal_command_);
+  while (now_ns_ < now_ns) {
+    const DurationNs dt_ns = std::min(physics_step_ns_, now_ns - now_ns_);
+    physicsStep(rt::nsToSeconds(dt_ns));
+    now_ns_ += dt_ns;
+    truth_.stamp_ns = now_ns_;
+    truth_.drone = quad_.state();
+    truth_.gimbal_angle_rad = gimbal_.angleRad();
+    if (now_ns_ >= next_odometry_ns_) {
+      sampleOdometry();
+      next_odometry_ns_ += odometry_period_ns_;
+    }
+    if (now_ns_ >= next_camera_ns_) {
+      captureCamera();
+      next_camera_ns_ += camera_period_ns_;
+    }
+    if (options_.render_depth && now_ns_ >= next_depth_ns_) {
+      captureDepth();
+      next_depth_ns_ += depth_period_ns_;
+    }
+    releaseDetections();
+    if (now_ns_ >= next_metrics_ns_) {
+      truth_.person = personAt(now_ns_);
+      truth_.T_WC = cameraPose(truth_.drone, truth_.gimbal_angle_rad);
+      const double t_s = rt::nsToSeconds(now_ns_ - start_ns_);
+      metrics_.record(t_s, truth_.drone.p_W_m, truth_.person.p_W_m, obstacles_.distance(truth_.drone.p_W_m),
+                      personVisible(truth_.T_WC, truth_.person), t_s >= personStartS(),
+                      rt::nsToSeconds(metrics_period_ns_));
+      next_metrics_ns_ += metrics_period_ns_;
+    }
+  }
+  gimbal_out_.write(gimbal_.encoder(now_ns_));
+  publishTruth();
+}
+
+void Simulation::publishTruth() {
+  const QuadrotorState& drone = quad_.state();
+  const PersonState person = personAt(now_ns_);
+  TruthSnapshot t;
+  t.stamp_ns = now_ns_;
+  t.drone_p_W_m = drone.p_W_m;
+  t.drone_v_W_mps = drone.v_W_mps;
+  t.drone_yaw_rad = std::atan2(drone.R_WB(1, 0), drone.R_WB(0, 0));
+  t.person_p_W_m = person.p_W_m;
+  t.person_v_W_mps = person.v_W_mps;
+  t.camera_p_W_m = cameraPose(drone, gimbal_.angleRad()).translation();
+  t.gimbal_angle_rad = gimbal_.angleRad();
+  t.person_walking = rt::nsToSeconds(now_ns_ - start_ns_) >= personStartS();
+  truth_out_.write(t);
+}
+
+void Simulation::physicsStep(double dt_s) {
+  const QuadrotorCommand command = controller_.update(active_setpoint_, quad_.state());
+  quad_.step(command, dt_s);
+  gimbal_.step(active_gimbal_command_, dt_s);
+}
+
+void Simulation::captureCamera() {
+  const PersonState person = personAt(now_ns_);
+  const Eigen::Isometry3d T_WC = cameraPose(quad_.state(), gimbal_.angleRad());
+  const GimbalCameraSpec& spec = scenario_.spec.gimbal_camera;
+  const LineOfSight line_of_sight = [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return obstacles_.segmentClear(a, b);
+  };
+  DetectionFrame frame;
+  frame.stamp_ns = now_ns_;
+  frame.result_ns = now_ns_ + rt::secondsToNs(spec.latency_s);
+  frame.sequence = ++camera_sequence_;
+  frame.intrinsics = spec.camera.intrinsics;
+  if (const auto detection = observe(person.keypoints_W_m, T_WC, spec.camera, line_of_sight, camera_rng_)) {
+    frame.persons[0] = *detection;
+    frame.person_count = 1;
+  }
+  if (pending_count_ == pending_.size()) {  // cannot happen with sane rates; drop the oldest
+    pending_head_ = (pending_head_ + 1) % pending_.size();
+    --pending_count_;
+  }
+  pending_[(pending_head_ + pending_count_) % pending_.size()] = frame;
+  ++pending_count_;
+}
+
+void Simulation::releaseDetections() {
+  while (pending_count_ > 0 && pending_[pending_head_].result_ns <= now_ns_) {
+    detections_out_.try_push(pending_[pending_head_]);
+    pending_head_ = (pending_head_ + 1) % pending_.size();
+    --pending_count_;
+  }
+}
+
+void Simulation::captureDepth() {
+  const DepthCameraSpec& spec = scenario_.spec.depth_camera;
+  const QuadrotorState& drone = quad_.state();
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  T_WC.linear() = drone.R_WB * opticalAxesInFlu();
+  T_WC.translation() = drone.p_W_m + drone.R_WB * spec.mount_B_m;
+  auto frame = std::make_shared<DepthFrame>();
+  frame->stamp_ns = now_ns_;
+  frame->sequence = ++depth_sequence_;
+  frame->intrinsics = depthIntrinsics(spec.camera);
+  frame->T_BC.linear() = opticalAxesInFlu();
+  frame->T_BC.translation() = spec.mount_B_m;
+  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m);
+  depth_out_.write(std::move(frame));
+}
+
+void Simulation::sampleOdometry() {
+  const OdometrySpec& spec = scenario_.spec.odometry;
+  const QuadrotorState& drone = quad_.state();
+  std::normal_distribution<double> unit(0.0, 1.0);
+  OdometrySample sample;
+  sample.stamp_ns = now_ns_;
+  sample.p_WB_m = drone.p_W_m + spec.position_noise_m *
+                                    Eigen::Vector3d(unit(odometry_rng_), unit(odometry_rng_), unit(odometry_rng_));
+  sample.v_WB_mps = drone.v_W_mps + spec.velocity_noise_mps *
+                                        Eigen::Vector3d(unit(odometry_rng_), unit(odometry_rng_), unit(odometry_rng_));
+  const Eigen::Matrix3d yaw_error =
+      Eigen::AngleAxisd(spec.yaw_noise_rad * unit(odometry_rng_), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  sample.q_WB = Eigen::Quaterniond(yaw_error * drone.R_WB);
+  sample.w_WB_B_radps = drone.w_B_radps;
+  odometry_delay_[(odometry_head_ + odometry_count_) % odometry_delay_.size()] = sample;
+  if (odometry_count_ < odometry_delay_.size())
+    ++odometry_count_;
+  else
+    odometry_head_ = (odometry_head_ + 1) % odometry_delay_.size();
+  // Publish the newest sample at least `latency` old: its stamp is when it was measured.
+  const TimeNs due_ns = now_ns_ - rt::secondsToNs(spec.latency_s);
+  bool published = false;
+  OdometrySample ready;
+  while (odometry_count_ > 0 && odometry_delay_[odometry_head_].stamp_ns <= due_ns) {
+    ready = odometry_delay_[odometry_head_];
+    published = true;
+    odometry_head_ = (odometry_head_ + 1) % odometry_delay_.size();
+    --odometry_count_;
+  }
+  if (published) odometry_out_.write(ready);
+}
+
+}  // namespace aerotrack::hal::sim
