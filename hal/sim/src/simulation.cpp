@@ -117,38 +117,45 @@ bool Simulation::personVisible(const Eigen::Isometry3d& T_WC, const PersonState&
 void Simulation::step(TimeNs now_ns) {
   setpoint_in_.readIfNewer(setpoint_version_, active_setpoint_);
   gimbal_in_.readIfNewer(gimbal_version_, active_gimbal_command_);
-  while (now_ns_ < now_ns) {
+  // Sensors due at the current instant sample before physics moves on, so that samples fall on
+  // their own schedule (start + k * period) whatever the physics step.
+  for (;;) {
+    sampleDueSensors();
+    if (now_ns_ >= now_ns) break;
     const DurationNs dt_ns = std::min(physics_step_ns_, now_ns - now_ns_);
     physicsStep(rt::nsToSeconds(dt_ns));
     now_ns_ += dt_ns;
-    truth_.stamp_ns = now_ns_;
-    truth_.drone = quad_.state();
-    truth_.gimbal_angle_rad = gimbal_.angleRad();
-    if (now_ns_ >= next_odometry_ns_) {
-      sampleOdometry();
-      next_odometry_ns_ += odometry_period_ns_;
-    }
-    if (now_ns_ >= next_camera_ns_) {
-      captureCamera();
-      next_camera_ns_ += camera_period_ns_;
-    }
-    if (options_.render_depth && now_ns_ >= next_depth_ns_) {
-      captureDepth();
-      next_depth_ns_ += depth_period_ns_;
-    }
-    releaseDetections();
-    if (now_ns_ >= next_metrics_ns_) {
-      truth_.person = personAt(now_ns_);
-      truth_.T_WC = cameraPose(truth_.drone, truth_.gimbal_angle_rad);
-      const double t_s = rt::nsToSeconds(now_ns_ - start_ns_);
-      metrics_.record(t_s, truth_.drone.p_W_m, truth_.person.p_W_m, obstacles_.distance(truth_.drone.p_W_m),
-                      personVisible(truth_.T_WC, truth_.person), t_s >= personStartS(),
-                      rt::nsToSeconds(metrics_period_ns_));
-      next_metrics_ns_ += metrics_period_ns_;
-    }
   }
   gimbal_out_.write(gimbal_.encoder(now_ns_));
   publishTruth();
+}
+
+void Simulation::sampleDueSensors() {
+  truth_.stamp_ns = now_ns_;
+  truth_.drone = quad_.state();
+  truth_.gimbal_angle_rad = gimbal_.angleRad();
+  if (now_ns_ >= next_odometry_ns_) {
+    sampleOdometry();
+    next_odometry_ns_ += odometry_period_ns_;
+  }
+  if (now_ns_ >= next_camera_ns_) {
+    captureCamera();
+    next_camera_ns_ += camera_period_ns_;
+  }
+  if (options_.render_depth && now_ns_ >= next_depth_ns_) {
+    captureDepth();
+    next_depth_ns_ += depth_period_ns_;
+  }
+  releaseDetections();
+  if (now_ns_ >= next_metrics_ns_) {
+    truth_.person = personAt(now_ns_);
+    truth_.T_WC = cameraPose(truth_.drone, truth_.gimbal_angle_rad);
+    const double t_s = rt::nsToSeconds(now_ns_ - start_ns_);
+    metrics_.record(t_s, truth_.drone.p_W_m, truth_.person.p_W_m, obstacles_.distance(truth_.drone.p_W_m),
+                    personVisible(truth_.T_WC, truth_.person), t_s >= personStartS(),
+                    rt::nsToSeconds(metrics_period_ns_));
+    next_metrics_ns_ += metrics_period_ns_;
+  }
 }
 
 void Simulation::publishTruth() {

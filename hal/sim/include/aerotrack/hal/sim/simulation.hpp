@@ -105,6 +105,7 @@ class Simulation {
   Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
              WalkingPerson person, Quadrotor quad, GeometricController controller, TimeNs start_ns);
   void physicsStep(double dt_s);
+  void sampleDueSensors();
   void captureCamera();
   void captureDepth();
   void sampleOdometry();

@@ -1,0 +1,184 @@
+// The integrated simulation against hand-built situations: sensor rates and latencies, the
+// depth camera seeing a wall at a known distance, occlusion hiding the person, odometry noise,
+// gimbal commands, collisions counted.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "aerotrack/hal/sim/simulation.hpp"
+
+namespace aerotrack::hal::sim {
+namespace {
+
+using rt::kNsPerSecond;
+
+/// A person standing 4 m in front of a hovering drone (their walk starts only after 500 s),
+/// optionally behind a wall, and a wall 6 m behind the person.
+std::string worldYaml(bool wall_between) {
+  std::string boxes = "    - {min_m: [10.0, -5.0, 0.0], max_m: [10.5, 5.0, 3.0]}\n";
+  if (wall_between) boxes += "    - {min_m: [1.5, -2.0, 0.0], max_m: [2.0, 2.0, 3.0]}\n";
+  return R"(name: test
+end_margin_s: 1.0
+max_duration_s: 2000.0
+world:
+  bounds_min_m: [-5.0, -5.0, 0.0]
+  bounds_max_m: [12.0, 5.0, 4.0]
+  boxes:
+)" + boxes +
+         R"(person:
+  height_m: 1.75
+  torso_m: 0.5
+  start_delay_s: 500.0
+  path:
+    - {p_m: [4.0, 0.0], speed_mps: 1.0}
+    - {p_m: [4.0, 3.0], speed_mps: 0.0}
+drone:
+  start_m: [0.0, 0.0, 1.5]
+  start_yaw_rad: 0.0
+  radius_m: 0.25
+  mass_kg: 1.0
+  thrust_to_weight: 2.5
+success:
+  tracking_distance_m: 2.5
+  final_distance_factor: 2.0
+)";
+}
+
+std::unique_ptr<Simulation> makeSim(bool wall_between, bool depth = true) {
+  auto spec = parseScenarioSpec(worldYaml(wall_between), "test.yaml");
+  EXPECT_TRUE(spec) << spec.error().message;
+  auto trial = instantiate(*spec, 1);
+  EXPECT_TRUE(trial) << trial.error().message;
+  SimulationOptions options;
+  options.render_depth = depth;
+  auto sim = Simulation::create(*trial, options, 0);
+  EXPECT_TRUE(sim) << sim.error().message;
+  return std::move(sim.value());
+}
+
+void hover(Simulation& sim, double seconds, std::vector<DetectionFrame>* detections = nullptr) {
+  const rt::TimeNs start = sim.truth().stamp_ns;
+  Setpoint hold;
+  hold.p_W_m = Eigen::Vector3d(0, 0, 1.5);
+  sim.setpointInbox().write(hold);
+  for (rt::TimeNs t = start; t <= start + rt::secondsToNs(seconds); t += 5'000'000) {
+    sim.step(t);
+    while (auto f = sim.detectionsOut().try_pop())
+      if (detections != nullptr) detections->push_back(*f);
+  }
+}
+
+TEST(Simulation, GivenPersonInViewThenDetectionsAt30HzArriveAfterTheDetectorLatency) {
+  auto sim = makeSim(false, false);
+  std::vector<DetectionFrame> frames;
+  hover(*sim, 2.0, &frames);
+  EXPECT_NEAR(static_cast<double>(frames.size()), 2.0 * 30.0, 2.0);
+  for (const DetectionFrame& f : frames) EXPECT_EQ(f.result_ns - f.stamp_ns, 40 * rt::kNsPerMillisecond);
+  int with_person = 0;
+  for (const DetectionFrame& f : frames) with_person += f.person_count == 1 ? 1 : 0;
+  EXPECT_GT(with_person, 55);
+  // The person stands 4 m ahead on the optical axis: the torso's centre near the image centre.
+  const PersonDetection& p = frames.back().persons[0];
+  double u_sum = 0.0;
+  int detected = 0;
+  for (CocoKeypoint k :
+       {CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip})
+    if (p.keypoints[index(k)].score > 0.0) {  // a missed keypoint has score 0 and no position
+      u_sum += p.keypoints[index(k)].u_px;
+      ++detected;
+    }
+  ASSERT_GT(detected, 0);
+  EXPECT_NEAR(u_sum / detected, 320.0, 15.0);
+  EXPECT_TRUE(sim->personVisible(sim->truth().T_WC, sim->truth().person));
+}
+
+TEST(Simulation, GivenWallBetweenThenPersonIsHiddenAndNotDetected) {
+  auto sim = makeSim(true, false);
+  std::vector<DetectionFrame> frames;
+  hover(*sim, 1.0, &frames);
+  ASSERT_FALSE(frames.empty());
+  for (const DetectionFrame& f : frames) EXPECT_EQ(f.person_count, 0U);
+  EXPECT_FALSE(sim->personVisible(sim->truth().T_WC, sim->truth().person));
+}
+
+TEST(Simulation, GivenWallAheadThenDepthFramesAt15HzSeeItAtItsDistance) {
+  auto sim = makeSim(false, true);
+  std::uint64_t version = 0, frames = 0;
+  DepthFrameHandle last;
+  Setpoint hold;
+  hold.p_W_m = Eigen::Vector3d(0, 0, 1.5);
+  sim->setpointInbox().write(hold);
+  for (rt::TimeNs t = 0; t <= 2 * kNsPerSecond; t += 5'000'000) {
+    sim->step(t);
+    if (sim->depthOut().version() != version) {
+      version = sim->depthOut().version();
+      last = sim->depthOut().read();
+      ++frames;
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(frames), 30.0, 1.0);
+  ASSERT_TRUE(last);
+  // The top rows look over the person's head (1.75 m tall, 4 m away) at the wall at x = 10 m,
+  // 10 - 0.12 m (the camera's mount) in front of the camera.
+  const int u = last->depth_m.cols / 2 + 10;
+  float seen = 0.0F;
+  for (int v = 0; v < last->depth_m.rows / 2 && seen == 0.0F; ++v) seen = last->depth_m.at<float>(v, u);
+  EXPECT_NEAR(seen, 10.0 - 0.12, 3.0 * 0.0015 * 100.0);  // 3 sigma of the depth noise at ~10 m
+}
+
+TEST(Simulation, OdometryIsDelayedByItsLatencyAndNoisyAsConfigured) {
+  auto sim = makeSim(false, false);
+  Setpoint hold;
+  hold.p_W_m = Eigen::Vector3d(0, 0, 1.5);
+  sim->setpointInbox().write(hold);
+  double sum2 = 0.0;
+  int n = 0;
+  for (rt::TimeNs t = 0; t <= 20 * kNsPerSecond; t += 10'000'000) {
+    sim->step(t);
+    const auto o = sim->odometryOut().read();
+    if (t < 10 * rt::kNsPerMillisecond) continue;  // the first sample is due after the latency
+    ASSERT_TRUE(o);
+    if (t > 0) {
+      EXPECT_EQ(t - o->stamp_ns, 10 * rt::kNsPerMillisecond);
+    }
+    if (t > 3 * kNsPerSecond) {  // hovering still: the error is the noise
+      sum2 += (o->p_WB_m.x() - sim->truth().drone.p_W_m.x()) * (o->p_WB_m.x() - sim->truth().drone.p_W_m.x());
+      ++n;
+    }
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / n), 0.02, 0.003);
+}
+
+TEST(Simulation, GimbalFollowsAngleCommandsAndReportsEncoderReadings) {
+  auto sim = makeSim(false, false);
+  GimbalCommand c;
+  c.mode = GimbalCommand::Mode::kAngle;
+  c.angle_rad = 2.0 * M_PI + 1.0;  // more than a turn: the slip ring allows it
+  sim->gimbalInbox().write(c);
+  hover(*sim, 4.0);
+  const auto encoder = sim->gimbalOut().read();
+  ASSERT_TRUE(encoder);
+  EXPECT_NEAR(encoder->angle_rad, 2.0 * M_PI + 1.0, 1e-3);
+}
+
+TEST(Simulation, GivenSetpointInsideAWallThenTheCollisionIsCounted) {
+  auto sim = makeSim(false, false);
+  Setpoint into_wall;
+  into_wall.p_W_m = Eigen::Vector3d(10.2, 0, 1.5);
+  into_wall.yaw_rad = 0.0;
+  sim->setpointInbox().write(into_wall);
+  for (rt::TimeNs t = 0; t <= 10 * kNsPerSecond; t += 5'000'000) sim->step(t);
+  EXPECT_GE(sim->metrics().collisions(), 1);
+  EXPECT_LT(sim->metrics().minClearanceM(), 0.0);
+}
+
+TEST(Simulation, GivenSameSeedThenBitIdenticalTruth) {
+  auto a = makeSim(false, true), b = makeSim(false, true);
+  hover(*a, 3.0);
+  hover(*b, 3.0);
+  EXPECT_EQ(a->truth().drone.p_W_m, b->truth().drone.p_W_m);
+  EXPECT_EQ(a->odometryOut().read()->p_WB_m, b->odometryOut().read()->p_WB_m);
+}
+
+}  // namespace
+}  // namespace aerotrack::hal::sim
