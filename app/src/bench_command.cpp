@@ -46,6 +46,7 @@ pid_t launchTrial(const std::string& self, const ParsedArgs& args, std::int64_t 
   sigemptyset(&none);
   pthread_sigmask(SIG_SETMASK, &none, nullptr);  // the parent's watcher blocked SIGINT/SIGTERM
   std::vector<char*> raw;
+  raw.reserve(argv.size() + 1);
   for (std::string& a : argv) raw.push_back(a.data());
   raw.push_back(nullptr);
   execv(self.c_str(), raw.data());

@@ -29,7 +29,8 @@ double uniform(std::mt19937_64& rng, double lo, double hi) {
 double distanceToPolyline(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& line) {
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i + 1 < line.size(); ++i) {
-    const Eigen::Vector2d a = line[i], ab = line[i + 1] - line[i];
+    const Eigen::Vector2d& a = line[i];
+    const Eigen::Vector2d ab = line[i + 1] - a;
     const double len2 = ab.squaredNorm();
     const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
     best = std::min(best, (a + t * ab - p).norm());
@@ -75,7 +76,7 @@ rt::Expected<std::vector<PathPoint>> generatePath(const RandomPathGenerator& g, 
       // Cornered: turn towards the centre, as a person at a fence would.
       heading = std::atan2(centre.y() - p.y(), centre.x() - p.x());
       --leg;
-      if (path.size() > static_cast<std::size_t>(10 * g.legs)) return rt::Error{"random_path: cannot place the legs"};
+      if (path.size() > 10 * static_cast<std::size_t>(g.legs)) return rt::Error{"random_path: cannot place the legs"};
     }
   }
   path.push_back({p, 0.0});

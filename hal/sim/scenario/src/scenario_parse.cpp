@@ -26,6 +26,13 @@ Eigen::Vector3d vec3Or(const ConfigNode& n, const std::string& key, const Eigen:
   return n.has(key) ? vec3(n, key) : fallback;
 }
 
+/// region_min_m and region_max_m, [x, y] each, with max > min.
+void parseRegion(const ConfigNode& n, Eigen::Vector2d& min_m, Eigen::Vector2d& max_m) {
+  min_m = vec2(n, "region_min_m");
+  max_m = vec2(n, "region_max_m");
+  if ((max_m.array() <= min_m.array()).any()) n.fail("region_max_m", "must exceed region_min_m");
+}
+
 std::vector<Box> parseBoxes(const ConfigNode& root) {
   std::vector<Box> boxes;
   if (!root.has("boxes")) return boxes;
@@ -55,9 +62,7 @@ std::vector<Cylinder> parseCylinders(const ConfigNode& root) {
 
 ForestGenerator parseForest(const ConfigNode& n) {
   ForestGenerator f;
-  f.region_min_m = vec2(n, "region_min_m");
-  f.region_max_m = vec2(n, "region_max_m");
-  if ((f.region_max_m.array() <= f.region_min_m.array()).any()) n.fail("region_max_m", "must exceed region_min_m");
+  parseRegion(n, f.region_min_m, f.region_max_m);
   f.density_per_m2 = n.getDouble("density_per_m2", 0.0, 2.0);
   const auto radius = n.getDoubleList("radius_m", 2, 0.01, 5.0);
   f.radius_min_m = radius[0];
@@ -91,9 +96,7 @@ CorridorGenerator parseCorridor(const ConfigNode& n) {
 
 RandomPathGenerator parseRandomPath(const ConfigNode& n) {
   RandomPathGenerator g;
-  g.region_min_m = vec2(n, "region_min_m");
-  g.region_max_m = vec2(n, "region_max_m");
-  if ((g.region_max_m.array() <= g.region_min_m.array()).any()) n.fail("region_max_m", "must exceed region_min_m");
+  parseRegion(n, g.region_min_m, g.region_max_m);
   g.legs = n.getInt("legs", 1, 1000);
   const auto leg = n.getDoubleList("leg_m", 2, 0.5, 1000.0);
   g.leg_min_m = leg[0];

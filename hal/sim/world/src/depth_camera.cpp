@@ -197,7 +197,7 @@ void renderDepth(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, cons
   for (int v = 0; v < params.height_px; ++v) {
     float* row = depth_m.ptr<float>(v);
     for (int u = 0; u < params.width_px; ++u) {
-      double z_m = row[u];
+      double z_m = static_cast<double>(row[u]);
       float out = 0.0F;
       if (z_m >= params.min_range_m && z_m <= max_range_m) {
         if (keep == 0) {

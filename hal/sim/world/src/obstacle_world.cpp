@@ -16,7 +16,7 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Footprints are registered in the cells they overlap after padding by this much, so that
 /// rounding in the grid walk never skips a cell that touches an obstacle.
-constexpr double kPad_m = 1e-6;
+constexpr double kPadM = 1e-6;
 
 std::string describe(const Eigen::Vector3d& v) {
   std::ostringstream out;
@@ -83,8 +83,8 @@ rt::Expected<ObstacleWorld> ObstacleWorld::create(std::vector<Box> boxes, std::v
   world.cylinders_ = std::move(cylinders);
   if (count == 0) return world;
 
-  world.grid_min_W_m_ = world.bounds_.min_W_m.head<2>().array() - 2.0 * kPad_m;
-  const Eigen::Vector2d extent_m = world.bounds_.max_W_m.head<2>().array() + 2.0 * kPad_m - world.grid_min_W_m_.array();
+  world.grid_min_W_m_ = world.bounds_.min_W_m.head<2>().array() - 2.0 * kPadM;
+  const Eigen::Vector2d extent_m = world.bounds_.max_W_m.head<2>().array() + 2.0 * kPadM - world.grid_min_W_m_.array();
   const double nx = std::max(1.0, std::ceil(extent_m.x() / cell_size_m));
   const double ny = std::max(1.0, std::ceil(extent_m.y() / cell_size_m));
   if (nx * ny > static_cast<double>(kMaxCells)) {
@@ -114,17 +114,17 @@ rt::Expected<ObstacleWorld> ObstacleWorld::create(std::vector<Box> boxes, std::v
     const auto cellOf = [&](double x, double x0, int n) {
       return std::clamp(static_cast<int>(std::floor((x - x0) / cs)), 0, n - 1);
     };
-    const int i0 = cellOf(lo.x() - kPad_m, world.grid_min_W_m_.x(), world.nx_);
-    const int i1 = cellOf(hi.x() + kPad_m, world.grid_min_W_m_.x(), world.nx_);
-    const int j0 = cellOf(lo.y() - kPad_m, world.grid_min_W_m_.y(), world.ny_);
-    const int j1 = cellOf(hi.y() + kPad_m, world.grid_min_W_m_.y(), world.ny_);
+    const int i0 = cellOf(lo.x() - kPadM, world.grid_min_W_m_.x(), world.nx_);
+    const int i1 = cellOf(hi.x() + kPadM, world.grid_min_W_m_.x(), world.nx_);
+    const int j0 = cellOf(lo.y() - kPadM, world.grid_min_W_m_.y(), world.ny_);
+    const int j1 = cellOf(hi.y() + kPadM, world.grid_min_W_m_.y(), world.ny_);
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i) {
         if (cyl != nullptr) {
           const Eigen::Vector2d cell_lo = world.grid_min_W_m_ + cs * Eigen::Vector2d(i, j);
           const Eigen::Vector2d nearest =
               cyl->center_W_m.cwiseMax(cell_lo).cwiseMin(cell_lo + Eigen::Vector2d::Constant(cs));
-          if ((nearest - cyl->center_W_m).norm() > cyl->radius_m + kPad_m) continue;
+          if ((nearest - cyl->center_W_m).norm() > cyl->radius_m + kPadM) continue;
         }
         fn(static_cast<std::size_t>(j) * static_cast<std::size_t>(world.nx_) + static_cast<std::size_t>(i));
       }
