@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -122,7 +123,8 @@ int benchCommand(const ParsedArgs& args) {
     rtf_sum += s.value("realtime_factor", 0.0);
     std::printf("%6lld %8s %7.0f%% %9.1fs %9.2f %9.2f %9.0f  %s\n", static_cast<long long>(seed), ok ? "yes" : "NO",
                 100.0 * s.value("visible_ratio", 0.0), s.value("longest_loss_s", 0.0), s.value("distance_mean_m", 0.0),
-                s.value("min_clearance_m", 0.0), s.value("realtime_factor", 0.0),
+                s["min_clearance_m"].is_number() ? s["min_clearance_m"].get<double>() : std::nan(""),
+                s.value("realtime_factor", 0.0),
                 s["failure_reason"].is_string() ? s["failure_reason"].get<std::string>().c_str() : "");
   }
   const double n = std::max<double>(1.0, static_cast<double>(per_trial.size()));

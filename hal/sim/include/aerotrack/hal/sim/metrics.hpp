@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,7 @@ class SimMetrics {
   std::string failureReason() const;
 
   int collisions() const { return collisions_; }
+  /// Infinity when there is no obstacle in the world.
   double minClearanceM() const { return min_clearance_m_; }
   double visibleRatio() const { return tracked_s_ > 0.0 ? visible_s_ / tracked_s_ : 0.0; }
   double longestLossS() const;
@@ -58,7 +60,7 @@ class SimMetrics {
   SuccessSpec success_;
   int collisions_ = 0;
   bool in_collision_ = false;
-  double min_clearance_m_ = 1e9;
+  double min_clearance_m_ = std::numeric_limits<double>::infinity();  // stays infinite without obstacles
   double tracked_s_ = 0.0, visible_s_ = 0.0;
   double distance_sum_m_ = 0.0, distance_max_m_ = 0.0, final_distance_m_ = 0.0;
   double last_t_s_ = 0.0;
