@@ -6,10 +6,10 @@
 #include <chrono>
 #include <thread>
 
+#include "aerotrack/rt/realtime_executor.hpp"
 #include "app_config.hpp"
 #include "sim_report.hpp"
 #include "system.hpp"
-#include "aerotrack/rt/realtime_executor.hpp"
 
 namespace aerotrack::app {
 namespace {
