@@ -56,6 +56,8 @@ class Odometry : public Device {
 
 class VehicleLink : public Device {
  public:
+  /// One task sends setpoints (the trajectory server, or the simulator's baseline_follow
+  /// stand-in): backends may assume a single caller.
   virtual void send(const Setpoint& setpoint) = 0;
   virtual VehicleStatus status(TimeNs now_ns) = 0;
 };
