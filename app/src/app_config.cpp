@@ -3,6 +3,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "aerotrack/mapping/mapping_task.hpp"
+
 namespace aerotrack::app {
 namespace {
 
@@ -35,6 +37,8 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   const rt::ConfigNode server = root.child("trajectory_server");
   c.trajectory_server.yaw_min_speed_mps = server.getDouble("yaw_min_speed_mps", 0.0, 10.0);
   server.finish();
+
+  if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
 
   if (root.has("realtime")) {
     const rt::ConfigNode rt_node = root.child("realtime");
@@ -81,6 +85,21 @@ std::string toYaml(const AppConfig& c) {
   out << YAML::Key << "trajectory_server" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "yaw_min_speed_mps" << YAML::Value << c.trajectory_server.yaw_min_speed_mps;
   out << YAML::EndMap;
+  if (c.mapping) {
+    const mapping::MapperParams& m = *c.mapping;
+    out << YAML::Key << "mapping" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "resolution_m" << YAML::Value << m.octomap.resolution_m;
+    out << YAML::Key << "decimation" << YAML::Value << m.points.decimation;
+    out << YAML::Key << "min_range_m" << YAML::Value << m.points.min_range_m;
+    out << YAML::Key << "max_range_m" << YAML::Value << m.points.max_range_m;
+    out << YAML::Key << "grid_size_m" << YAML::Value << YAML::Flow
+        << std::vector<double>{m.grid.size_m.x(), m.grid.size_m.y(), m.grid.size_m.z()};
+    out << YAML::Key << "inflation_radius_m" << YAML::Value << m.grid.inflation_radius_m;
+    out << YAML::Key << "unknown_is_occupied" << YAML::Value << m.grid.unknown_is_occupied;
+    out << YAML::Key << "recenter_distance_m" << YAML::Value << m.grid.recenter_distance_m;
+    out << YAML::Key << "octree_snapshot_every_n_frames" << YAML::Value << m.octree_snapshot_every_n_frames;
+    out << YAML::EndMap;
+  }
   out << YAML::Key << "realtime" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "realtime_priority" << YAML::Value << c.realtime.use_realtime_priority;
   out << YAML::Key << "affinity" << YAML::Value << c.realtime.use_affinity;

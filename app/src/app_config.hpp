@@ -6,7 +6,10 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
 #include "aerotrack/hal/factory.hpp"
+#include "aerotrack/mapping/mapper.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "aerotrack/rt/task.hpp"
@@ -26,6 +29,7 @@ struct AppConfig {
   hal::HalConfig hal;
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.
   trajectory_server::TrajectoryServerParams trajectory_server;
+  std::optional<mapping::MapperParams> mapping;  ///< `mapping:` section; needed by the mapping task.
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };

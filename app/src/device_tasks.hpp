@@ -14,20 +14,25 @@
 
 namespace aerotrack::app {
 
-/// Polls the odometry device and publishes each new sample (by stamp) on the odometry channel.
+/// Polls the odometry device and publishes each new sample (by stamp): the newest on the
+/// odometry channel, every one on the stream that feeds the mapper's pose history.
 class OdometryTask final : public rt::Task {
  public:
-  OdometryTask(hal::Odometry& device, rt::LatestSlot<hal::OdometrySample>& out) : device_(device), out_(out) {}
+  OdometryTask(hal::Odometry& device, rt::LatestSlot<hal::OdometrySample>& out,
+               rt::SpscQueue<hal::OdometrySample>& stream)
+      : device_(device), out_(out), stream_(stream) {}
   void step(rt::TimeNs now_ns) override {
     const auto sample = device_.read(now_ns);
     if (!sample || sample->stamp_ns <= last_stamp_ns_) return;
     last_stamp_ns_ = sample->stamp_ns;
     out_.write(*sample);
+    stream_.try_push(*sample);
   }
 
  private:
   hal::Odometry& device_;
   rt::LatestSlot<hal::OdometrySample>& out_;
+  rt::SpscQueue<hal::OdometrySample>& stream_;
   rt::TimeNs last_stamp_ns_ = -1;
 };
 

@@ -108,6 +108,7 @@ int simCommand(const ParsedArgs& args) {
                                   : runLockstep(**system, sim_clock, end_ns, stop, info);
   if (!ran) return fail(ran.error().message);
   info.interrupted = stop.load();
+  info.map = mapSummary((*system)->mappingTask(), info.timings);
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
   const nlohmann::json summary = simSummary(sim, info);

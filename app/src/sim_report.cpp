@@ -10,6 +10,27 @@
 
 namespace aerotrack::app {
 
+nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<TaskTiming>& timings) {
+  if (task == nullptr) return nullptr;
+  const mapping::MapperStats& s = task->mapper().stats();
+  nlohmann::json out = {{"frames_inserted", s.frames_inserted},
+                        {"frames_skipped_no_pose", s.frames_skipped_no_pose},
+                        {"frames_skipped_bad", s.frames_skipped_bad},
+                        {"frames_dropped_waiting_for_odometry", task->framesDroppedWaiting()},
+                        {"occupied_voxels", s.occupied_voxels},
+                        {"grid_snapshots_allocated", s.grid_snapshots_allocated}};
+  (void)timings;
+  const rt::TimingSnapshot insert = task->insertStats().snapshot();
+  const rt::TimingSnapshot snapshot = task->snapshotStats().snapshot();
+  out["map_insert_ms_p50"] = insert.p50_ms;
+  out["map_insert_ms_p99"] = insert.p99_ms;
+  out["map_insert_ms_max"] = insert.max_ms;
+  out["octree_snapshots"] = snapshot.runs;
+  out["octree_snapshot_ms_p50"] = snapshot.p50_ms;
+  out["octree_snapshot_ms_max"] = snapshot.max_ms;
+  return out;
+}
+
 nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
   const hal::sim::SimMetrics& m = sim.metrics();
   const hal::sim::ScenarioInstance& trial = sim.scenario();
@@ -37,6 +58,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"wall_time_s", run.wall_time_s},
       {"realtime_factor", run.wall_time_s > 0.0 ? run.sim_time_s / run.wall_time_s : 0.0},
       {"tasks", timingJson(run.timings)},
+      {"map", run.map},
   };
   if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
   return out;

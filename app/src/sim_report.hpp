@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "aerotrack/hal/sim/simulation.hpp"
+#include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "report.hpp"
 
@@ -22,7 +23,11 @@ struct RunInfo {
   bool interrupted = false;
   std::string trace_hash;  ///< lockstep only
   std::vector<TaskTiming> timings;
+  nlohmann::json map;  ///< mapSummary()
 };
+
+/// The map section of summary.json (null if the run had no mapping task).
+nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<TaskTiming>& timings);
 
 nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run);
 

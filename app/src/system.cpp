@@ -7,7 +7,8 @@
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry", "gimbal_camera", "depth_camera", "gimbal", "trajectory_server", "baseline_follow"};
+  return {"sim_world", "odometry", "gimbal_camera",     "depth_camera",
+          "gimbal",    "mapping",  "trajectory_server", "baseline_follow"};
 }
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
@@ -41,11 +42,20 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     else
       task = std::make_unique<BaselineFollowTask>(devices_.simulation, *devices_.vehicle_link, *devices_.gimbal);
   } else if (spec.name == "odometry") {
-    task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry);
+    task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream);
   } else if (spec.name == "gimbal_camera") {
     task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections);
   } else if (spec.name == "depth_camera") {
     task = std::make_unique<DepthCameraTask>(*devices_.depth_camera, channels_.depth);
+  } else if (spec.name == "mapping") {
+    if (!config_.mapping) return rt::Error{where + ": task 'mapping' needs a mapping: section"};
+    auto mapper = mapping::Mapper::create(*config_.mapping);
+    if (!mapper) return rt::Error{config_.source + ": mapping: " + mapper.error().message};
+    auto mapping_task =
+        std::make_unique<mapping::MappingTask>(std::move(mapper.value()), channels_.odometry_stream, channels_.depth,
+                                               channels_.local_grid, channels_.octree, stats_clock_);
+    mapping_task_ = mapping_task.get();
+    task = std::move(mapping_task);
   } else if (spec.name == "gimbal") {
     task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state);
   } else if (spec.name == "trajectory_server") {

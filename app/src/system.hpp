@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "aerotrack/hal/factory.hpp"
+#include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/rt/doorbell.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
@@ -27,6 +28,10 @@ struct Channels {
   rt::SpscQueue<hal::DetectionFrame> detections{16, rt::OverflowPolicy::kDropOldest};
   rt::SharedSlot<hal::DepthFrame> depth;
   rt::LatestSlot<hal::GimbalState> gimbal_state;
+  rt::SpscQueue<hal::OdometrySample> odometry_stream{
+      256, rt::OverflowPolicy::kDropOldest};  ///< every sample, for the mapper
+  rt::SharedSlot<mapping::LocalGrid> local_grid;
+  rt::SharedSlot<octomap::OcTree> octree;
 };
 
 class System {
@@ -40,6 +45,8 @@ class System {
   Channels& channels() { return channels_; }
   hal::Devices& devices() { return devices_; }
   const AppConfig& config() const { return config_; }
+  /// The mapping task, if the table has one (for its statistics).
+  const mapping::MappingTask* mappingTask() const { return mapping_task_; }
 
   /// Names of the tasks this build knows, for messages and tests.
   static std::vector<std::string> knownTasks();
@@ -54,6 +61,8 @@ class System {
   std::vector<std::unique_ptr<rt::Task>> tasks_;
   std::vector<std::unique_ptr<rt::Doorbell>> doorbells_;
   std::vector<rt::TaskBinding> bindings_;
+  const mapping::MappingTask* mapping_task_ = nullptr;
+  rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };
 
 }  // namespace aerotrack::app

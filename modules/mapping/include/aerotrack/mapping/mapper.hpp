@@ -1,0 +1,90 @@
+// The mapper (issue 4; paper Sect. III: voxel occupancy grids built from the depth camera): each
+// depth frame is placed in the world with the drone's pose at the frame's capture time
+// (interpolated from the odometry history, not the latest pose), inserted into the OctoMap with
+// free-space clearing, and the dense local grid around the drone is brought up to date with only
+// the voxels that changed. Readers on other threads get immutable snapshots: the local grid after
+// every frame (from a small pool, so publishing does not allocate once warm) and, less often, a
+// copy of the octree for the final FCL check of trajectories.
+//
+// Pure: time comes in, nothing is printed; one thread calls it (the mapping task).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "aerotrack/hal/types.hpp"
+#include "aerotrack/mapping/depth_points.hpp"
+#include "aerotrack/mapping/frame_inserter.hpp"
+#include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/mapping/octomap_map.hpp"
+#include "aerotrack/mapping/pose_history.hpp"
+#include "aerotrack/rt/expected.hpp"
+
+namespace aerotrack::mapping {
+
+struct MapperParams {
+  OctomapMapParams octomap;
+  DepthPointsParams points;
+  LocalGridParams grid;
+  PoseHistoryParams poses;
+  std::size_t grid_pool_size = 3;           ///< Grid snapshots in flight before one is allocated.
+  int octree_snapshot_every_n_frames = 15;  ///< Publish an octree snapshot every n-th frame.
+};
+
+struct MapperStats {
+  std::uint64_t frames_inserted = 0;
+  std::uint64_t frames_skipped_no_pose = 0;
+  std::uint64_t frames_skipped_bad = 0;  ///< Malformed depth images, or a camera outside the map.
+  std::uint64_t odometry_rejected = 0;   ///< Out of order or not finite.
+  std::uint64_t grid_snapshots_allocated = 0;
+  std::size_t occupied_voxels = 0;
+};
+
+/// The occupied voxels of tree inside the box [min_W_m, max_W_m), as a new octree with the same
+/// resolution and thresholds (coarse leaves expanded to voxels). This is what the FCL check of a
+/// trajectory needs; a deep copy of the whole tree would also copy every free voxel ever seen
+/// (measured: ~120 ms for a 40 x 40 m forest, against a few ms for this). Allocates the new tree.
+std::shared_ptr<const octomap::OcTree> occupiedSnapshot(const octomap::OcTree& tree, const Eigen::Vector3d& min_W_m,
+                                                        const Eigen::Vector3d& max_W_m);
+
+/// What one frame produced for readers: handles to immutable snapshots (null if not refreshed).
+struct MapUpdate {
+  std::shared_ptr<const LocalGrid> grid;
+};
+
+class Mapper {
+ public:
+  static rt::Expected<Mapper> create(const MapperParams& params);
+
+  /// Adds an odometry sample to the pose history (time order; others are rejected and counted).
+  void addOdometry(const hal::OdometrySample& sample);
+
+  /// Inserts one depth frame. Error (and nothing changes) if the pose at its capture time is
+  /// unknown or the image is unusable; the stats count why. The update carries the new grid
+  /// snapshot; octreeDue() says whether an octree snapshot should follow.
+  rt::Expected<MapUpdate> insert(const hal::DepthFrame& frame);
+  bool octreeDue() const;
+  /// The occupied voxels of the local window as a new octree (occupiedSnapshot()).
+  std::shared_ptr<const octomap::OcTree> octreeSnapshot() const;
+
+  const MapperStats& stats() const { return stats_; }
+  const OctomapMap& octomap() const { return *map_; }
+  const LocalGrid& grid() const { return *grid_; }
+  const PoseHistory& poses() const { return *poses_; }
+
+ private:
+  explicit Mapper(const MapperParams& params) : params_(params) {}
+  std::shared_ptr<const LocalGrid> publishGrid();
+
+  MapperParams params_;
+  std::unique_ptr<PoseHistory> poses_;
+  std::unique_ptr<FrameInserter> inserter_;
+  std::unique_ptr<OctomapMap> map_;
+  std::unique_ptr<LocalGrid> grid_;
+  std::vector<std::shared_ptr<LocalGrid>> pool_;
+  MapperStats stats_;
+  bool grid_initialised_ = false;
+};
+
+}  // namespace aerotrack::mapping

@@ -1,0 +1,89 @@
+// The mapper: see mapper.hpp.
+#include "aerotrack/mapping/mapper.hpp"
+
+#include <cmath>
+
+namespace aerotrack::mapping {
+
+rt::Expected<Mapper> Mapper::create(const MapperParams& params) {
+  if (params.grid_pool_size < 1) return rt::Error{"mapping: grid_pool_size must be >= 1"};
+  if (params.octree_snapshot_every_n_frames < 1)
+    return rt::Error{"mapping: octree_snapshot_every_n_frames must be >= 1"};
+  if (std::abs(params.grid.resolution_m - params.octomap.resolution_m) > 1e-9)
+    return rt::Error{"mapping: the local grid's resolution must equal the octree's"};
+  auto poses = PoseHistory::create(params.poses);
+  if (!poses) return rt::Error{"mapping: " + poses.error().message};
+  auto inserter = FrameInserter::create(params.points);
+  if (!inserter) return rt::Error{"mapping: " + inserter.error().message};
+  auto map = OctomapMap::create(params.octomap);
+  if (!map) return rt::Error{"mapping: " + map.error().message};
+  auto grid = LocalGrid::create(params.grid);
+  if (!grid) return rt::Error{"mapping: " + grid.error().message};
+  Mapper m(params);
+  m.poses_ = std::make_unique<PoseHistory>(std::move(poses.value()));
+  m.inserter_ = std::make_unique<FrameInserter>(std::move(inserter.value()));
+  m.map_ = std::make_unique<OctomapMap>(std::move(map.value()));
+  m.grid_ = std::make_unique<LocalGrid>(std::move(grid.value()));
+  for (std::size_t i = 0; i < params.grid_pool_size; ++i) m.pool_.push_back(std::make_shared<LocalGrid>(*m.grid_));
+  return m;
+}
+
+void Mapper::addOdometry(const hal::OdometrySample& sample) {
+  if (poses_->push(sample) != PushResult::kAccepted) ++stats_.odometry_rejected;
+}
+
+std::shared_ptr<const LocalGrid> Mapper::publishGrid() {
+  // A pool grid that only the pool holds is free to reuse; readers keep theirs alive.
+  for (const std::shared_ptr<LocalGrid>& g : pool_) {
+    if (g.use_count() == 1) {
+      g->copyFrom(*grid_);
+      return g;
+    }
+  }
+  ++stats_.grid_snapshots_allocated;
+  pool_.push_back(std::make_shared<LocalGrid>(*grid_));
+  return pool_.back();
+}
+
+rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame) {
+  const auto report = inserter_->insert(frame, *poses_, *map_);
+  if (!report) {
+    ++stats_.frames_skipped_bad;
+    return report.error();
+  }
+  if (report->status == FrameInsertStatus::kSkippedNoPose) {
+    ++stats_.frames_skipped_no_pose;
+    return rt::Error{toString(report->status)};
+  }
+  ++stats_.frames_inserted;
+  const octomap::OcTree& tree = map_->tree();
+  // Keep the window on the drone: the pose at the frame's time is known (the insert used it).
+  const Eigen::Vector3d drone_W_m = poses_->poseAt(frame.stamp_ns)->translation();
+  if (!grid_initialised_) {
+    if (auto moved = grid_->recenter(drone_W_m, tree); !moved) return moved.error();
+    if (rt::Status s = grid_->rebuild(tree); !s) return s.error();
+    grid_initialised_ = true;
+  } else {
+    if (rt::Status s = grid_->applyChanges(tree); !s) return s.error();
+    if (auto moved = grid_->recenter(drone_W_m, tree); !moved) return moved.error();
+  }
+  map_->resetChanges();
+  stats_.occupied_voxels = map_->occupiedVoxelCount();
+
+  MapUpdate update;
+  update.grid = publishGrid();
+  return update;
+}
+
+bool Mapper::octreeDue() const {
+  const auto n = static_cast<std::uint64_t>(params_.octree_snapshot_every_n_frames);
+  return stats_.frames_inserted > 0 && (stats_.frames_inserted - 1) % n == 0;
+}
+
+std::shared_ptr<const octomap::OcTree> Mapper::octreeSnapshot() const {
+  const CellBox box = grid_->windowBox();
+  const double res = params_.grid.resolution_m;
+  return occupiedSnapshot(map_->tree(), box.lo.cast<double>() * res, box.hi.cast<double>() * res);
+}
+
+}  // namespace aerotrack::mapping

@@ -1,0 +1,60 @@
+// Mapping task and its config section: see mapping_task.hpp.
+#include "aerotrack/mapping/mapping_task.hpp"
+
+namespace aerotrack::mapping {
+
+MapperParams parseMapperParams(const rt::ConfigNode& node) {
+  MapperParams p;
+  p.octomap.resolution_m = node.getDouble("resolution_m", 0.02, 1.0);
+  p.grid.resolution_m = p.octomap.resolution_m;
+  p.points.decimation = node.getInt("decimation", 1, 64);
+  p.points.min_range_m = node.getDouble("min_range_m", 0.0, 5.0);
+  p.points.max_range_m = node.getDouble("max_range_m", 0.5, 50.0);
+  if (p.points.max_range_m <= p.points.min_range_m) node.fail("max_range_m", "must exceed min_range_m");
+  const auto size = node.getDoubleList("grid_size_m", 3, 1.0, 200.0);
+  p.grid.size_m = Eigen::Vector3d(size[0], size[1], size[2]);
+  p.grid.inflation_radius_m = node.getDouble("inflation_radius_m", 0.0, 2.0);
+  p.grid.unknown_is_occupied = node.getBool("unknown_is_occupied");
+  p.grid.recenter_distance_m = node.getDouble("recenter_distance_m", 0.1, 50.0);
+  p.octree_snapshot_every_n_frames = node.getInt("octree_snapshot_every_n_frames", 1, 1000);
+  node.finish();
+  return p;
+}
+
+void MappingTask::step(rt::TimeNs now_ns) {
+  while (const auto sample = odometry_.try_pop()) mapper_.addOdometry(*sample);
+
+  if (depth_.version() != depth_version_) {
+    depth_version_ = depth_.version();
+    if (auto frame = depth_.read()) {
+      if (pending_count_ == pending_.size()) {  // far behind: drop the oldest waiting frame
+        for (std::size_t i = 1; i < pending_count_; ++i) pending_[i - 1] = std::move(pending_[i]);
+        --pending_count_;
+        ++dropped_waiting_;
+      }
+      pending_[pending_count_++] = std::move(frame);
+    }
+  }
+
+  std::size_t done = 0;
+  for (; done < pending_count_; ++done) {
+    const hal::DepthFrame& frame = *pending_[done];
+    const bool covered = mapper_.poses().size() > 0 && mapper_.poses().newest().stamp_ns >= frame.stamp_ns;
+    if (!covered && now_ns - frame.stamp_ns < max_wait_ns_) break;  // odometry still on its way
+    const rt::TimeNs begin_ns = stats_clock_.now();
+    const auto update = mapper_.insert(frame);  // a frame that cannot be placed is counted there
+    if (!update) continue;
+    if (update->grid) grid_out_.write(update->grid);
+    const rt::TimeNs inserted_ns = stats_clock_.now();
+    insert_stats_.recordRun(inserted_ns - begin_ns);
+    if (mapper_.octreeDue()) {
+      octree_out_.write(mapper_.octreeSnapshot());
+      snapshot_stats_.recordRun(stats_clock_.now() - inserted_ns);
+    }
+  }
+  for (std::size_t i = done; i < pending_count_; ++i) pending_[i - done] = std::move(pending_[i]);
+  for (std::size_t i = pending_count_ - done; i < pending_count_; ++i) pending_[i].reset();
+  pending_count_ -= done;
+}
+
+}  // namespace aerotrack::mapping
