@@ -96,8 +96,8 @@ class OctomapMap {
   /// A deep copy of the tree for readers on other threads (immutable; change detection off and
   /// its key list empty in the copy). Cost: O(nodes) time and a full copy of the tree's memory
   /// (tree().memoryUsage()), allocated node by node on every call. Measured (bench, 2-core dev
-  /// machine): 130 000 nodes (3.6 MB, 10 m of forest flight) ~10 ms; 1 000 000 nodes (28 MB,
-  /// 100 m) ~170 ms. So take snapshots at a low rate or of a bounded map, not after every frame,
+  /// machine): 130 000 nodes (3.6 MB, 10 m of forest flight) 10-16 ms; 1 000 000 nodes (28 MB,
+  /// 100 m) ~165 ms. So take snapshots at a low rate or of a bounded map, not after every frame,
   /// and not on the insertion task's deadline. Call on the owner thread (it reads the tree).
   std::shared_ptr<const octomap::OcTree> snapshot() const;
 
