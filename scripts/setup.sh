@@ -10,7 +10,9 @@ lists=(scripts/deps/debian-build.txt)
 [[ ${1:-} == --dev ]] && lists+=(scripts/deps/debian-dev.txt)
 mapfile -t wanted < <(sed 's/#.*//; s/[[:space:]]//g; /^$/d' "${lists[@]}")
 
-installed=$(dpkg-query -W -f='${Package} ${db:Status-Status}\n' "${wanted[@]}" 2>/dev/null | awk '$2 == "installed" {print $1}')
+# dpkg-query exits 1 when any package is unknown to dpkg (never installed): that is the answer we
+# want, not an error, so the pipeline must not trip pipefail.
+installed=$({ dpkg-query -W -f='${Package} ${db:Status-Status}\n' "${wanted[@]}" 2>/dev/null || true; } | awk '$2 == "installed" {print $1}')
 missing=()
 for p in "${wanted[@]}"; do
   grep -qx "$p" <<<"$installed" || missing+=("$p")
