@@ -195,6 +195,7 @@ void Simulation::captureCamera() {
   if (const auto detection = observe(person.keypoints_W_m, T_WC, spec.camera, line_of_sight, camera_rng_)) {
     frame.persons[0] = *detection;
     frame.person_count = 1;
+    frame.target_index = 0;  // the simulated world holds one person: the one followed
   }
   if (pending_count_ == pending_.size()) {  // cannot happen with sane rates; drop the oldest
     pending_head_ = (pending_head_ + 1) % pending_.size();

@@ -118,6 +118,9 @@ struct DetectionFrame {
   CameraIntrinsics intrinsics;  ///< Of the image the pixels refer to.
   std::size_t person_count = 0;
   std::array<PersonDetection, kMaxPersons> persons{};
+  /// Which of persons[] is the followed person (the detector's lock-on), -1 if none of them is:
+  /// bystanders alone, or the target was not found.
+  int target_index = -1;
 };
 
 /// Vehicle state estimate from the flight controller or the simulator.
