@@ -25,3 +25,6 @@ if ((${#missing[@]})); then
   "${sudo[@]}" apt-get update -qq
   DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
+
+# The MoveNet models in models/: fetched and converted once, checked against their sha256 sums.
+scripts/models/provision.sh
