@@ -1,0 +1,53 @@
+// Task glue for the detector: takes the newest gimbal-camera image, runs the tracking loop
+// (Detector::track) and publishes a DetectionFrame stamped with the image's exposure time, the
+// followed person marked by target_index. Frames that arrive while the detector is busy are
+// skipped, not queued: the newest image is the one worth detecting. Inference failures are
+// counted, not printed (the app reports them).
+#pragma once
+
+#include <cstdint>
+
+#include "aerotrack/perception/detector.hpp"
+#include "aerotrack/rt/clock.hpp"
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/shared_slot.hpp"
+#include "aerotrack/rt/spsc_queue.hpp"
+#include "aerotrack/rt/task.hpp"
+#include "aerotrack/rt/timing_stats.hpp"
+
+namespace aerotrack::perception {
+
+/// Reads the `perception:` config section (throws rt::ConfigError naming the key). model_dir is
+/// taken as written; "default" is left for the app to resolve.
+DetectorParams parseDetectorParams(const rt::ConfigNode& node);
+
+/// The DetectionFrame for one detector output on an image. Pure.
+hal::DetectionFrame toDetectionFrame(const DetectorOutput& output, const hal::ImageFrame& image, rt::TimeNs result_ns);
+
+class DetectionTask final : public rt::Task {
+ public:
+  DetectionTask(Detector detector, const rt::SharedSlot<hal::ImageFrame>& images,
+                rt::SpscQueue<hal::DetectionFrame>& out, const rt::Clock& stats_clock)
+      : detector_(std::move(detector)), images_(images), out_(out), stats_clock_(stats_clock) {}
+
+  void step(rt::TimeNs now_ns) override;
+
+  std::uint64_t framesDetected() const { return frames_detected_; }
+  std::uint64_t framesWithTarget() const { return frames_with_target_; }
+  std::uint64_t failures() const { return failures_; }
+  /// Per detected frame: transform, inference, decoding, lock-on.
+  const rt::TimingStats& detectStats() const { return detect_stats_; }
+
+ private:
+  Detector detector_;
+  const rt::SharedSlot<hal::ImageFrame>& images_;
+  rt::SpscQueue<hal::DetectionFrame>& out_;
+  const rt::Clock& stats_clock_;
+  rt::TimingStats detect_stats_;
+  std::uint64_t image_version_ = 0;
+  std::uint64_t frames_detected_ = 0;
+  std::uint64_t frames_with_target_ = 0;
+  std::uint64_t failures_ = 0;
+};
+
+}  // namespace aerotrack::perception

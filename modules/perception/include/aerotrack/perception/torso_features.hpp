@@ -1,0 +1,43 @@
+// The distance features of the paper's localization (Sect. IV-B): the torso length L_t, from the
+// neck (midpoint of the shoulders) to the mid-hip, and the person's horizontal image position u_t.
+// A distance is only as good as the four torso joints behind it, so each result carries a
+// reliability flag and, when unreliable, the reason: a joint with a low score, or a joint on the
+// image border -- MoveNet clamps joints of a person cut off by the frame to the border, and such a
+// torso is too short, which the regression would read as a person too far away (issue 5, item 4).
+#pragma once
+
+#include <array>
+#include <string_view>
+
+#include "aerotrack/hal/types.hpp"
+
+namespace aerotrack::perception {
+
+struct TorsoFeatureParams {
+  double min_joint_score = 0.3;   ///< Each of the four torso joints needs at least this score.
+  double border_margin_px = 4.0;  ///< A torso joint closer than this to the image edge is "on the border".
+  double min_torso_px = 1.0;      ///< A shorter torso (degenerate) is unreliable.
+};
+
+enum class TorsoReason : std::uint8_t { kOk, kLowScore, kOnBorder, kTooShort };
+
+/// "ok", "low_score", "on_border", "too_short".
+std::string_view toString(TorsoReason reason);
+
+struct TorsoFeatures {
+  double torso_px = 0.0;  ///< Neck to mid-hip length, pixels.
+  double u_px = 0.0;      ///< Horizontal centre of the torso (midpoint of neck and mid-hip), pixels.
+  double v_px = 0.0;      ///< Vertical centre of the torso, pixels.
+  bool reliable = false;
+  TorsoReason reason = TorsoReason::kLowScore;
+  hal::CocoKeypoint culprit = hal::CocoKeypoint::kLeftShoulder;  ///< The joint behind an unreliable verdict.
+};
+
+/// Features of one detection in an image of width_px x height_px. Pure, allocation-free.
+TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints, int width_px,
+                            int height_px, const TorsoFeatureParams& params);
+
+/// COCO name of a joint ("left_hip"), for reasons printed to people.
+std::string_view keypointName(hal::CocoKeypoint k);
+
+}  // namespace aerotrack::perception

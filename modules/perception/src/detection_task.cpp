@@ -1,0 +1,57 @@
+// Detection task and its config section: see detection_task.hpp.
+#include "aerotrack/perception/detection_task.hpp"
+
+namespace aerotrack::perception {
+
+DetectorParams parseDetectorParams(const rt::ConfigNode& node) {
+  DetectorParams p;
+  p.model_dir = node.getString("model_dir");
+  p.tracking_model = node.getEnum("tracking_model", {"lightning", "thunder"});
+  p.search_model = node.getEnum("search_model", {"multipose", "lightning", "thunder"});
+  p.dnn.backend = node.getEnum("dnn_backend", {"auto", "opencv", "cuda"});
+  p.dnn.target = node.getEnum("dnn_target", {"auto", "cpu", "cuda", "cuda_fp16"});
+  p.min_person_score = node.getDouble("min_person_score", 0.0, 1.0);
+  p.torso.min_joint_score = node.getDouble("torso_min_joint_score", 0.0, 1.0);
+  p.torso.border_margin_px = node.getDouble("torso_border_margin_px", 0.0, 100.0);
+  const rt::ConfigNode tracker = node.child("tracker");
+  p.tracker.gate_torso_multiples = tracker.getDouble("gate_torso_multiples", 0.1, 20.0);
+  p.tracker.max_torso_ratio = tracker.getDouble("max_torso_ratio", 1.01, 10.0);
+  p.tracker.max_appearance_distance = tracker.getDouble("max_appearance_distance", 0.01, 1.0);
+  p.tracker.appearance_weight = tracker.getDouble("appearance_weight", 0.0, 100.0);
+  p.tracker.lost_after_s = tracker.getDouble("lost_after_s", 0.01, 60.0);
+  p.tracker.appearance_rate = tracker.getDouble("appearance_rate", 0.0, 1.0);
+  tracker.finish();
+  node.finish();
+  return p;
+}
+
+hal::DetectionFrame toDetectionFrame(const DetectorOutput& output, const hal::ImageFrame& image, rt::TimeNs result_ns) {
+  hal::DetectionFrame frame;
+  frame.stamp_ns = image.stamp_ns;
+  frame.result_ns = result_ns;
+  frame.sequence = image.sequence;
+  frame.intrinsics = image.intrinsics;
+  frame.person_count = output.count;
+  for (std::size_t i = 0; i < output.count; ++i) frame.persons[i] = output.persons[i].detection;
+  frame.target_index = output.target ? static_cast<int>(*output.target) : -1;
+  return frame;
+}
+
+void DetectionTask::step(rt::TimeNs now_ns) {
+  if (images_.version() == image_version_) return;
+  image_version_ = images_.version();
+  const auto image = images_.read();
+  if (!image || image->bgr.empty()) return;
+  const rt::TimeNs begin_ns = stats_clock_.now();
+  const auto output = detector_.track(image->bgr, image->stamp_ns);
+  detect_stats_.recordRun(stats_clock_.now() - begin_ns);
+  if (!output) {
+    ++failures_;
+    return;
+  }
+  ++frames_detected_;
+  if (output->target) ++frames_with_target_;
+  out_.try_push(toDetectionFrame(*output, *image, now_ns));
+}
+
+}  // namespace aerotrack::perception

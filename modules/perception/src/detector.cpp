@@ -1,0 +1,190 @@
+// The detector and its tracking loop: see detector.hpp.
+#include "aerotrack/perception/detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace aerotrack::perception {
+
+namespace {
+
+std::size_t modelIndex(const std::string& name) {
+  const auto& names = knownModelNames();
+  return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+}
+
+void clipBox(hal::PersonDetection& p, double u0, double v0, double u1, double v1, int width_px, int height_px) {
+  u0 = std::clamp(u0, 0.0, static_cast<double>(width_px));
+  u1 = std::clamp(u1, 0.0, static_cast<double>(width_px));
+  v0 = std::clamp(v0, 0.0, static_cast<double>(height_px));
+  v1 = std::clamp(v1, 0.0, static_cast<double>(height_px));
+  p.bbox_u_px = u0;
+  p.bbox_v_px = v0;
+  p.bbox_w_px = std::max(0.0, u1 - u0);
+  p.bbox_h_px = std::max(0.0, v1 - v0);
+}
+
+void mapKeypoints(const NormalisedPose& pose, const InputTransform& t, hal::PersonDetection& p) {
+  const double s = t.input_size_px;
+  for (std::size_t k = 0; k < hal::kNumKeypoints; ++k) {
+    p.keypoints[k].u_px = t.toImageU(static_cast<double>(pose[k].x) * s);
+    p.keypoints[k].v_px = t.toImageV(static_cast<double>(pose[k].y) * s);
+    p.keypoints[k].score = pose[k].score;
+  }
+}
+
+}  // namespace
+
+rt::Status validate(const DetectorParams& p) {
+  if (modelIndex(p.tracking_model) >= 2)
+    return rt::Error{"tracking_model: expected lightning or thunder (a singlepose model), got '" + p.tracking_model +
+                     "'"};
+  if (modelIndex(p.search_model) >= knownModelNames().size())
+    return rt::Error{"search_model: expected multipose, lightning or thunder, got '" + p.search_model + "'"};
+  if (auto s = validate(p.dnn); !s) return rt::Error{"dnn." + s.error().message};
+  if (!(p.min_person_score >= 0.0 && p.min_person_score <= 1.0))
+    return rt::Error{"min_person_score: must be in [0, 1]"};
+  if (!(p.bbox_min_keypoint_score >= 0.0 && p.bbox_min_keypoint_score <= 1.0))
+    return rt::Error{"bbox_min_keypoint_score: must be in [0, 1]"};
+  if (!(p.bbox_margin_fraction >= 0.0 && p.bbox_margin_fraction <= 1.0))
+    return rt::Error{"bbox_margin_fraction: must be in [0, 1]"};
+  if (!(p.crop.min_score >= 0.0 && p.crop.min_score <= 1.0)) return rt::Error{"crop.min_score: must be in [0, 1]"};
+  if (!(p.crop.torso_factor > 0.0 && p.crop.body_factor > 0.0)) return rt::Error{"crop: factors must be > 0"};
+  if (!(p.crop.min_side_fraction > 0.0 && p.crop.min_side_fraction <= 1.0))
+    return rt::Error{"crop.min_side_fraction: must be in (0, 1]"};
+  if (!(p.torso.min_joint_score >= 0.0 && p.torso.min_joint_score <= 1.0))
+    return rt::Error{"torso.min_joint_score: must be in [0, 1]"};
+  if (!(p.torso.border_margin_px >= 0.0)) return rt::Error{"torso.border_margin_px: must be >= 0"};
+  if (auto s = validate(p.tracker); !s) return rt::Error{"tracker." + s.error().message};
+  return rt::ok();
+}
+
+hal::PersonDetection singlePoseToImage(const NormalisedPose& pose, const InputTransform& transform, int width_px,
+                                       int height_px, double bbox_min_keypoint_score, double bbox_margin_fraction) {
+  hal::PersonDetection p;
+  mapKeypoints(pose, transform, p);
+  double score_sum = 0.0;
+  double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
+  for (const hal::Keypoint2D& k : p.keypoints) {
+    score_sum += k.score;
+    if (k.score < bbox_min_keypoint_score) continue;
+    u0 = std::min(u0, k.u_px);
+    u1 = std::max(u1, k.u_px);
+    v0 = std::min(v0, k.v_px);
+    v1 = std::max(v1, k.v_px);
+  }
+  p.score = score_sum / static_cast<double>(hal::kNumKeypoints);
+  if (u1 >= u0) {
+    const double margin = bbox_margin_fraction * std::max(u1 - u0, v1 - v0);
+    clipBox(p, u0 - margin, v0 - margin, u1 + margin, v1 + margin, width_px, height_px);
+  }
+  return p;
+}
+
+hal::PersonDetection multiPoseToImage(const MultiPoseInstance& instance, const InputTransform& transform, int width_px,
+                                      int height_px) {
+  hal::PersonDetection p;
+  mapKeypoints(instance.keypoints, transform, p);
+  p.score = instance.score;
+  const double s = transform.input_size_px;
+  clipBox(p, transform.toImageU(static_cast<double>(instance.box_xmin) * s),
+          transform.toImageV(static_cast<double>(instance.box_ymin) * s),
+          transform.toImageU(static_cast<double>(instance.box_xmax) * s),
+          transform.toImageV(static_cast<double>(instance.box_ymax) * s), width_px, height_px);
+  return p;
+}
+
+rt::Expected<Detector> Detector::create(const DetectorParams& params) {
+  if (auto s = validate(params); !s) return s.error();
+  Detector detector(params);
+  for (const std::string& name : {params.tracking_model, params.search_model})
+    if (auto m = detector.model(name); !m) return m.error();
+  return detector;
+}
+
+rt::Expected<MoveNetModel*> Detector::model(const std::string& name) {
+  const std::size_t i = modelIndex(name);
+  if (i >= models_.size()) return rt::Error{"unknown model '" + name + "' (known: lightning, thunder, multipose)"};
+  if (!models_[i]) {
+    auto loaded = MoveNetModel::load(params_.model_dir, name, params_.dnn);
+    if (!loaded) return loaded.error();
+    models_[i].emplace(std::move(loaded.value()));
+    blobs_[i] = makeInputBlob(models_[i]->info().input_size_px);
+  }
+  return &*models_[i];
+}
+
+rt::Expected<DetectorOutput> Detector::runModel(MoveNetModel& model, const cv::Mat& bgr,
+                                                const InputTransform& transform) {
+  cv::Mat& blob = blobs_[modelIndex(model.info().name)];
+  fillInputBlob(bgr, transform, scratch_, blob);
+  if (auto s = model.run(blob); !s) return s.error();
+
+  DetectorOutput out;
+  out.model = knownModelNames()[modelIndex(model.info().name)].c_str();
+  const auto add = [&](const hal::PersonDetection& person) {
+    if (person.score < params_.min_person_score || out.count >= out.persons.size()) return;
+    DetectedPerson& d = out.persons[out.count++];
+    d.detection = person;
+    d.torso = torsoFeatures(person.keypoints, bgr.cols, bgr.rows, params_.torso);
+    d.appearance = torsoAppearance(bgr, person.keypoints);
+  };
+  if (model.info().kind == ModelKind::kSinglePose) {
+    const SinglePoseHeads heads = model.singlePoseHeads();
+    if (!shapesValid(heads)) return rt::Error{model.info().name + ": heads do not match the decoder"};
+    add(singlePoseToImage(decodeSinglePose(heads, model.info().constants), transform, bgr.cols, bgr.rows,
+                          params_.bbox_min_keypoint_score, params_.bbox_margin_fraction));
+  } else {
+    const MultiPoseHeads heads = model.multiPoseHeads();
+    if (!shapesValid(heads)) return rt::Error{model.info().name + ": heads do not match the decoder"};
+    const MultiPoseResult result = decodeMultiPose(heads, model.info().constants);
+    for (const MultiPoseInstance& instance : result.instances)
+      add(multiPoseToImage(instance, transform, bgr.cols, bgr.rows));
+  }
+  return out;
+}
+
+rt::Expected<DetectorOutput> Detector::detectFrame(const cv::Mat& bgr, const std::string& model_name) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) return rt::Error{"expected a non-empty 8-bit BGR image"};
+  auto m = model(model_name);
+  if (!m) return m.error();
+  return runModel(**m, bgr, letterbox(bgr.cols, bgr.rows, (*m)->info().input_size_px));
+}
+
+rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stamp_ns,
+                                             const std::optional<ImagePrediction>& external) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) return rt::Error{"expected a non-empty 8-bit BGR image"};
+  std::array<TrackCandidate, hal::kMaxPersons> candidates{};
+  const auto choose = [&](DetectorOutput& out) {
+    for (std::size_t i = 0; i < out.count; ++i)
+      candidates[i] = {out.persons[i].torso, out.persons[i].appearance, out.persons[i].detection.score};
+    out.target = tracker_.update(stamp_ns, std::span(candidates.data(), out.count), external);
+    if (out.target) last_target_keypoints_ = out.persons[*out.target].detection.keypoints;
+  };
+
+  // While locked: singlepose on the crop around the last keypoints.
+  auto tracking_model = model(params_.tracking_model);
+  if (!tracking_model) return tracking_model.error();
+  MoveNetModel* tracking = tracking_model.value();
+  InputTransform crop;
+  if (tracker_.locked(stamp_ns) && last_target_keypoints_ &&
+      cropAroundPerson(*last_target_keypoints_, bgr.cols, bgr.rows, tracking->info().input_size_px, params_.crop,
+                       crop)) {
+    auto out = runModel(*tracking, bgr, crop);
+    if (!out) return out.error();
+    out->cropped = true;
+    choose(*out);
+    if (out->target) return out;
+  }
+
+  // No lock, or the crop lost the person: search the whole frame.
+  auto search_model = model(params_.search_model);
+  if (!search_model) return search_model.error();
+  MoveNetModel* search = search_model.value();
+  auto out = runModel(*search, bgr, letterbox(bgr.cols, bgr.rows, search->info().input_size_px));
+  if (!out) return out.error();
+  choose(*out);
+  return out;
+}
+
+}  // namespace aerotrack::perception

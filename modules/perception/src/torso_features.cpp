@@ -1,0 +1,76 @@
+// Torso length, horizontal position and reliability: see torso_features.hpp.
+#include "aerotrack/perception/torso_features.hpp"
+
+#include <cmath>
+
+namespace aerotrack::perception {
+
+using hal::CocoKeypoint;
+using hal::index;
+
+std::string_view toString(TorsoReason reason) {
+  switch (reason) {
+    case TorsoReason::kOk:
+      return "ok";
+    case TorsoReason::kLowScore:
+      return "low_score";
+    case TorsoReason::kOnBorder:
+      return "on_border";
+    case TorsoReason::kTooShort:
+      return "too_short";
+  }
+  return "unknown";
+}
+
+std::string_view keypointName(CocoKeypoint k) {
+  static constexpr std::array<std::string_view, hal::kNumKeypoints> kNames = {
+      "nose",           "left_eye",   "right_eye",   "left_ear",   "right_ear",   "left_shoulder",
+      "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hip",
+      "right_hip",      "left_knee",  "right_knee",  "left_ankle", "right_ankle"};
+  return kNames[index(k)];
+}
+
+TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints, int width_px,
+                            int height_px, const TorsoFeatureParams& params) {
+  const hal::Keypoint2D& ls = keypoints[index(CocoKeypoint::kLeftShoulder)];
+  const hal::Keypoint2D& rs = keypoints[index(CocoKeypoint::kRightShoulder)];
+  const hal::Keypoint2D& lh = keypoints[index(CocoKeypoint::kLeftHip)];
+  const hal::Keypoint2D& rh = keypoints[index(CocoKeypoint::kRightHip)];
+  const double neck_u = 0.5 * (ls.u_px + rs.u_px);
+  const double neck_v = 0.5 * (ls.v_px + rs.v_px);
+  const double hip_u = 0.5 * (lh.u_px + rh.u_px);
+  const double hip_v = 0.5 * (lh.v_px + rh.v_px);
+
+  TorsoFeatures f;
+  f.torso_px = std::hypot(neck_u - hip_u, neck_v - hip_v);
+  f.u_px = 0.5 * (neck_u + hip_u);
+  f.v_px = 0.5 * (neck_v + hip_v);
+
+  constexpr std::array<CocoKeypoint, 4> kTorso = {CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder,
+                                                  CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip};
+  for (CocoKeypoint k : kTorso)
+    if (keypoints[index(k)].score < params.min_joint_score) {
+      f.reason = TorsoReason::kLowScore;
+      f.culprit = k;
+      return f;
+    }
+  for (CocoKeypoint k : kTorso) {
+    const hal::Keypoint2D& p = keypoints[index(k)];
+    const bool on_border = p.u_px < params.border_margin_px || p.v_px < params.border_margin_px ||
+                           p.u_px > width_px - params.border_margin_px || p.v_px > height_px - params.border_margin_px;
+    if (on_border) {
+      f.reason = TorsoReason::kOnBorder;
+      f.culprit = k;
+      return f;
+    }
+  }
+  if (!(f.torso_px >= params.min_torso_px)) {
+    f.reason = TorsoReason::kTooShort;
+    return f;
+  }
+  f.reliable = true;
+  f.reason = TorsoReason::kOk;
+  return f;
+}
+
+}  // namespace aerotrack::perception

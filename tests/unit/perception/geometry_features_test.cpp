@@ -1,0 +1,126 @@
+// Unit tests of the input transform (letterbox, tracking crop, blob filling) and the torso features,
+// with hand-computed expectations.
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include "aerotrack/perception/input_transform.hpp"
+#include "aerotrack/perception/torso_features.hpp"
+
+namespace aerotrack::perception {
+namespace {
+
+using hal::CocoKeypoint;
+using hal::index;
+using Keypoints = std::array<hal::Keypoint2D, hal::kNumKeypoints>;
+
+TEST(Letterbox, GivenA640x480Frame_WhenLetterboxedTo192_ThenItIsCentredWithBarsAboveAndBelow) {
+  const InputTransform t = letterbox(640, 480, 192);
+  EXPECT_DOUBLE_EQ(t.region_side_px, 640.0);
+  EXPECT_DOUBLE_EQ(t.region_u0_px, 0.0);
+  EXPECT_DOUBLE_EQ(t.region_v0_px, -80.0);
+  EXPECT_DOUBLE_EQ(t.scale(), 0.3);
+  // The network's centre is the image's centre; its corners are the square's corners.
+  EXPECT_DOUBLE_EQ(t.toImageU(96.0), 320.0);
+  EXPECT_DOUBLE_EQ(t.toImageV(96.0), 240.0);
+  EXPECT_DOUBLE_EQ(t.toImageV(0.0), -80.0);
+  EXPECT_DOUBLE_EQ(t.toImageU(192.0), 640.0);
+}
+
+TEST(FillInputBlob, GivenAnImageOfTheInputSize_WhenFilled_ThenPixelsPassUnchangedInRgbPlanes) {
+  cv::Mat bgr(4, 4, CV_8UC3);
+  cv::randu(bgr, 0, 256);
+  TransformScratch scratch;
+  cv::Mat blob = makeInputBlob(4);
+  fillInputBlob(bgr, letterbox(4, 4, 4), scratch, blob);
+  const float* p = blob.ptr<float>();
+  for (int v = 0; v < 4; ++v)
+    for (int u = 0; u < 4; ++u) {
+      const cv::Vec3b px = bgr.at<cv::Vec3b>(v, u);
+      EXPECT_EQ(p[0 * 16 + v * 4 + u], px[2]);  // R
+      EXPECT_EQ(p[1 * 16 + v * 4 + u], px[1]);  // G
+      EXPECT_EQ(p[2 * 16 + v * 4 + u], px[0]);  // B
+    }
+}
+
+TEST(FillInputBlob, GivenAWideFrame_WhenLetterboxed_ThenTheBarsAreBlackAndTheCentreKeepsItsColour) {
+  cv::Mat bgr(50, 100, CV_8UC3, cv::Scalar(10, 20, 200));
+  TransformScratch scratch;
+  cv::Mat blob = makeInputBlob(100);
+  fillInputBlob(bgr, letterbox(100, 50, 100), scratch, blob);
+  const float* r = blob.ptr<float>();
+  EXPECT_EQ(r[10 * 100 + 50], 0.0F);    // row 10: inside the top bar (rows 0..24)
+  EXPECT_EQ(r[50 * 100 + 50], 200.0F);  // centre: the image
+  EXPECT_EQ(r[90 * 100 + 50], 0.0F);    // bottom bar
+}
+
+Keypoints standingPerson(double hip_u, double hip_v, double torso_px, double score) {
+  Keypoints k{};
+  for (auto& p : k) p = {hip_u, hip_v - 0.5 * torso_px, score};
+  k[index(CocoKeypoint::kLeftShoulder)] = {hip_u + 0.2 * torso_px, hip_v - torso_px, score};
+  k[index(CocoKeypoint::kRightShoulder)] = {hip_u - 0.2 * torso_px, hip_v - torso_px, score};
+  k[index(CocoKeypoint::kLeftHip)] = {hip_u + 0.15 * torso_px, hip_v, score};
+  k[index(CocoKeypoint::kRightHip)] = {hip_u - 0.15 * torso_px, hip_v, score};
+  k[index(CocoKeypoint::kNose)] = {hip_u, hip_v - 1.4 * torso_px, score};
+  k[index(CocoKeypoint::kLeftAnkle)] = {hip_u + 0.1 * torso_px, hip_v + 1.6 * torso_px, score};
+  k[index(CocoKeypoint::kRightAnkle)] = {hip_u - 0.1 * torso_px, hip_v + 1.6 * torso_px, score};
+  return k;
+}
+
+TEST(CropAroundPerson, GivenAConfidentPerson_WhenCropped_ThenTheSquareIsCentredOnTheHipsAndHoldsTheBody) {
+  const Keypoints k = standingPerson(300.0, 250.0, 50.0, 0.9);
+  InputTransform t;
+  ASSERT_TRUE(cropAroundPerson(k, 640, 480, 192, CropParams{}, t));
+  // Largest torso-joint range: the shoulders, 50 px above the hip centre -> 1.9 x 50 = 95 px;
+  // largest body range: the ankles, 80 px below -> 1.2 x 80 = 96 px; half side 96 px.
+  EXPECT_DOUBLE_EQ(t.region_side_px, 192.0);
+  EXPECT_DOUBLE_EQ(t.region_u0_px, 300.0 - 96.0);
+  EXPECT_DOUBLE_EQ(t.region_v0_px, 250.0 - 96.0);
+}
+
+TEST(CropAroundPerson, GivenNoConfidentHips_WhenCropped_ThenThereIsNoCrop) {
+  Keypoints k = standingPerson(300.0, 250.0, 50.0, 0.9);
+  k[index(CocoKeypoint::kLeftHip)].score = 0.1;
+  k[index(CocoKeypoint::kRightHip)].score = 0.1;
+  InputTransform t;
+  EXPECT_FALSE(cropAroundPerson(k, 640, 480, 192, CropParams{}, t));
+}
+
+TEST(CropAroundPerson, GivenAPersonFillingTheFrame_WhenCropped_ThenTheWholeFrameIsUsed) {
+  const Keypoints k = standingPerson(320.0, 240.0, 200.0, 0.9);
+  InputTransform t;
+  ASSERT_TRUE(cropAroundPerson(k, 640, 480, 192, CropParams{}, t));
+  EXPECT_DOUBLE_EQ(t.region_side_px, 640.0);
+}
+
+TEST(TorsoFeatures, GivenAConfidentTorso_WhenMeasured_ThenLengthAndCentreComeFromNeckAndMidHip) {
+  const Keypoints k = standingPerson(300.0, 250.0, 80.0, 0.9);
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_TRUE(f.reliable);
+  EXPECT_EQ(f.reason, TorsoReason::kOk);
+  EXPECT_DOUBLE_EQ(f.torso_px, 80.0);
+  EXPECT_DOUBLE_EQ(f.u_px, 300.0);
+  EXPECT_DOUBLE_EQ(f.v_px, 210.0);
+}
+
+TEST(TorsoFeatures, GivenAWeakHip_WhenMeasured_ThenItIsUnreliableForALowScoreOfThatHip) {
+  Keypoints k = standingPerson(300.0, 250.0, 80.0, 0.9);
+  k[index(CocoKeypoint::kRightHip)].score = 0.29;
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_FALSE(f.reliable);
+  EXPECT_EQ(f.reason, TorsoReason::kLowScore);
+  EXPECT_EQ(f.culprit, CocoKeypoint::kRightHip);
+}
+
+TEST(TorsoFeatures, GivenHipsCutOffByTheBottomEdge_WhenMeasured_ThenItIsUnreliableOnTheBorder) {
+  // MoveNet clamps the hips of a person cut off by the frame to the last rows.
+  Keypoints k = standingPerson(300.0, 478.0, 80.0, 0.9);
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_FALSE(f.reliable);
+  EXPECT_EQ(f.reason, TorsoReason::kOnBorder);
+  EXPECT_EQ(toString(f.reason), "on_border");
+  EXPECT_EQ(keypointName(f.culprit), "left_hip");
+}
+
+}  // namespace
+}  // namespace aerotrack::perception
