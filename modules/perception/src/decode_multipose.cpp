@@ -59,7 +59,7 @@ bool shapesValid(const MultiPoseHeads& heads) {
 MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstants& c) {
   const int h = heads.center.height;
   const int w = heads.center.width;
-  const int r = c.center_nms_kernel / 2;
+  const int r = c.nms_kernel / 2;
 
   // 1. Centre peaks: a cell equal (within tolerance) to the maximum of its window; others count 0.
   // 2. The six largest, larger first, ties to the lower flat index (TopK).
@@ -76,7 +76,7 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
       for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
         for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx)
           window_max = std::max(window_max, heads.center.at(0, yy, xx));
-      const float masked = std::abs(v - window_max) < c.center_nms_tolerance ? v : 0.0F;
+      const float masked = std::abs(v - window_max) < c.nms_tolerance ? v : 0.0F;
       const Peak candidate{masked, y * w + x};
       // Insert keeping the order (value descending, index ascending); later equal values go after.
       for (std::size_t i = 0; i < top.size(); ++i)
@@ -98,8 +98,8 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
     const float size_x = std::max(heads.box_scale.at(1, cy, cx), c.box_scale_min);
     const float centre_y = static_cast<float>(cy) + heads.box_offset.at(0, cy, cx);
     const float centre_x = static_cast<float>(cx) + heads.box_offset.at(1, cy, cx);
-    boxes[n] = {clip(centre_y - size_y * 0.5F, fh), clip(centre_x - size_x * 0.5F, fw),
-                clip(centre_y + size_y * 0.5F, fh), clip(centre_x + size_x * 0.5F, fw)};
+    boxes[n] = {clip(centre_y - size_y * c.box_half, fh), clip(centre_x - size_x * c.box_half, fw),
+                clip(centre_y + size_y * c.box_half, fh), clip(centre_x + size_x * c.box_half, fw)};
     for (int k = 0; k < kJoints; ++k) {
       regressed[n][static_cast<std::size_t>(2 * k)] = static_cast<float>(cy) + heads.regress.at(2 * k, cy, cx);
       regressed[n][static_cast<std::size_t>(2 * k + 1)] = static_cast<float>(cx) + heads.regress.at(2 * k + 1, cy, cx);
@@ -108,7 +108,7 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
 
   // 4-6. Each joint at the maximum of its weighted heatmap inside its box; its score is the
   // largest weighted value any instance gives that cell (the graph's Max over instances).
-  const float sigma_cells2 = static_cast<float>(std::min(h, w)) * c.distance_sigma_fraction;
+  const float sigma_cells2 = static_cast<float>(std::min(h, w)) * c.sigma_scale;
   MultiPoseResult result;
   for (std::size_t n = 0; n < top.size(); ++n) {
     MultiPoseInstance& out = result.instances[n];
@@ -143,7 +143,7 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
       kp.y = (static_cast<float>(best_y) + heads.offset.at(2 * k, best_y, best_x)) * c.coord_scale_y;
       kp.x = (static_cast<float>(best_x) + heads.offset.at(2 * k + 1, best_y, best_x)) * c.coord_scale_x;
       kp.score = score;
-      if (score > c.keypoint_score_threshold) {
+      if (score > c.keypoint_threshold) {
         score_sum += top[n].value * score;
         count += 1.0F;
       }
@@ -152,7 +152,7 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
     out.box_xmin = std::min(std::max(box.xmin * c.coord_scale_x, 0.0F), 1.0F);
     out.box_ymax = std::min(std::max(box.ymax * c.coord_scale_y, 0.0F), 1.0F);
     out.box_xmax = std::min(std::max(box.xmax * c.coord_scale_x, 0.0F), 1.0F);
-    out.score = (1.0F / std::max(count, c.min_instance_denominator)) * score_sum;
+    out.score = (1.0F / std::max(count, 1.0F)) * score_sum;  // the graph's Maximum_1: at least one
   }
   return result;
 }

@@ -11,6 +11,7 @@ DetectorParams parseDetectorParams(const rt::ConfigNode& node) {
   p.dnn.backend = node.getEnum("dnn_backend", {"auto", "opencv", "cuda"});
   p.dnn.target = node.getEnum("dnn_target", {"auto", "cpu", "cuda", "cuda_fp16"});
   p.min_person_score = node.getDouble("min_person_score", 0.0, 1.0);
+  p.min_multipose_score = node.getDouble("min_multipose_score", 0.0, 1.0);
   p.torso.min_joint_score = node.getDouble("torso_min_joint_score", 0.0, 1.0);
   p.torso.border_margin_px = node.getDouble("torso_border_margin_px", 0.0, 100.0);
   const rt::ConfigNode tracker = node.child("tracker");

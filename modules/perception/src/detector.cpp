@@ -44,6 +44,8 @@ rt::Status validate(const DetectorParams& p) {
   if (auto s = validate(p.dnn); !s) return rt::Error{"dnn." + s.error().message};
   if (!(p.min_person_score >= 0.0 && p.min_person_score <= 1.0))
     return rt::Error{"min_person_score: must be in [0, 1]"};
+  if (!(p.min_multipose_score >= 0.0 && p.min_multipose_score <= 1.0))
+    return rt::Error{"min_multipose_score: must be in [0, 1]"};
   if (!(p.bbox_min_keypoint_score >= 0.0 && p.bbox_min_keypoint_score <= 1.0))
     return rt::Error{"bbox_min_keypoint_score: must be in [0, 1]"};
   if (!(p.bbox_margin_fraction >= 0.0 && p.bbox_margin_fraction <= 1.0))
@@ -122,8 +124,10 @@ rt::Expected<DetectorOutput> Detector::runModel(MoveNetModel& model, const cv::M
 
   DetectorOutput out;
   out.model = knownModelNames()[modelIndex(model.info().name)].c_str();
+  const double min_score =
+      model.info().kind == ModelKind::kSinglePose ? params_.min_person_score : params_.min_multipose_score;
   const auto add = [&](const hal::PersonDetection& person) {
-    if (person.score < params_.min_person_score || out.count >= out.persons.size()) return;
+    if (person.score < min_score || out.count >= out.persons.size()) return;
     DetectedPerson& d = out.persons[out.count++];
     d.detection = person;
     d.torso = torsoFeatures(person.keypoints, bgr.cols, bgr.rows, params_.torso);

@@ -81,17 +81,22 @@ rt::Expected<ModelInfo> readModelInfo(const std::string& sidecar_path, std::stri
   if (info.kind == ModelKind::kSinglePose) {
     if (auto s = read("distance_bias", c.distance_bias); !s) return s.error();
   } else {
-    auto kernel = field<int>(j, "center_nms_kernel", sidecar_path);
+    auto kernel = field<int>(j, "nms_kernel", sidecar_path);
     if (!kernel) return kernel.error();
-    if (*kernel < 1 || *kernel % 2 == 0) return rt::Error{sidecar_path + ": center_nms_kernel: must be odd and >= 1"};
-    c.center_nms_kernel = *kernel;
-    for (const auto& [key, out] : {std::pair<const char*, float*>{"center_nms_tolerance", &c.center_nms_tolerance},
-                                   {"distance_sigma_fraction", &c.distance_sigma_fraction},
+    if (*kernel < 1 || *kernel % 2 == 0) return rt::Error{sidecar_path + ": nms_kernel: must be odd and >= 1"};
+    c.nms_kernel = *kernel;
+    for (const auto& [key, out] : {std::pair<const char*, float*>{"nms_tolerance", &c.nms_tolerance},
+                                   {"sigma_scale", &c.sigma_scale},
                                    {"box_scale_min", &c.box_scale_min},
-                                   {"keypoint_score_threshold", &c.keypoint_score_threshold},
-                                   {"min_instance_denominator", &c.min_instance_denominator}})
+                                   {"box_half", &c.box_half},
+                                   {"keypoint_threshold", &c.keypoint_threshold}})
       if (auto s = read(key, *out); !s) return s.error();
-    if (!(c.distance_sigma_fraction > 0.0F)) return rt::Error{sidecar_path + ": distance_sigma_fraction: must be > 0"};
+    if (!(c.sigma_scale > 0.0F)) return rt::Error{sidecar_path + ": sigma_scale: must be > 0"};
+    auto max_persons = field<int>(j, "max_persons", sidecar_path);
+    if (!max_persons) return max_persons.error();
+    if (*max_persons != static_cast<int>(kMaxMultiPoseInstances))
+      return rt::Error{sidecar_path + ": max_persons: the decoder handles exactly " +
+                       std::to_string(kMaxMultiPoseInstances)};
   }
   return info;
 }

@@ -35,12 +35,12 @@ struct Heads {
 DecodeConstants constants() {
   DecodeConstants c;
   c.coord_scale_y = c.coord_scale_x = 1.0F / kGrid;
-  c.center_nms_kernel = 5;
-  c.center_nms_tolerance = 1e-6F;
-  c.distance_sigma_fraction = 0.3F;
+  c.nms_kernel = 5;
+  c.nms_tolerance = 1e-6F;
+  c.sigma_scale = 0.3F;
   c.box_scale_min = 0.0F;
-  c.keypoint_score_threshold = 0.127F;
-  c.min_instance_denominator = 1.0F;
+  c.box_half = 0.5F;
+  c.keypoint_threshold = 0.127F;
   return c;
 }
 
@@ -104,7 +104,7 @@ MultiPoseResult referenceDecode(const Heads& h, const DecodeConstants& c) {
         for (int xx = x - 2; xx <= x + 2; ++xx)
           if (yy >= 0 && yy < kGrid && xx >= 0 && xx < kGrid) m = std::max(m, h.center[Heads::at(0, yy, xx)]);
       const float v = h.center[Heads::at(0, y, x)];
-      masked[static_cast<std::size_t>(y * kGrid + x)] = v * (std::abs(v - m) < c.center_nms_tolerance ? 1.0F : 0.0F);
+      masked[static_cast<std::size_t>(y * kGrid + x)] = v * (std::abs(v - m) < c.nms_tolerance ? 1.0F : 0.0F);
     }
   std::vector<int> order(masked.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
@@ -130,7 +130,7 @@ MultiPoseResult referenceDecode(const Heads& h, const DecodeConstants& c) {
           const float d2 = (static_cast<float>(y) - ky) * (static_cast<float>(y) - ky) +
                            (static_cast<float>(x) - kx) * (static_cast<float>(x) - kx);
           const auto e =
-              static_cast<float>(std::exp(static_cast<double>((-1.0F * d2) / (kGrid * c.distance_sigma_fraction))));
+              static_cast<float>(std::exp(static_cast<double>((-1.0F * d2) / (kGrid * c.sigma_scale))));
           const auto& bx = boxes[static_cast<std::size_t>(n)];
           const float inside = (static_cast<float>(y) >= bx[0] && static_cast<float>(y) < bx[2] &&
                                 static_cast<float>(x) >= bx[1] && static_cast<float>(x) < bx[3])
@@ -157,7 +157,7 @@ MultiPoseResult referenceDecode(const Heads& h, const DecodeConstants& c) {
       r.instances[static_cast<std::size_t>(n)].keypoints[static_cast<std::size_t>(k)] = {
           (static_cast<float>(y) + h.offset[Heads::at(2 * k, y, x)]) * c.coord_scale_y,
           (static_cast<float>(x) + h.offset[Heads::at(2 * k + 1, y, x)]) * c.coord_scale_x, score};
-      if (score > c.keypoint_score_threshold) {
+      if (score > c.keypoint_threshold) {
         sum += masked[static_cast<std::size_t>(order[static_cast<std::size_t>(n)])] * score;
         count += 1.0F;
       }

@@ -37,13 +37,13 @@ struct DecodeConstants {
   float coord_scale_x = 0.0F;
   /// Singlepose: heatmap / (distance to the regressed joint + distance_bias) picks the joint's cell.
   float distance_bias = 0.0F;
-  /// Multipose (scripts/models/README.md, "multipose decode"):
-  int center_nms_kernel = 0;              ///< A centre cell is a peak if it equals the max of this k x k window...
-  float center_nms_tolerance = 0.0F;      ///< ...to within this.
-  float distance_sigma_fraction = 0.0F;   ///< Joint weight exp(-d^2 / (min(H, W) x this)), d in cells.
-  float box_scale_min = 0.0F;             ///< Box size is max(box_scale head, this).
-  float keypoint_score_threshold = 0.0F;  ///< Joints above it count for the instance score.
-  float min_instance_denominator = 0.0F;  ///< The instance score divides by max(count, this).
+  /// Multipose (scripts/models/README.md, "multipose decode"; sidecar names in brackets):
+  int nms_kernel = 0;          ///< [nms_kernel] A centre cell is a peak if it equals the max of this k x k window...
+  float nms_tolerance = 0.0F;  ///< [nms_tolerance] ...to within this.
+  float sigma_scale = 0.0F;    ///< [sigma_scale] Joint weight exp(-d^2 / (min(H, W) x this)), d in cells.
+  float box_scale_min = 0.0F;  ///< [box_scale_min] Box size is max(box_scale head, this)...
+  float box_half = 0.0F;       ///< [box_half] ...and the box reaches size x this on each side of its centre.
+  float keypoint_threshold = 0.0F;  ///< [keypoint_threshold] Joints above it count for the instance score.
 };
 
 /// Singlepose heads: heatmap [1,17,H,W] (sigmoid), center [1,1,H,W] (sigmoid x the model's centre
