@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# End-to-end fidelity check of the MoveNet detector: the original tfjs graph (reference.mjs, the
+# pure-JS CPU backend of TensorFlow.js) against `aerotrack detect --json` on real photos from
+# Debian's opencv-doc (messi5, basketball1, frames 0/200/400 of vtest), for each model. The images
+# are letterboxed once into S x S PNGs so that both sides see identical pixels; keypoints are
+# compared in normalised coordinates (pixels / S) and scores, and the run fails beyond 1e-4.
+# With --python the candidate is tools/fidelity/fidelity.py's decoder (OpenCV DNN on the ONNX file
+# plus a numpy transcription of the decoding in scripts/models/README.md) instead of the C++ one;
+# every output value, multipose boxes and person scores included, is then compared.
+# Needs node/npm (installs tools/fidelity's pinned packages with `npm ci` when missing),
+# opencv-doc, and the models (scripts/models/provision.sh --tfjs, run here).
+# usage: tools/fidelity/run.sh [--python] [lightning|thunder|multipose]...
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+readonly HERE=tools/fidelity PYTHON=/usr/bin/python3 DATA=/usr/share/doc/opencv-doc/examples/data
+
+fail() { echo "fidelity: $*" >&2; exit 1; }
+
+candidate=detect
+[[ ${1:-} == --python ]] && { candidate=python; shift; }
+variants=("$@")
+((${#variants[@]})) || variants=(lightning thunder multipose)
+
+command -v node >/dev/null || fail "node is missing (install Debian's npm, or run scripts/models/provision.sh)"
+[[ -d $DATA ]] || fail "$DATA is missing (apt-get install opencv-doc)"
+[[ $candidate == python || -x build/bin/aerotrack ]] || fail "build/bin/aerotrack is missing: run scripts/build.sh, or use --python"
+scripts/models/provision.sh --tfjs
+if [[ ! -d $HERE/node_modules ]]; then
+  (cd "$HERE" && npm ci --no-audit --no-fund --ignore-scripts --silent) || fail "npm ci in $HERE failed"
+fi
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# Inputs: one set of letterboxed PNGs per input size.
+declare -A size
+for v in "${variants[@]}"; do
+  [[ -f models/movenet-$v.decode.json ]] || fail "unknown model $v"
+  size[$v]=$("$PYTHON" -c 'import json, sys; print(json.load(open(sys.argv[1]))["input_size"])' "models/movenet-$v.decode.json")
+  if [[ ! -f $work/inputs-${size[$v]} ]]; then
+    "$PYTHON" $HERE/fidelity.py inputs --size "${size[$v]}" --out "$work/${size[$v]}" \
+      "$DATA/messi5.jpg" "$DATA/basketball1.png" "$DATA/vtest.avi" >"$work/inputs-${size[$v]}"
+  fi
+done
+
+# The reference: tfjs's JavaScript convolutions take seconds per image, so one process per
+# (model, image), as many at a time as there are cores.
+for v in "${variants[@]}"; do
+  while read -r png; do
+    echo "$v $png $work/reference-$v-${png##*/}.json"
+  done <"$work/inputs-${size[$v]}"
+done | xargs -P "$(nproc)" -L 1 sh -c \
+  'node '$HERE'/reference.mjs --model .cache/models/tfjs/movenet-$0.json "$1" >"$2" 2>"$2.log" || { cat "$2.log" >&2; exit 255; }' \
+  || fail "reference.mjs failed"
+
+failed=0
+for v in "${variants[@]}"; do
+  mapfile -t pngs <"$work/inputs-${size[$v]}"
+  for png in "${pngs[@]}"; do cat "$work/reference-$v-${png##*/}.json"; done >"$work/reference-$v"
+  if [[ $candidate == python ]]; then
+    "$PYTHON" $HERE/fidelity.py decode --model "models/movenet-$v.onnx" "${pngs[@]}" >"$work/candidate-$v"
+    format=identity
+  else
+    for png in "${pngs[@]}"; do
+      build/bin/aerotrack detect "$png" --model "$v" --json
+    done >"$work/candidate-$v"
+    format=detect
+  fi
+  "$PYTHON" $HERE/fidelity.py compare --reference "$work/reference-$v" --candidate "$work/candidate-$v" \
+    --format "$format" --size "${size[$v]}" --label "$v ($candidate)" || failed=1
+done
+echo "fidelity: ${#variants[@]} models in $SECONDS s"
+exit "$failed"
