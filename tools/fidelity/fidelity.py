@@ -10,7 +10,8 @@ implements it. This tool provides the pieces that check them:
            sees exactly the same pixels;
   decode   run an ONNX model in OpenCV DNN and decode its heads with a numpy transcription of the
            graph's tail (the reference decoder), printing what tfjs's Identity:0 would hold;
-  heads    compare the ONNX heads (OpenCV) with the same tensors inside the tfjs graph;
+  heads    compare the ONNX heads (OpenCV) with the same tensors inside the tfjs graph, and both
+           with a float64 numpy evaluation of the ONNX graph (its exact value);
   compare  compare reference.mjs's output with `decode` output or with `aerotrack detect --json`.
 
 All arithmetic of the decoder is float32, in the order the graph does it.
@@ -24,6 +25,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import onnx
+from numpy.lib.stride_tricks import sliding_window_view
+from onnx import numpy_helper
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent / "scripts" / "models"))
@@ -162,25 +166,64 @@ def cmd_decode(args):
 
 # --- heads against tfjs -------------------------------------------------------------------------
 
+def run_onnx_float64(model, blob):
+    """The ONNX graph evaluated in float64 with numpy (only the ops the converter emits): the
+    exact value of the converted network, against which both float32 runtimes are measured."""
+    env = {"input": blob.astype(np.float64)}
+    env.update((t.name, numpy_helper.to_array(t).astype(np.float64)) for t in model.graph.initializer)
+    for node in model.graph.node:
+        attrs = {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
+        x, *rest = (env[name] for name in node.input)
+        if node.op_type == "Conv":
+            top, left, bottom, right = attrs["pads"]
+            sh, sw = attrs["strides"]
+            x = np.pad(x, ((0, 0), (0, 0), (top, bottom), (left, right)))
+            windows = sliding_window_view(x, rest[0].shape[2:], axis=(2, 3))[:, :, ::sh, ::sw]
+            if attrs["group"] == 1:
+                y = np.einsum("nchwij,ocij->nohw", windows, rest[0], optimize=True)
+            else:  # depthwise, multiplier 1
+                y = np.einsum("nchwij,cij->nchw", windows, rest[0][:, 0])
+            if len(rest) > 1:
+                y = y + rest[1][None, :, None, None]
+        elif node.op_type == "Relu":
+            y = np.maximum(x, 0)
+        elif node.op_type == "Clip":
+            y = np.clip(x, attrs["min"], attrs["max"])
+        elif node.op_type == "Sigmoid":
+            y = 1 / (1 + np.exp(-x))
+        elif node.op_type in ("Add", "Sub", "Mul"):
+            y = {"Add": np.add, "Sub": np.subtract, "Mul": np.multiply}[node.op_type](x, rest[0])
+        elif node.op_type == "Resize":
+            y = x.repeat(2, axis=2).repeat(2, axis=3)
+        elif node.op_type == "Pad":
+            y = np.pad(x, ((0, 0), (0, 0), (1, 1), (1, 1)), mode="reflect")
+        else:
+            raise SystemExit(f"fidelity: no float64 evaluation of {node.op_type}")
+        env[node.output[0]] = y
+    return {out.name: env[out.name][0] for out in model.graph.output}
+
+
 def cmd_heads(args):
+    """Max abs difference per head between tfjs, OpenCV and the float64 evaluation, over the images."""
     info = json.loads(args.model.with_suffix(".decode.json").read_text())
-    model_json = json.loads(args.tfjs_model.read_text())
-    conv = convert_movenet.Converter(model_json, {})
-    nodes = conv.head_nodes()
-    names = [nodes[head] for head in info["outputs"]]
+    nodes = convert_movenet.Converter(json.loads(args.tfjs_model.read_text()), {}).head_nodes()
     net = cv2.dnn.readNetFromONNX(str(args.model))
-    worst = {head: 0.0 for head in info["outputs"]}
+    model = onnx.load(str(args.model))
+    pairs = ("tfjs-opencv", "tfjs-float64", "opencv-float64")
+    worst = {pair: {head: 0.0 for head in info["outputs"]} for pair in pairs}
     with tempfile.TemporaryDirectory() as dump:
         lines = subprocess.run(
             ["node", str(HERE / "reference.mjs"), "--model", str(args.tfjs_model), "--dump", dump,
-             "--nodes", ",".join(names), *map(str, args.images)],
+             "--nodes", ",".join(nodes[head] for head in info["outputs"]), *map(str, args.images)],
             check=True, capture_output=True, text=True).stdout.splitlines()
         for line in lines:
             result = json.loads(line)
-            ours = run_onnx(net, info["outputs"], result["image"])
+            opencv = run_onnx(net, info["outputs"], result["image"])
+            exact = run_onnx_float64(model, cv2.dnn.blobFromImage(cv2.imread(result["image"]), 1.0, swapRB=True))
             for head, dumped in zip(info["outputs"], result["dumped"]):
-                theirs = np.fromfile(dumped["file"], F32).reshape(dumped["shape"])[0].transpose(2, 0, 1)
-                worst[head] = max(worst[head], float(np.max(np.abs(theirs - ours[head]))))
+                tfjs = np.fromfile(dumped["file"], F32).reshape(dumped["shape"])[0].transpose(2, 0, 1)
+                for pair, a, b in zip(pairs, (tfjs, tfjs, opencv[head]), (opencv[head], exact[head], exact[head])):
+                    worst[pair][head] = max(worst[pair][head], float(np.max(np.abs(a - b))))
     print(json.dumps({"model": str(args.model), "images": len(args.images), "max_abs_diff": worst}))
 
 
