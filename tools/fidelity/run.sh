@@ -45,12 +45,17 @@ done
 
 # The reference: tfjs's JavaScript convolutions take seconds per image, so one process per
 # (model, image), as many at a time as there are cores.
-for v in "${variants[@]}"; do
-  while read -r png; do
-    echo "$v $png $work/reference-$v-${png##*/}.json"
-  done <"$work/inputs-${size[$v]}"
-done | xargs -P "$(nproc)" -L 1 sh -c \
-  'node '$HERE'/reference.mjs --model .cache/models/tfjs/movenet-$0.json "$1" >"$2" 2>"$2.log" || { cat "$2.log" >&2; exit 255; }' \
+reference_jobs() {  # lines of: tfjs model, PNG, result file
+  local v png
+  for v in "${variants[@]}"; do
+    while read -r png; do
+      echo ".cache/models/tfjs/movenet-$v.json $png $work/reference-$v-${png##*/}.json"
+    done <"$work/inputs-${size[$v]}"
+  done
+}
+# shellcheck disable=SC2016  # the quoted script is expanded by sh -c, once per job
+reference_jobs | xargs -P "$(nproc)" -L 1 sh -c \
+  'node tools/fidelity/reference.mjs --model "$0" "$1" >"$2" 2>"$2.log" || { cat "$2.log" >&2; exit 255; }' \
   || fail "reference.mjs failed"
 
 failed=0
