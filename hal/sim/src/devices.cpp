@@ -25,7 +25,34 @@ DeviceHealth SimGimbal::health(TimeNs) const {
 }
 
 DeviceHealth SimGimbalCamera::health(TimeNs now_ns) const {
+  if (sim_->renderer() != nullptr) return simulated("simulated gimbal camera, image mode", last_stamp_ns_);
   return simulated("simulated gimbal camera, keypoint mode", now_ns);
+}
+
+std::shared_ptr<ImageFrame> SimGimbalCamera::freeFrame() {
+  // A pooled frame no one else holds, whose pixels no one else shares, is reused in place.
+  for (std::shared_ptr<ImageFrame>& frame : pool_) {
+    if (frame && frame.use_count() == 1 && (frame->bgr.u == nullptr || frame->bgr.u->refcount == 1)) return frame;
+  }
+  std::shared_ptr<ImageFrame>& slot = pool_[pool_next_];
+  pool_next_ = (pool_next_ + 1) % pool_.size();
+  slot = std::make_shared<ImageFrame>();  // every frame is still in use: a new one (the old stays with its holders)
+  return slot;
+}
+
+ImageFrameHandle SimGimbalCamera::grab(TimeNs) {
+  const SceneRenderer* renderer = sim_->renderer();
+  if (renderer == nullptr) return {};
+  std::optional<CameraExposure> newest;
+  while (auto exposure = sim_->exposuresOut().try_pop()) newest = std::move(exposure);
+  if (!newest) return {};
+  std::shared_ptr<ImageFrame> frame = freeFrame();
+  frame->stamp_ns = newest->stamp_ns;
+  frame->sequence = newest->sequence;
+  frame->intrinsics = renderer->params().intrinsics;
+  renderer->render(sim_->obstacles(), newest->T_WC, &newest->person, frame->bgr, scratch_);
+  last_stamp_ns_ = newest->stamp_ns;
+  return frame;
 }
 
 DeviceHealth SimDepthCamera::health(TimeNs) const {

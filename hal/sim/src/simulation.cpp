@@ -48,9 +48,19 @@ rt::Expected<std::unique_ptr<Simulation>> Simulation::create(const ScenarioInsta
   if (!controller) return rt::Error{s.source + ": drone controller: " + controller.error().message};
   if (!(options.physics_step_s > 0.0 && options.physics_step_s <= 0.01))
     return rt::Error{"simulation: physics_step_s must be in (0, 0.01]"};
-  return std::unique_ptr<Simulation>(new Simulation(scenario, options, std::move(obstacles.value()),
-                                                    std::move(person.value()), std::move(quad.value()),
-                                                    std::move(controller.value()), start_ns));
+  std::optional<SceneRenderer> renderer;
+  if (s.gimbal_camera.mode == GimbalCameraMode::kImage) {
+    SceneRenderParams render_params;
+    render_params.intrinsics = s.gimbal_camera.camera.intrinsics;
+    auto created = SceneRenderer::create(render_params, s.gimbal_camera.person_sprite);
+    if (!created) return rt::Error{s.source + ": sensors.gimbal_camera: " + created.error().message};
+    renderer = std::move(created.value());
+  }
+  auto sim = std::unique_ptr<Simulation>(new Simulation(scenario, options, std::move(obstacles.value()),
+                                                        std::move(person.value()), std::move(quad.value()),
+                                                        std::move(controller.value()), start_ns));
+  sim->renderer_ = std::move(renderer);
+  return sim;
 }
 
 Simulation::Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
@@ -184,6 +194,15 @@ void Simulation::captureCamera() {
   const PersonState person = personAt(now_ns_);
   const Eigen::Isometry3d T_WC = cameraPose(quad_.state(), gimbal_.angleRad());
   const GimbalCameraSpec& spec = scenario_.spec.gimbal_camera;
+  if (spec.mode == GimbalCameraMode::kImage) {  // the device renders it; no detector model here
+    CameraExposure exposure;
+    exposure.stamp_ns = now_ns_;
+    exposure.sequence = ++camera_sequence_;
+    exposure.T_WC = T_WC;
+    exposure.person = person;
+    exposures_out_.try_push(exposure);
+    return;
+  }
   const LineOfSight line_of_sight = [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return obstacles_.segmentClear(a, b);
   };

@@ -2,6 +2,7 @@
 // so the modules cannot tell them from real devices.
 #pragma once
 
+#include <array>
 #include <memory>
 
 #include "aerotrack/hal/devices.hpp"
@@ -44,18 +45,30 @@ class SimGimbal final : public Gimbal {
   std::shared_ptr<Simulation> sim_;
 };
 
-/// Keypoint mode: grabDetections() delivers the simulated detector output; no images.
+/// The gimbal camera, in the scenario's mode (sensors.gimbal_camera.mode):
+///  - keypoints: grabDetections() delivers the simulated detector output; grab() returns nothing;
+///  - image: grab() renders the newest exposure the simulation took since the last call (hal/sim/render)
+///    into an ImageFrame stamped at its exposure time, at most one per exposure, so at the camera's
+///    rate when called at least that often (older waiting exposures are skipped: sequence gaps);
+///    grabDetections() returns nothing. Rendering (a few ms) runs on the caller's thread. Frames come
+///    from a small pool: a frame is reused once no one holds it, so after warm-up nothing is allocated.
+/// One task uses the device (the simulation's camera queues have one consumer).
 class SimGimbalCamera final : public GimbalCamera {
  public:
   explicit SimGimbalCamera(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
-  ImageFrameHandle grab(TimeNs) override { return {}; }
+  ImageFrameHandle grab(TimeNs now_ns) override;
   std::optional<DetectionFrame> grabDetections(TimeNs) override { return sim_->detectionsOut().try_pop(); }
 
  private:
+  std::shared_ptr<ImageFrame> freeFrame();
+
   std::shared_ptr<Simulation> sim_;
-  // detectionsOut() has one consumer: this device, used by one task.
+  std::array<std::shared_ptr<ImageFrame>, 4> pool_{};
+  std::size_t pool_next_ = 0;
+  RenderScratch scratch_;
+  TimeNs last_stamp_ns_ = 0;
 };
 
 class SimDepthCamera final : public DepthCamera {

@@ -3,7 +3,9 @@
 // vehicle link, as a flight controller would; the person walks their path; the gimbal motor turns
 // the camera; the sensors sample at their rates with their noise and latency:
 //   - gimbal camera in keypoint mode: the person's 17 keypoints projected, occluded by obstacles,
-//     noisy, sometimes missed, delivered after the detector's latency (hal::DetectionFrame);
+//     noisy, sometimes missed, delivered after the detector's latency (hal::DetectionFrame); in image
+//     mode: the camera pose and the person at each exposure (CameraExposure), which the camera device
+//     renders into an image (hal/sim/render) on its own thread, so the stepping thread stays cheap;
 //   - depth camera fixed to the body, ray cast against the obstacles (hal::DepthFrame);
 //   - odometry: truth plus noise, delayed;
 //   - gimbal encoder.
@@ -16,6 +18,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <random>
 
 #include "aerotrack/hal/sim/geometric_controller.hpp"
@@ -24,6 +27,7 @@
 #include "aerotrack/hal/sim/obstacle_world.hpp"
 #include "aerotrack/hal/sim/quadrotor.hpp"
 #include "aerotrack/hal/sim/scenario.hpp"
+#include "aerotrack/hal/sim/scene_renderer.hpp"
 #include "aerotrack/hal/sim/walking_person.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
@@ -46,6 +50,14 @@ struct SimTruth {
   PersonState person;
   double gimbal_angle_rad = 0.0;
   Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();  ///< Gimbal camera (OpenCV axes).
+};
+
+/// One image-mode exposure of the gimbal camera: what its renderer needs, at the exposure time.
+struct CameraExposure {
+  TimeNs stamp_ns = 0;         ///< Exposure time.
+  std::uint64_t sequence = 0;  ///< Frame counter (shared with keypoint mode's).
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  PersonState person;
 };
 
 /// The truth other threads may read (through Simulation::truthOut()): small and fixed-size.
@@ -85,6 +97,12 @@ class Simulation {
   rt::SpscQueue<DetectionFrame>& detectionsOut() { return detections_out_; }
   const rt::SharedSlot<DepthFrame>& depthOut() const { return depth_out_; }
   const rt::LatestSlot<TruthSnapshot>& truthOut() const { return truth_out_; }
+  /// Image mode only (otherwise never written): exposures for the camera device to render, oldest
+  /// dropped when 4 wait. One consumer.
+  rt::SpscQueue<CameraExposure>& exposuresOut() { return exposures_out_; }
+  /// Image mode: the renderer (its sprite loaded by create()); null in keypoint mode. Immutable, so
+  /// any thread may use it, with obstacles() (also immutable after create()).
+  const SceneRenderer* renderer() const { return renderer_ ? &*renderer_ : nullptr; }
 
   // The stepping thread's view.
   const SimTruth& truth() const { return truth_; }
@@ -150,6 +168,8 @@ class Simulation {
   rt::SpscQueue<DetectionFrame> detections_out_{8, rt::OverflowPolicy::kDropOldest};
   rt::SharedSlot<DepthFrame> depth_out_;
   rt::LatestSlot<TruthSnapshot> truth_out_;
+  rt::SpscQueue<CameraExposure> exposures_out_{4, rt::OverflowPolicy::kDropOldest};
+  std::optional<SceneRenderer> renderer_;
 };
 
 }  // namespace aerotrack::hal::sim

@@ -16,6 +16,7 @@
 #include "aerotrack/hal/sim/depth_camera.hpp"
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/hal/sim/obstacle_world.hpp"
+#include "aerotrack/hal/sim/person_sprite.hpp"
 #include "aerotrack/hal/sim/walking_person.hpp"
 #include "aerotrack/rt/expected.hpp"
 
@@ -77,11 +78,17 @@ struct DroneSpec {
   double thrust_to_weight = 2.5;
 };
 
+/// What the simulated gimbal camera delivers: the detector's output (keypoints, the default) or
+/// rendered images (hal/sim/render) for a real detector to run on.
+enum class GimbalCameraMode { kKeypoints, kImage };
+
 struct GimbalCameraSpec {
+  GimbalCameraMode mode = GimbalCameraMode::kKeypoints;
   double rate_hz = 30.0;
   double latency_s = 0.040;  ///< Capture to detection result (the paper's detector time).
   Eigen::Vector3d mount_B_m = Eigen::Vector3d(0.08, 0.0, -0.06);  ///< Gimbal axis in the body frame.
-  KeypointCameraParams camera;
+  KeypointCameraParams camera;     ///< Intrinsics for both modes; the rest for keypoint mode.
+  PersonSpriteSpec person_sprite;  ///< Image mode: the photo the person is cut out of.
 };
 
 struct DepthCameraSpec {

@@ -1,0 +1,437 @@
+// Image-mode scene renderer: sky and textured ground per pixel, obstacles ray cast over their
+// projected bounds into a z-buffer, the person sprite placed by the projected torso and depth-tested
+// per pixel. See scene_renderer.hpp.
+#include "aerotrack/hal/sim/scene_renderer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace aerotrack::hal::sim {
+namespace {
+
+constexpr double kNearM = 0.05;         // Obstacle parts nearer than this (camera z) are clipped.
+constexpr double kSpriteNearM = 0.1;    // The person is drawn only if this far in front.
+constexpr double kMirrorLateral = 0.3;  // |sideways component| of the facing direction that mirrors.
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr double kNoHit = std::numeric_limits<double>::infinity();
+constexpr int kGroundSize = 512;        // texels along each side of the ground texture's period
+constexpr double kGroundTexelM = 0.05;  // level 0
+
+using Colour = Eigen::Vector3d;  // B, G, R in [0, 255].
+
+const Colour kSkyHorizon(235.0, 218.0, 200.0);
+const Colour kSkyZenith(205.0, 140.0, 80.0);
+const Colour kGrass(52.0, 112.0, 70.0);
+const Colour kBark(48.0, 68.0, 96.0);
+const Colour kConcrete(150.0, 158.0, 166.0);
+
+/// Uniform in [0, 1) from two integer cell coordinates and a salt (splitmix64 finaliser).
+double hash01(std::int64_t i, std::int64_t j, std::uint64_t salt) {
+  std::uint64_t z = static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ULL ^
+                    (static_cast<std::uint64_t>(j) + 0x632BE59BD9B4E019ULL) * 0xC2B2AE3D27D4EB4FULL ^ salt;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+/// floor() as an integer, without a library call (x within +-9e18).
+std::int64_t fastFloor(double x) {
+  const auto i = static_cast<std::int64_t>(x);
+  return static_cast<double>(i) > x ? i - 1 : i;
+}
+
+/// floor(log2(x)) for x >= 1, from the exponent bits.
+int floorLog2(double x) {
+  return static_cast<int>((std::bit_cast<std::uint64_t>(x) >> 52) & 0x7FF) - 1023;
+}
+
+std::uint8_t toByte(double c) {
+  return static_cast<std::uint8_t>(std::clamp(c, 0.0, 255.0) + 0.5);
+}
+
+void store(cv::Vec3b& px, const Colour& c) {
+  px[0] = toByte(c[0]);
+  px[1] = toByte(c[1]);
+  px[2] = toByte(c[2]);
+}
+
+struct PixelRect {
+  int u0 = 0, u1 = -1, v0 = 0, v1 = -1;  // inclusive
+};
+
+/// Pixels whose centres can see the part of the box with camera z >= kNearM (its corners in front
+/// and its edges cut at the near plane, projected), one pixel of margin. False if none.
+bool projectBox(const Box& box, const Eigen::Matrix3d& R_CW, const Eigen::Vector3d& p_WC_m, const CameraIntrinsics& k,
+                PixelRect& rect) {
+  std::array<Eigen::Vector3d, 8> corner_C;
+  for (std::size_t i = 0; i < corner_C.size(); ++i) {
+    const Eigen::Vector3d corner_W((i & 1U) ? box.max_W_m.x() : box.min_W_m.x(),
+                                   (i & 2U) ? box.max_W_m.y() : box.min_W_m.y(),
+                                   (i & 4U) ? box.max_W_m.z() : box.min_W_m.z());
+    corner_C[i] = R_CW * (corner_W - p_WC_m);
+  }
+  double u_min = std::numeric_limits<double>::infinity(), v_min = u_min, u_max = -u_min, v_max = -u_min;
+  const auto add = [&](const Eigen::Vector3d& q_C) {
+    const double u = k.fx_px * q_C.x() / q_C.z() + k.cx_px;
+    const double v = k.fy_px * q_C.y() / q_C.z() + k.cy_px;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  };
+  for (std::size_t i = 0; i < corner_C.size(); ++i) {
+    if (corner_C[i].z() >= kNearM) add(corner_C[i]);
+    for (const std::size_t bit : {1U, 2U, 4U}) {
+      const std::size_t j = i | bit;
+      if (j == i || (corner_C[i].z() >= kNearM) == (corner_C[j].z() >= kNearM)) continue;
+      const double s = (kNearM - corner_C[i].z()) / (corner_C[j].z() - corner_C[i].z());
+      Eigen::Vector3d cut_C = corner_C[i] + s * (corner_C[j] - corner_C[i]);
+      cut_C.z() = kNearM;
+      add(cut_C);
+    }
+  }
+  if (!(u_min <= u_max)) return false;
+  const auto range = [](double lo, double hi, int size, int& first, int& last) {
+    const double a = std::floor(lo - 0.5) - 1.0;
+    const double b = std::ceil(hi - 0.5) + 1.0;
+    if (b < 0.0 || a > size - 1.0) return false;
+    first = static_cast<int>(std::max(a, 0.0));
+    last = static_cast<int>(std::min(b, size - 1.0));
+    return true;
+  };
+  return range(u_min, u_max, k.width_px, rect.u0, rect.u1) && range(v_min, v_max, k.height_px, rect.v0, rect.v1);
+}
+
+/// Image right for an image "down" direction (u right, v down): down (0, 1) gives right (1, 0).
+Eigen::Vector2d rightOf(const Eigen::Vector2d& down) {
+  return {down.y(), -down.x()};
+}
+
+/// Bilinear sample of a premultiplied BGRA float image at continuous pixel coordinates (pixel
+/// centres at i + 0.5); transparent outside.
+cv::Vec4f sample(const cv::Mat& img, double x, double y) {
+  const double fx = x - 0.5, fy = y - 0.5;
+  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+  const float ax = static_cast<float>(fx - x0), ay = static_cast<float>(fy - y0);
+  cv::Vec4f out(0.0F, 0.0F, 0.0F, 0.0F);
+  const std::array<float, 4> w = {(1.0F - ax) * (1.0F - ay), ax * (1.0F - ay), (1.0F - ax) * ay, ax * ay};
+  for (int n = 0; n < 4; ++n) {
+    const int xi = x0 + (n & 1), yi = y0 + (n >> 1);
+    if (xi < 0 || yi < 0 || xi >= img.cols || yi >= img.rows) continue;
+    out += w[static_cast<std::size_t>(n)] * img.at<cv::Vec4f>(yi, xi);
+  }
+  return out;
+}
+
+}  // namespace
+
+rt::Status validate(const SceneRenderParams& p) {
+  const auto fail = [](const std::string& what) { return rt::Status(rt::Error{"scene renderer: " + what}); };
+  const CameraIntrinsics& k = p.intrinsics;
+  if (k.width_px < 1 || k.height_px < 1 || k.width_px > 8192 || k.height_px > 8192)
+    return fail("image size must be 1..8192 px");
+  if (!(std::isfinite(k.fx_px) && std::isfinite(k.fy_px) && k.fx_px > 0.0 && k.fy_px > 0.0))
+    return fail("focal lengths must be finite and > 0");
+  if (!(std::isfinite(k.cx_px) && std::isfinite(k.cy_px))) return fail("principal point must be finite");
+  for (const double d : k.distortion) {
+    if (d != 0.0) return fail("distortion is not modelled; it must be zero");
+  }
+  if (!(p.max_range_m > 1.0 && p.max_range_m <= 1e4)) return fail("max_range_m must be in (1, 1e4]");
+  if (!(p.haze_distance_m > 0.0 && std::isfinite(p.haze_distance_m))) return fail("haze_distance_m must be > 0");
+  if (!(std::abs(p.sun_dir_W.norm() - 1.0) < 1e-6)) return fail("sun_dir_W must be a unit vector");
+  return rt::ok();
+}
+
+rt::Expected<SceneRenderer> SceneRenderer::create(const SceneRenderParams& params, const PersonSpriteSpec& sprite) {
+  if (auto status = validate(params); !status) return status.error();
+  auto loaded = PersonSprite::load(sprite);
+  if (!loaded) return loaded.error();
+  // The ground texture: 1.6 m tiles, 0.2 m cells and 0.05 m texels of hashed brightness, periodic.
+  auto ground = std::make_shared<GroundTexture>();
+  std::vector<float> level(static_cast<std::size_t>(kGroundSize) * kGroundSize);
+  for (int j = 0; j < kGroundSize; ++j) {
+    for (int i = 0; i < kGroundSize; ++i) {
+      double shade = (((i / 32) + (j / 32)) & 1) ? 1.06 : 0.94;
+      shade += 0.22 * (hash01(i / 4, j / 4, 1) - 0.5);
+      shade += 0.16 * (hash01(i, j, 2) - 0.5);
+      level[static_cast<std::size_t>(j * kGroundSize + i)] = static_cast<float>(shade);
+    }
+  }
+  for (int size = kGroundSize; size >= 1; size /= 2) {
+    ground->levels.push_back(level);
+    if (size == 1) break;
+    const int half = size / 2;
+    std::vector<float> down(static_cast<std::size_t>(half) * half);
+    for (int j = 0; j < half; ++j) {
+      for (int i = 0; i < half; ++i) {
+        const auto at = [&](int x, int y) { return level[static_cast<std::size_t>(y * size + x)]; };
+        down[static_cast<std::size_t>(j * half + i)] =
+            0.25F * (at(2 * i, 2 * j) + at(2 * i + 1, 2 * j) + at(2 * i, 2 * j + 1) + at(2 * i + 1, 2 * j + 1));
+      }
+    }
+    level = std::move(down);
+  }
+  return SceneRenderer(params, std::make_shared<const PersonSprite>(std::move(loaded.value())), std::move(ground));
+}
+
+void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const PersonState* person,
+                           cv::Mat& bgr, RenderScratch& scratch) const {
+  const CameraIntrinsics& k = params_.intrinsics;
+  bgr.create(k.height_px, k.width_px, CV_8UC3);
+  scratch.depth_m.create(k.height_px, k.width_px, CV_32FC1);
+  scratch.obstacle_id.create(k.height_px, k.width_px, CV_32SC1);
+  scratch.depth_m.setTo(cv::Scalar(kInf));
+  scratch.obstacle_id.setTo(cv::Scalar(-1));
+  rasterObstacles(world, T_WC, scratch);
+  shade(world, T_WC, scratch, bgr);
+  if (person != nullptr) {
+    const SpritePlacement placement = placeSprite(*person, T_WC);
+    if (placement.visible) drawPerson(placement, bgr, scratch.depth_m);
+  }
+}
+
+void SceneRenderer::rasterObstacles(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC,
+                                    RenderScratch& scratch) const {
+  const CameraIntrinsics& k = params_.intrinsics;
+  const Eigen::Matrix3d& R_WC = T_WC.linear();
+  const Eigen::Matrix3d R_CW = R_WC.transpose();
+  const Eigen::Vector3d o_W = T_WC.translation();
+  const Eigen::Vector3d step_W = R_WC.col(0) / k.fx_px;
+  const double max_range = params_.max_range_m;
+  const std::size_t box_count = world.boxes().size();
+  const std::size_t count = box_count + world.cylinders().size();
+  for (std::size_t id = 0; id < count; ++id) {
+    const bool is_box = id < box_count;
+    const Cylinder* cyl = is_box ? nullptr : &world.cylinders()[id - box_count];
+    const Box aabb = is_box ? world.boxes()[id] : boundingBox(*cyl);
+    if (distanceTo(aabb, o_W) > max_range) continue;
+    PixelRect rect;
+    if (!projectBox(aabb, R_CW, o_W, k, rect)) continue;
+    // Cylinder seen from outside its footprint: the side by the 2D quadratic, then the caps.
+    const double ox = cyl ? o_W.x() - cyl->center_W_m.x() : 0.0;
+    const double oy = cyl ? o_W.y() - cyl->center_W_m.y() : 0.0;
+    const double c = cyl ? ox * ox + oy * oy - cyl->radius_m * cyl->radius_m : 0.0;
+    const bool fast_cylinder = cyl != nullptr && c > 0.0;
+    const int label = static_cast<int>(id);
+    for (int v = rect.v0; v <= rect.v1; ++v) {
+      float* depth_row = scratch.depth_m.ptr<float>(v);
+      int* id_row = scratch.obstacle_id.ptr<int>(v);
+      Eigen::Vector3d d_W =
+          R_WC * Eigen::Vector3d((rect.u0 + 0.5 - k.cx_px) / k.fx_px, (v + 0.5 - k.cy_px) / k.fy_px, 1.0);
+      for (int u = rect.u0; u <= rect.u1; ++u, d_W += step_W) {
+        const double t_max = std::min(static_cast<double>(depth_row[u]), max_range);
+        double t = kNoHit;
+        if (fast_cylinder) {
+          const double b = ox * d_W.x() + oy * d_W.y();
+          if (b >= 0.0) continue;  // moving away from the axis
+          const double a = d_W.x() * d_W.x() + d_W.y() * d_W.y();
+          const double disc = b * b - a * c;
+          if (disc < 0.0) continue;
+          const double t_side = (-b - std::sqrt(disc)) / a;
+          const double z = o_W.z() + t_side * d_W.z();
+          if (z >= cyl->z_min_m && z <= cyl->z_max_m) {
+            t = t_side;
+          } else if (d_W.z() != 0.0) {  // over or under the side: through a cap?
+            const double z_cap = z > cyl->z_max_m ? cyl->z_max_m : cyl->z_min_m;
+            const double t_cap = (z_cap - o_W.z()) / d_W.z();
+            const double px = ox + t_cap * d_W.x(), py = oy + t_cap * d_W.y();
+            if (t_cap > t_side && px * px + py * py <= cyl->radius_m * cyl->radius_m) t = t_cap;
+          }
+        } else {
+          const Ray ray(o_W, d_W);
+          const std::optional<double> hit = is_box ? firstHit(aabb, ray, t_max) : firstHit(*cyl, ray, t_max);
+          if (hit) t = *hit;
+        }
+        if (t < kNearM || t >= t_max) continue;
+        depth_row[u] = static_cast<float>(t);
+        id_row[u] = label;
+      }
+    }
+  }
+}
+
+void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const RenderScratch& scratch,
+                          cv::Mat& bgr) const {
+  const CameraIntrinsics& k = params_.intrinsics;
+  const Eigen::Matrix3d& R_WC = T_WC.linear();
+  const Eigen::Vector3d o_W = T_WC.translation();
+  const Eigen::Vector3d step_W = R_WC.col(0) / k.fx_px;
+  const double haze_m = params_.haze_distance_m;
+  const double inv_f = 1.0 / k.fx_px;
+  const std::size_t box_count = world.boxes().size();
+  const bool above_ground = o_W.z() > 0.0;
+  const double inv_height = above_ground ? 1.0 / o_W.z() : 0.0;
+  const auto& levels = ground_->levels;
+  const int top_level = static_cast<int>(levels.size()) - 1;
+  for (int v = 0; v < k.height_px; ++v) {
+    cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
+    const float* depth_row = scratch.depth_m.ptr<float>(v);
+    const int* id_row = scratch.obstacle_id.ptr<int>(v);
+    // Pixel rays (x, y, 1) in C, i.e. with camera z = 1: a hit at ray parameter t has depth t.
+    Eigen::Vector3d d_W = R_WC * Eigen::Vector3d((0.5 - k.cx_px) / k.fx_px, (v + 0.5 - k.cy_px) / k.fy_px, 1.0);
+    for (int u = 0; u < k.width_px; ++u, d_W += step_W) {
+      const int id = id_row[u];
+      Colour colour;
+      if (id >= 0) {
+        const double t = depth_row[u];
+        const Eigen::Vector3d p_W = o_W + t * d_W;
+        Eigen::Vector3d n_W = Eigen::Vector3d::Zero();
+        double albedo = 0.85 + 0.3 * hash01(id, 0, 3);
+        const Colour* base = &kBark;
+        if (static_cast<std::size_t>(id) < box_count) {
+          const Box& box = world.boxes()[static_cast<std::size_t>(id)];
+          int axis = 0;
+          double best = std::numeric_limits<double>::infinity(), sign = 1.0;
+          for (int a = 0; a < 3; ++a) {  // the face hit: the plane nearest the hit point
+            const double dl = std::abs(p_W[a] - box.min_W_m[a]), dh = std::abs(p_W[a] - box.max_W_m[a]);
+            if (dl < best) best = dl, axis = a, sign = -1.0;
+            if (dh < best) best = dh, axis = a, sign = 1.0;
+          }
+          n_W[axis] = sign;
+          // Panels of 1 m with dark seams, each panel a little different.
+          const double s1 = p_W[(axis + 1) % 3], s2 = p_W[(axis + 2) % 3];
+          const std::int64_t i1 = fastFloor(s1), i2 = fastFloor(s2);
+          const bool seam = s1 - static_cast<double>(i1) < 0.03 || s2 - static_cast<double>(i2) < 0.03;
+          albedo *= seam ? 0.55 : 0.9 + 0.2 * hash01(i1, i2, 5 + static_cast<std::uint64_t>(axis));
+          base = &kConcrete;
+        } else {
+          const Cylinder& cyl = world.cylinders()[static_cast<std::size_t>(id) - box_count];
+          if (p_W.z() >= cyl.z_max_m - 1e-6) {
+            n_W.z() = 1.0;
+          } else if (p_W.z() <= cyl.z_min_m + 1e-6) {
+            n_W.z() = -1.0;
+          } else {
+            n_W.x() = (p_W.x() - cyl.center_W_m.x()) / cyl.radius_m;
+            n_W.y() = (p_W.y() - cyl.center_W_m.y()) / cyl.radius_m;
+          }
+          // Bark: furrows (by the normal's direction) broken into 0.4 m bands.
+          albedo *= 0.8 + 0.35 * hash01(fastFloor((n_W.x() + 2.0 * n_W.y()) * 3.0), fastFloor(p_W.z() * 2.5), 7);
+        }
+        const double shade = albedo * (0.45 + 0.6 * std::max(0.0, n_W.dot(params_.sun_dir_W)));
+        const double range_m = t * d_W.norm();
+        const double haze = range_m / (range_m + haze_m);
+        colour = (1.0 - haze) * shade * *base + haze * kSkyHorizon;
+      } else if (above_ground && d_W.z() < 0.0) {
+        const double t = -o_W.z() / d_W.z();
+        const double x = o_W.x() + t * d_W.x(), y = o_W.y() + t * d_W.y();
+        const double range_m = t * d_W.norm();
+        // The pixel's footprint on the ground, stretched by the grazing angle, picks the texture level.
+        const double texels = range_m * inv_f * std::min(range_m * inv_height, 20.0) * (1.0 / kGroundTexelM);
+        const int level = std::min(top_level, texels < 1.0 ? 0 : floorLog2(texels) + 1);
+        const int size = kGroundSize >> level;
+        const double inv_texel = 1.0 / (kGroundTexelM * static_cast<double>(1 << level));
+        const std::int64_t i = fastFloor(x * inv_texel) & (size - 1), j = fastFloor(y * inv_texel) & (size - 1);
+        const double shade = levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)];
+        const double haze = range_m / (range_m + haze_m);
+        colour = (1.0 - haze) * shade * kGrass + haze * kSkyHorizon;
+      } else {
+        const double horizontal = std::sqrt(d_W.x() * d_W.x() + d_W.y() * d_W.y());
+        const double s = std::clamp(d_W.z() / std::max(horizontal, 1e-9), 0.0, 1.0);
+        colour = (1.0 - s) * kSkyHorizon + s * kSkyZenith;
+      }
+      store(row[u], colour);
+    }
+  }
+}
+
+SpritePlacement SceneRenderer::placeSprite(const PersonState& person, const Eigen::Isometry3d& T_WC) const {
+  SpritePlacement out;
+  const CameraIntrinsics& k = params_.intrinsics;
+  const Eigen::Isometry3d T_CW = T_WC.inverse(Eigen::Isometry);
+  const auto& kp = person.keypoints_W_m;
+  const Eigen::Vector3d neck_C =
+      T_CW * (0.5 * (kp[index(CocoKeypoint::kLeftShoulder)] + kp[index(CocoKeypoint::kRightShoulder)]));
+  const Eigen::Vector3d hip_C = T_CW * (0.5 * (kp[index(CocoKeypoint::kLeftHip)] + kp[index(CocoKeypoint::kRightHip)]));
+  const Eigen::Vector3d ground_C = T_CW * person.p_W_m;
+  if (neck_C.z() < kSpriteNearM || hip_C.z() < kSpriteNearM || ground_C.z() < kSpriteNearM) return out;
+  const auto proj = [&](const Eigen::Vector3d& p_C) {
+    return Eigen::Vector2d(k.cx_px + k.fx_px * p_C.x() / p_C.z(), k.cy_px + k.fy_px * p_C.y() / p_C.z());
+  };
+  out.neck_px = proj(neck_C);
+  out.mid_hip_px = proj(hip_C);
+  const Eigen::Vector2d torso_px = out.mid_hip_px - out.neck_px;
+  const PersonSprite& s = *sprite_;
+  const Eigen::Vector2d sprite_torso = s.midHipPx() - s.neckPx();
+  if (torso_px.norm() < 1e-3) return out;
+  out.down = torso_px.normalized();
+  out.scale = torso_px.norm() / sprite_torso.norm();
+  const Eigen::Vector2d d_s = sprite_torso.normalized();
+  const Eigen::Vector2d r_s = rightOf(d_s);
+  const double sprite_leg = (s.solesPx() - s.midHipPx()).dot(d_s);
+  const double leg = (proj(ground_C) - out.mid_hip_px).dot(out.down);
+  out.leg_scale = std::clamp(leg / sprite_leg, 0.5 * out.scale, 2.5 * out.scale);
+  out.soles_px = out.mid_hip_px + out.leg_scale * sprite_leg * out.down;
+  out.depth_m = hip_C.z();
+  // Mirror when the person walks clearly towards the image side the photo's person does not face.
+  const Eigen::Vector3d facing_C =
+      T_CW.linear() * Eigen::Vector3d(std::cos(person.heading_rad), std::sin(person.heading_rad), 0.0);
+  out.mirrored = s.turnedRight() ? facing_C.x() < -kMirrorLateral : facing_C.x() > kMirrorLateral;
+  // Image bounds of the silhouette: its (a, b) box in the sprite's torso frame, mapped piecewise.
+  const Eigen::Vector4d& sb = s.silhouetteBoundsPx();
+  double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min, b_min = a_min, b_max = -a_min;
+  for (const Eigen::Vector2d& c : {Eigen::Vector2d(sb[0], sb[1]), Eigen::Vector2d(sb[2], sb[1]),
+                                   Eigen::Vector2d(sb[0], sb[3]), Eigen::Vector2d(sb[2], sb[3])}) {
+    const double a = (c - s.midHipPx()).dot(r_s), b = (c - s.midHipPx()).dot(d_s);
+    a_min = std::min(a_min, a), a_max = std::max(a_max, a), b_min = std::min(b_min, b), b_max = std::max(b_max, b);
+  }
+  const Eigen::Vector2d r_i = rightOf(out.down) * (out.mirrored ? -1.0 : 1.0);
+  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min, v_min = u_min, v_max = -u_min;
+  for (const double a : {a_min, a_max}) {
+    for (const double b : {b_min, 0.0, b_max}) {
+      const Eigen::Vector2d p =
+          out.mid_hip_px + out.scale * a * r_i + (b <= 0.0 ? out.scale : out.leg_scale) * b * out.down;
+      u_min = std::min(u_min, p.x()), u_max = std::max(u_max, p.x());
+      v_min = std::min(v_min, p.y()), v_max = std::max(v_max, p.y());
+    }
+  }
+  out.bounds_px = Eigen::Vector4d(u_min, v_min, u_max, v_max);
+  out.visible = true;
+  return out;
+}
+
+void SceneRenderer::drawPerson(const SpritePlacement& pl, cv::Mat& bgr, const cv::Mat& depth_m) const {
+  const CameraIntrinsics& k = params_.intrinsics;
+  const PersonSprite& s = *sprite_;
+  const int u0 = std::max(0, static_cast<int>(std::floor(pl.bounds_px[0])) - 1);
+  const int v0 = std::max(0, static_cast<int>(std::floor(pl.bounds_px[1])) - 1);
+  const int u1 = std::min(k.width_px - 1, static_cast<int>(std::ceil(pl.bounds_px[2])) + 1);
+  const int v1 = std::min(k.height_px - 1, static_cast<int>(std::ceil(pl.bounds_px[3])) + 1);
+  if (u0 > u1 || v0 > v1) return;
+  // Pyramid level: the finest whose pixels are at least as large as an image pixel's footprint / 2.
+  const double minification = 1.0 / std::min(pl.scale, pl.leg_scale);
+  const int level = std::clamp(static_cast<int>(std::floor(std::log2(std::max(minification, 1.0)))), 0,
+                               static_cast<int>(s.levels().size()) - 1);
+  const cv::Mat& img = s.levels()[static_cast<std::size_t>(level)];
+  const double level_scale = std::ldexp(1.0, -level);
+  const Eigen::Vector2d d_s = (s.midHipPx() - s.neckPx()).normalized();
+  const Eigen::Vector2d r_s = rightOf(d_s);
+  const Eigen::Vector2d r_i = rightOf(pl.down);
+  const double mirror = pl.mirrored ? -1.0 : 1.0;
+  const float depth = static_cast<float>(pl.depth_m);
+  for (int v = v0; v <= v1; ++v) {
+    cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
+    const float* depth_row = depth_m.ptr<float>(v);
+    for (int u = u0; u <= u1; ++u) {
+      if (depth_row[u] <= depth) continue;  // an obstacle is in front
+      const Eigen::Vector2d rel = Eigen::Vector2d(u + 0.5, v + 0.5) - pl.mid_hip_px;
+      const double a = mirror * rel.dot(r_i) / pl.scale;
+      const double along = rel.dot(pl.down);
+      const double b = along <= 0.0 ? along / pl.scale : along / pl.leg_scale;
+      const Eigen::Vector2d q = (s.midHipPx() + a * r_s + b * d_s) * level_scale;
+      const cv::Vec4f c = sample(img, q.x(), q.y());
+      if (c[3] <= 1e-3F) continue;
+      cv::Vec3b& px = row[u];
+      for (int ch = 0; ch < 3; ++ch) {
+        const float value = 255.0F * c[ch] + (1.0F - c[3]) * static_cast<float>(px[ch]);
+        px[ch] = toByte(static_cast<double>(value));
+      }
+    }
+  }
+}
+
+}  // namespace aerotrack::hal::sim
