@@ -1,0 +1,184 @@
+// Tests of the sim gimbal camera's image mode (sensors.gimbal_camera.mode: image): the scenario key is
+// read strictly with keypoints as the default, and in image mode grab() delivers rendered frames at the
+// camera's rate stamped at their exposure times while grabDetections() stays silent.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "aerotrack/hal/sim/devices.hpp"
+
+namespace aerotrack::hal::sim {
+namespace {
+
+std::string scenarioYaml(const std::string& gimbal_camera) {
+  return R"(name: image_mode
+end_margin_s: 0.5
+max_duration_s: 4.0
+world:
+  bounds_min_m: [-10.0, -10.0, 0.0]
+  bounds_max_m: [10.0, 10.0, 5.0]
+  cylinders:
+    - {center_m: [3.0, 2.0], radius_m: 0.3, height_m: 3.0}
+person:
+  height_m: 1.75
+  torso_m: 0.50
+  start_delay_s: 0.5
+  path:
+    - {p_m: [0.0, 0.0], speed_mps: 1.0}
+    - {p_m: [4.0, 0.0], speed_mps: 0.0}
+drone:
+  start_m: [-2.5, 0.0, 1.5]
+  start_yaw_rad: 0.0
+  radius_m: 0.25
+  mass_kg: 1.0
+  thrust_to_weight: 2.5
+success:
+  tracking_distance_m: 2.5
+  final_distance_factor: 2.0
+)" + gimbal_camera;
+}
+
+const std::string kCameraKeys = R"(    rate_hz: 10
+    latency_s: 0.04
+    width_px: 320
+    height_px: 240
+    hfov_deg: 87
+    pixel_noise_torso_fraction: 0.028
+    keypoint_miss_probability: 0.03
+)";
+
+TEST(ImageModeConfig, ModeDefaultsToKeypointsAndIsReadStrictly) {
+  // Given scenarios without the key, with each value, and with a misspelt value
+  const auto absent = parseScenarioSpec(scenarioYaml(""), "a.yaml");
+  const auto keypoints =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: keypoints\n" + kCameraKeys), "b.yaml");
+  const auto image =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "c.yaml");
+  const auto bad =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: images\n" + kCameraKeys), "d.yaml");
+
+  // Then the mode is keypoints unless image is asked for, and a bad value names the key
+  ASSERT_TRUE(absent.has_value()) << absent.error().message;
+  ASSERT_TRUE(keypoints.has_value()) << keypoints.error().message;
+  ASSERT_TRUE(image.has_value()) << image.error().message;
+  EXPECT_EQ(absent->gimbal_camera.mode, GimbalCameraMode::kKeypoints);
+  EXPECT_EQ(keypoints->gimbal_camera.mode, GimbalCameraMode::kKeypoints);
+  EXPECT_EQ(image->gimbal_camera.mode, GimbalCameraMode::kImage);
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_NE(bad.error().message.find("sensors.gimbal_camera.mode"), std::string::npos) << bad.error().message;
+}
+
+TEST(ImageModeConfig, APersonSpriteBlockIsReadStrictly) {
+  const std::string sprite = R"(    person_sprite:
+      image: /somewhere/photo.png
+      crop_px: [10, 20, 100, 300]
+      neck_px: [50, 60]
+      mid_hip_px: [52, 150]
+      soles_px: [55, 300]
+      turned_right: false
+      foreground_strokes_px: [[50, 60, 52, 150]]
+      background_strokes_px: []
+)";
+  const auto spec =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys + sprite), "e.yaml");
+  ASSERT_TRUE(spec.has_value()) << spec.error().message;
+  const PersonSpriteSpec& s = spec->gimbal_camera.person_sprite;
+  EXPECT_EQ(s.image_path, "/somewhere/photo.png");
+  EXPECT_EQ(s.crop_px[3], 300);
+  EXPECT_EQ(s.mid_hip_px, Eigen::Vector2d(52, 150));
+  EXPECT_FALSE(s.turned_right);
+  EXPECT_EQ(s.foreground_strokes_px.size(), 1U);
+  EXPECT_TRUE(s.background_strokes_px.empty());
+
+  const auto misplaced =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n" + kCameraKeys +
+                                     "    person_sprite:\n      image: x.png\n      crop_px: [0, 0, 10, 10]\n"),
+                        "f.yaml");
+  EXPECT_FALSE(misplaced.has_value());
+}
+
+TEST(ImageMode, AMissingPhotoFailsTheSimulationsCreation) {
+  // Given an image-mode scenario whose sprite photo is missing
+  auto spec = parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "g.yaml");
+  ASSERT_TRUE(spec.has_value());
+  spec->gimbal_camera.person_sprite.image_path = "/nonexistent/sprite.png";
+  auto trial = instantiate(*spec, 1);
+  ASSERT_TRUE(trial.has_value());
+
+  // When the simulation is created, then it is an error naming the file and the sensor
+  const auto sim = Simulation::create(*trial, {}, 0);
+  ASSERT_FALSE(sim.has_value());
+  EXPECT_NE(sim.error().message.find("/nonexistent/sprite.png"), std::string::npos) << sim.error().message;
+  EXPECT_NE(sim.error().message.find("gimbal_camera"), std::string::npos) << sim.error().message;
+}
+
+TEST(ImageMode, GrabDeliversFramesAtTheCameraRateStampedAtExposure) {
+  if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) {
+    GTEST_SKIP() << PersonSpriteSpec{}.image_path << " is missing: install the Debian package opencv-doc";
+  }
+  // Given an image-mode camera at 10 Hz, 320 x 240, and its device polled at 200 Hz for 1.5 s
+  const auto spec =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "h.yaml");
+  ASSERT_TRUE(spec.has_value()) << spec.error().message;
+  auto trial = instantiate(*spec, 7);
+  ASSERT_TRUE(trial.has_value());
+  SimulationOptions options;
+  options.render_depth = false;
+  auto sim = Simulation::create(*trial, options, 1'000'000'000);
+  ASSERT_TRUE(sim.has_value()) << sim.error().message;
+  std::shared_ptr<Simulation> shared = std::move(sim.value());
+  SimGimbalCamera camera(shared);
+
+  std::vector<ImageFrameHandle> frames;
+  int detections = 0;
+  for (TimeNs t = 1'000'000'000; t <= 2'500'000'000; t += 5'000'000) {
+    shared->step(t);
+    if (ImageFrameHandle frame = camera.grab(t)) {
+      EXPECT_LE(frame->stamp_ns, t);
+      frames.push_back(std::move(frame));
+    }
+    if (camera.grabDetections(t)) ++detections;
+  }
+
+  // Then one frame per exposure: 16 at 0, 100, ..., 1500 ms, stamped exactly there, numbered in
+  // sequence, of the configured size, and no detections at all
+  ASSERT_EQ(frames.size(), 16U);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i]->stamp_ns, 1'000'000'000 + static_cast<TimeNs>(i) * 100'000'000);
+    EXPECT_EQ(frames[i]->sequence, i + 1);
+    EXPECT_EQ(frames[i]->bgr.cols, 320);
+    EXPECT_EQ(frames[i]->bgr.rows, 240);
+    EXPECT_EQ(frames[i]->bgr.type(), CV_8UC3);
+    EXPECT_EQ(frames[i]->intrinsics.width_px, 320);
+  }
+  EXPECT_EQ(detections, 0);
+  // Frames still held are never overwritten: the first and last differ (the drone took off).
+  cv::Mat diff;
+  cv::absdiff(frames.front()->bgr, frames.back()->bgr, diff);
+  EXPECT_GT(cv::norm(diff, cv::NORM_L1), 0.0);
+  EXPECT_EQ(camera.health(2'500'000'000).last_sample_ns, frames.back()->stamp_ns);
+}
+
+TEST(ImageMode, KeypointModeDeliversNoImages) {
+  const auto spec = parseScenarioSpec(scenarioYaml(""), "i.yaml");
+  ASSERT_TRUE(spec.has_value());
+  auto trial = instantiate(*spec, 1);
+  auto sim = Simulation::create(*trial, {}, 0);
+  ASSERT_TRUE(sim.has_value());
+  std::shared_ptr<Simulation> shared = std::move(sim.value());
+  SimGimbalCamera camera(shared);
+  int detections = 0;
+  for (TimeNs t = 0; t <= 1'000'000'000; t += 5'000'000) {
+    shared->step(t);
+    EXPECT_EQ(camera.grab(t), nullptr);
+    while (camera.grabDetections(t)) ++detections;
+  }
+  EXPECT_GT(detections, 20);
+}
+
+}  // namespace
+}  // namespace aerotrack::hal::sim

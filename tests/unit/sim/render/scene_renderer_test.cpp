@@ -1,0 +1,240 @@
+// Tests of the image-mode renderer (hal/sim/render/scene_renderer.hpp): the person sprite lands on the
+// projected torso of the keypoints, obstacles hide it pixel by pixel, nothing behind the camera is
+// drawn, rendering is deterministic, and a missing or corrupt photo is an error at construction.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "aerotrack/hal/sim/scene_renderer.hpp"
+
+namespace aerotrack::hal::sim {
+namespace {
+
+using K = CocoKeypoint;
+
+// Camera at eye_W looking at target_W, OpenCV axes (x right, y down, z forward), world z up.
+Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {
+  const Eigen::Vector3d z = (target_W - eye_W).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = z.cross(x);
+  T.linear().col(2) = z;
+  T.translation() = eye_W;
+  return T;
+}
+
+// A person standing at (x, 0) facing -x, towards a camera on the -x side.
+PersonState standingAt(double x_m) {
+  auto walker = WalkingPerson::create({}, {{{x_m, 0.0}, 1.0}, {{x_m - 1.0, 0.0}, 1.0}});
+  EXPECT_TRUE(walker.has_value());
+  return walker->state(-1.0);
+}
+
+ObstacleWorld world(std::vector<Box> boxes, std::vector<Cylinder> cylinders = {}) {
+  auto w = ObstacleWorld::create(std::move(boxes), std::move(cylinders));
+  EXPECT_TRUE(w.has_value());
+  return std::move(w.value());
+}
+
+Eigen::Vector2d projected(const Eigen::Vector3d& p_W, const Eigen::Isometry3d& T_WC, const CameraIntrinsics& k) {
+  return *project(T_WC.inverse() * p_W, k);
+}
+
+Eigen::Vector3d mid(const PersonState& p, K a, K b) {
+  return 0.5 * (p.keypoints_W_m[index(a)] + p.keypoints_W_m[index(b)]);
+}
+
+// Pixels that differ between two images by more than threshold (sum over B, G, R).
+cv::Mat changed(const cv::Mat& a, const cv::Mat& b, float threshold = 0.0F) {
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  cv::Mat sum;
+  cv::transform(diff, sum, cv::Matx13f(1, 1, 1));
+  return sum > threshold;
+}
+
+class SceneRendererTest : public testing::Test {
+ protected:
+  // One renderer for the suite: loading segments the photo (a fraction of a second).
+  static void SetUpTestSuite() {
+    if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) return;
+    auto created = SceneRenderer::create({}, PersonSpriteSpec{});
+    if (created) shared_ = std::make_unique<SceneRenderer>(std::move(created.value()));
+  }
+  static void TearDownTestSuite() { shared_.reset(); }
+
+  void SetUp() override {
+    const PersonSpriteSpec spec;
+    if (!std::filesystem::exists(spec.image_path)) {
+      GTEST_SKIP() << spec.image_path << " is missing: install the Debian package opencv-doc";
+    }
+    ASSERT_NE(shared_, nullptr) << "the default sprite did not load";
+    renderer_ = shared_.get();
+  }
+
+  cv::Mat render(const ObstacleWorld& w, const Eigen::Isometry3d& T_WC, const PersonState* person) {
+    cv::Mat bgr;
+    renderer_->render(w, T_WC, person, bgr, scratch_);
+    return bgr;
+  }
+
+  static inline std::unique_ptr<SceneRenderer> shared_;
+  const SceneRenderer* renderer_ = nullptr;
+  RenderScratch scratch_;
+};
+
+TEST_F(SceneRendererTest, SpriteTorsoAndMidHipMatchTheProjectedKeypoints) {
+  // Given a person 4 m in front of a camera at 1.5 m, seen slightly from the side and rolled by 5 deg
+  const PersonState person = standingAt(4.0);
+  Eigen::Isometry3d T_WC = lookAt({0.0, 0.7, 1.5}, {4.0, 0.0, 1.0});
+  T_WC.linear() = T_WC.linear() * Eigen::AngleAxisd(0.087, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const CameraIntrinsics& k = renderer_->params().intrinsics;
+  const Eigen::Vector2d neck = projected(mid(person, K::kLeftShoulder, K::kRightShoulder), T_WC, k);
+  const Eigen::Vector2d hip = projected(mid(person, K::kLeftHip, K::kRightHip), T_WC, k);
+
+  // When the sprite is placed and the scene rendered with and without the person
+  const SpritePlacement placement = renderer_->placeSprite(person, T_WC);
+  const ObstacleWorld empty = world({});
+  const cv::Mat mask = changed(render(empty, T_WC, &person), render(empty, T_WC, nullptr));
+
+  // Then the sprite's own torso maps onto the projected one: same mid-hip, same length and direction
+  ASSERT_TRUE(placement.visible);
+  EXPECT_LT((placement.mid_hip_px - hip).norm(), 1e-9);
+  EXPECT_LT((placement.neck_px - neck).norm(), 1e-9);
+  const PersonSprite& sprite = renderer_->sprite();
+  EXPECT_NEAR(placement.scale * (sprite.midHipPx() - sprite.neckPx()).norm(), (hip - neck).norm(), 1e-9);
+  // ... and the drawn person covers the mid-hip and the neck, within the placement's bounds, with
+  // their feet near the projected ground point under the pelvis.
+  const auto covered = [&](const Eigen::Vector2d& p) {
+    int hits = 0;  // any pixel within 2 px
+    for (int dv = -2; dv <= 2; ++dv)
+      for (int du = -2; du <= 2; ++du)
+        hits += mask.at<std::uint8_t>(static_cast<int>(p.y()) + dv, static_cast<int>(p.x()) + du) > 0;
+    return hits > 0;
+  };
+  EXPECT_TRUE(covered(hip));
+  EXPECT_TRUE(covered(neck));
+  const cv::Rect drawn = cv::boundingRect(mask);
+  EXPECT_GE(drawn.x, placement.bounds_px[0] - 2.0);
+  EXPECT_LE(drawn.x + drawn.width, placement.bounds_px[2] + 2.0);
+  EXPECT_GE(drawn.y, placement.bounds_px[1] - 2.0);
+  EXPECT_LE(drawn.y + drawn.height, placement.bounds_px[3] + 2.0);
+  const Eigen::Vector2d ground = projected(person.p_W_m, T_WC, k);
+  EXPECT_NEAR(drawn.y + drawn.height, ground.y(), 6.0);
+  // The drawn height agrees with the person's: head top to soles ~ stature H = 1.75 m at ~4 m.
+  const double expected_height_px = k.fy_px * 1.75 / 4.2;
+  EXPECT_NEAR(drawn.height, expected_height_px, 0.15 * expected_height_px);
+}
+
+TEST_F(SceneRendererTest, AnObstacleBetweenCameraAndPersonHidesTheirPixels) {
+  // Given a person 5 m away and a pole between them and the camera covering the left half of the body
+  const PersonState person = standingAt(5.0);
+  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.2}, {5.0, 0.0, 1.0});
+  const ObstacleWorld pole = world({Box{{2.4, -0.05, 0.0}, {2.6, 0.4, 3.0}}});
+  const ObstacleWorld empty = world({});
+
+  // When the scene is rendered with and without the person, with and without the pole
+  const cv::Mat with_pole = changed(render(pole, T_WC, &person), render(pole, T_WC, nullptr));
+  const cv::Mat pole_pixels = scratch_.depth_m < std::numeric_limits<float>::infinity();
+  const cv::Mat without_pole = changed(render(empty, T_WC, &person), render(empty, T_WC, nullptr));
+
+  // Then no pixel of the pole shows the person, though the person is there behind it, and the
+  // person's other half is still drawn
+  ASSERT_GT(cv::countNonZero(pole_pixels), 1000);
+  EXPECT_EQ(cv::countNonZero(with_pole & pole_pixels), 0);
+  EXPECT_GT(cv::countNonZero(without_pole & pole_pixels), 300);
+  EXPECT_GT(cv::countNonZero(with_pole), 300);
+  EXPECT_EQ(cv::countNonZero(with_pole & ~without_pole), 0);
+
+  // ... and a pole behind the person hides nothing of them
+  const ObstacleWorld behind = world({Box{{7.0, -0.5, 0.0}, {7.2, 0.5, 3.0}}});
+  const cv::Mat with_behind = changed(render(behind, T_WC, &person), render(behind, T_WC, nullptr));
+  // (the faint edge pixels of the sprite may round to the background's colour on one of the two)
+  const cv::Mat clearly_person = changed(render(empty, T_WC, &person), render(empty, T_WC, nullptr), 30.0F);
+  EXPECT_GT(cv::countNonZero(clearly_person), 1000);
+  // (an opaque pixel of the photo may happen to have the pole's very colour)
+  EXPECT_LE(cv::countNonZero(clearly_person & ~with_behind), 5);
+}
+
+TEST_F(SceneRendererTest, NothingBehindTheCameraIsDrawn) {
+  // Given a camera looking along +x, and a wall, a tree and a person all behind it (x < 0)
+  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.5}, {10.0, 0.0, 1.0});
+  const PersonState person = standingAt(-3.0);
+  const ObstacleWorld behind =
+      world({Box{{-4.0, -5.0, 0.0}, {-3.8, 5.0, 4.0}}}, {Cylinder{{-2.0, 1.0}, 0.3, 0.0, 6.0}});
+
+  // When rendered, then the image is the empty world's
+  const cv::Mat scene = render(behind, T_WC, &person);
+  const cv::Mat empty = render(world({}), T_WC, nullptr);
+  EXPECT_EQ(cv::countNonZero(changed(scene, empty)), 0);
+  EXPECT_FALSE(renderer_->placeSprite(person, T_WC).visible);
+}
+
+TEST_F(SceneRendererTest, RenderingIsDeterministic) {
+  // Given a forest scene
+  std::vector<Cylinder> trees;
+  for (int i = 0; i < 30; ++i) trees.push_back(Cylinder{{3.0 + 0.9 * i, -6.0 + 0.43 * i}, 0.25, 0.0, 8.0});
+  const ObstacleWorld forest = world({Box{{10.0, 3.0, 0.0}, {14.0, 9.0, 4.0}}}, std::move(trees));
+  const PersonState person = standingAt(6.0);
+  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.5, 1.6}, {6.0, 0.0, 1.0});
+
+  // When it is rendered twice by one renderer and once by a second one built from the same photo
+  const cv::Mat first = render(forest, T_WC, &person);
+  const cv::Mat second = render(forest, T_WC, &person);
+  auto other = SceneRenderer::create({}, PersonSpriteSpec{});
+  ASSERT_TRUE(other.has_value());
+  cv::Mat third;
+  RenderScratch scratch;
+  other->render(forest, T_WC, &person, third, scratch);
+
+  // Then the three images are identical, bit for bit
+  EXPECT_EQ(cv::countNonZero(changed(first, second)), 0);
+  EXPECT_EQ(cv::countNonZero(changed(first, third)), 0);
+}
+
+TEST(SceneRendererErrors, AMissingPhotoIsAnErrorNamingIt) {
+  // Given a sprite spec whose photo does not exist
+  PersonSpriteSpec spec;
+  spec.image_path = "/nonexistent/person.png";
+
+  // When a renderer is created, then it fails with a message naming the file
+  const auto renderer = SceneRenderer::create({}, spec);
+  ASSERT_FALSE(renderer.has_value());
+  EXPECT_NE(renderer.error().message.find("/nonexistent/person.png"), std::string::npos) << renderer.error().message;
+}
+
+TEST(SceneRendererErrors, ACorruptPhotoIsAnError) {
+  // Given a "PNG" file holding garbage
+  const std::string path = testing::TempDir() + "/corrupt_sprite.png";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "\x89PNG\r\n\x1a\n this is not really an image";
+  }
+  PersonSpriteSpec spec;
+  spec.image_path = path;
+
+  // When a renderer is created, then it fails with a message naming the file, without crashing
+  const auto renderer = SceneRenderer::create({}, spec);
+  ASSERT_FALSE(renderer.has_value());
+  EXPECT_NE(renderer.error().message.find(path), std::string::npos) << renderer.error().message;
+  std::remove(path.c_str());
+}
+
+TEST(SceneRendererErrors, ACropOutsideThePhotoOrAMisplacedTorsoIsAnError) {
+  PersonSpriteSpec spec;
+  spec.neck_px = {79.0, 300.0};  // below the mid-hip
+  EXPECT_FALSE(validate(spec).has_value());
+  SceneRenderParams params;
+  params.intrinsics.distortion[0] = 0.1;
+  EXPECT_FALSE(validate(params).has_value());
+}
+
+}  // namespace
+}  // namespace aerotrack::hal::sim
