@@ -229,23 +229,32 @@ def cmd_heads(args):
 
 # --- comparison -----------------------------------------------------------------------------
 
-def identity_parts(line):
-    """tfjs Identity:0 (or `decode` output) split into coordinates and scores, normalised: the
-    keypoints' y, x (and multipose boxes) and the keypoints' scores (and multipose person scores)."""
-    out = np.asarray(json.loads(line)["output"], F32)
-    rows = out.reshape(-1, out.shape[-1]) if out.shape[-1] == 56 else out.reshape(1, 51)
-    keypoints = rows[:, :51].reshape(len(rows), 17, 3)
-    coords = np.concatenate([keypoints[:, :, :2].ravel(), rows[:, 51:55].ravel()])
-    scores = np.concatenate([keypoints[:, :, 2].ravel(), rows[:, 55:].ravel()])
-    return keypoints, coords, scores
+def identity_persons(line):
+    """tfjs Identity:0 (or `decode` output) as persons, each (coords, scores), normalised: coords are
+    the keypoints' y, x (and the multipose box: ymin, xmin, ymax, xmax), scores the keypoints'
+    scores (and the multipose person score)."""
+    out = np.asarray(json.loads(line)["output"], np.float64)
+    rows = out.reshape(-1, 56) if out.shape[-1] == 56 else out.reshape(1, 51)
+    persons = []
+    for row in rows:
+        keypoints = row[:51].reshape(17, 3)
+        persons.append((np.concatenate([keypoints[:, :2].ravel(), row[51:55]]),
+                        np.concatenate([keypoints[:, 2], row[55:]])))
+    return persons
 
 
-def detect_persons(line, size):
-    """`aerotrack detect --json` persons as [17, 3] (y, x, score), pixels of the S x S PNG normalised."""
+def detect_persons(line, size, multipose):
+    """`aerotrack detect --json` persons in the same form (pixels of the S x S PNG / S). Box and
+    person score are the graph's only for multipose; singlepose ones are the detector's own."""
     persons = []
     for person in json.loads(line)["persons"]:
         x, y, score = np.asarray(person["keypoints"], np.float64).T
-        persons.append(np.stack([y / size, x / size, score], axis=1))
+        coords, scores = np.stack([y, x], axis=1).ravel() / size, score
+        if multipose:
+            bx, by, bw, bh = np.asarray(person["bbox"], np.float64) / size
+            coords = np.concatenate([coords, [by, bx, by + bh, bx + bw]])
+            scores = np.append(scores, person["score"])
+        persons.append((coords, scores))
     return persons
 
 
@@ -257,18 +266,16 @@ def cmd_compare(args):
     coord = score = 0.0
     persons = 0
     for ref_line, cand_line in zip(reference, candidate):
-        ref_keypoints, ref_coords, ref_scores = identity_parts(ref_line)
-        if args.format == "identity":  # same layout: every value against its counterpart
-            _, coords, scores = identity_parts(cand_line)
+        ref = identity_persons(ref_line)
+        if args.format == "identity":  # same layout: each person against its counterpart
+            pairs = list(zip(ref, identity_persons(cand_line), strict=True))
+        else:  # each detected person against the reference person with the closest keypoints
+            found = detect_persons(cand_line, args.size, multipose=len(ref) > 1)
+            pairs = [(min(ref, key=lambda r: np.max(np.abs(r[0][:34] - f[0][:34]))), f) for f in found]
+        for (ref_coords, ref_scores), (coords, scores) in pairs:
             coord = max(coord, float(np.max(np.abs(coords - ref_coords))))
             score = max(score, float(np.max(np.abs(scores - ref_scores))))
-            persons += len(ref_keypoints)
-            continue
-        for found in detect_persons(cand_line, args.size):  # against the closest reference person
-            best = min(ref_keypoints, key=lambda r: float(np.max(np.abs(r[:, :2] - found[:, :2]))))
-            coord = max(coord, float(np.max(np.abs(best[:, :2] - found[:, :2]))))
-            score = max(score, float(np.max(np.abs(best[:, 2] - found[:, 2]))))
-            persons += 1
+        persons += len(pairs)
     ok = coord <= args.tolerance and score <= args.tolerance and persons > 0
     print(f"{args.label}: {len(reference)} images, {persons} persons, max |d coord| {coord:.2e}, "
           f"max |d score| {score:.2e}  {'ok' if ok else 'FAIL'} (tolerance {args.tolerance:g})")

@@ -2,11 +2,12 @@
 # End-to-end fidelity check of the MoveNet detector: the original tfjs graph (reference.mjs, the
 # pure-JS CPU backend of TensorFlow.js) against `aerotrack detect --json` on real photos from
 # Debian's opencv-doc (messi5, basketball1, frames 0/200/400 of vtest), for each model. The images
-# are letterboxed once into S x S PNGs so that both sides see identical pixels; keypoints are
-# compared in normalised coordinates (pixels / S) and scores, and the run fails beyond 1e-4.
+# are letterboxed once into S x S PNGs so that both sides see identical pixels; keypoints (and for
+# multipose the box and person score) are compared in normalised coordinates (pixels / S) and
+# scores, each detected person against the closest tfjs person; the run fails beyond 1e-4.
 # With --python the candidate is tools/fidelity/fidelity.py's decoder (OpenCV DNN on the ONNX file
-# plus a numpy transcription of the decoding in scripts/models/README.md) instead of the C++ one;
-# every output value, multipose boxes and person scores included, is then compared.
+# plus a numpy transcription of the decoding in scripts/models/README.md) instead of the C++ one,
+# and every output value is compared, all 6 multipose rows included.
 # Needs node/npm (installs tools/fidelity's pinned packages with `npm ci` when missing),
 # opencv-doc, and the models (scripts/models/provision.sh --tfjs, run here).
 # usage: tools/fidelity/run.sh [--python] [lightning|thunder|multipose]...
