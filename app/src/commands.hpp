@@ -9,5 +9,6 @@ namespace aerotrack::app {
 int runCommand(const ParsedArgs& args);
 int simCommand(const ParsedArgs& args);
 int benchCommand(const ParsedArgs& args);
+int detectCommand(const ParsedArgs& args);
 
 }  // namespace aerotrack::app

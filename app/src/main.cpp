@@ -5,11 +5,16 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core/utils/logger.hpp>
+
 #include "cli.hpp"
 #include "commands.hpp"
 
 int main(int argc, char** argv) {
   using namespace aerotrack::app;
+  // OpenCV prints warnings of its own (DNN layer fallbacks, decoder complaints); the commands
+  // report what matters in their own one-line messages.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   try {
     const std::vector<CommandSpec> table = commandTable();
     const auto args = parseArgs(std::vector<std::string>(argv + 1, argv + argc), table);
@@ -36,6 +41,7 @@ int main(int argc, char** argv) {
     if (args->command == "run") return runCommand(*args);
     if (args->command == "sim") return simCommand(*args);
     if (args->command == "bench") return benchCommand(*args);
+    if (args->command == "detect") return detectCommand(*args);
     std::fprintf(stderr, "aerotrack: command '%s' has no handler\n", args->command.c_str());
     return 1;
   } catch (const std::exception& e) {

@@ -5,7 +5,6 @@
 #include <fstream>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/core/utils/logger.hpp>
 
 namespace aerotrack::perception {
 
@@ -132,8 +131,6 @@ rt::Expected<MoveNetModel> MoveNetModel::load(const std::string& model_dir, cons
   if (!info) return info.error();
   model.info_ = std::move(info.value());
 
-  // OpenCV logs warnings of its own to stderr; a library must stay quiet (DESIGN.md rule 6).
-  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
   try {
     model.net_ = cv::dnn::readNetFromONNX(onnx_path);
   } catch (const cv::Exception& e) {
