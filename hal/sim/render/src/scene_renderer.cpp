@@ -50,8 +50,9 @@ int floorLog2(double x) {
   return static_cast<int>((std::bit_cast<std::uint64_t>(x) >> 52) & 0x7FF) - 1023;
 }
 
+/// Rounds a colour channel; every colour drawn is a non-negative blend, so only the top needs a clamp.
 std::uint8_t toByte(double c) {
-  return static_cast<std::uint8_t>(std::clamp(c, 0.0, 255.0) + 0.5);
+  return static_cast<std::uint8_t>(std::min(c, 255.0) + 0.5);
 }
 
 void store(cv::Vec3b& px, const Colour& c) {
@@ -268,6 +269,10 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
   const double inv_height = above_ground ? 1.0 / o_W.z() : 0.0;
   const auto& levels = ground_->levels;
   const int top_level = static_cast<int>(levels.size()) - 1;
+  const double footprint_scale = inv_f / kGroundTexelM;
+  std::array<double, 16> inv_texel_m{};
+  for (std::size_t l = 0; l < inv_texel_m.size(); ++l)
+    inv_texel_m[l] = 1.0 / std::ldexp(kGroundTexelM, static_cast<int>(l));
   for (int v = 0; v < k.height_px; ++v) {
     cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
     const float* depth_row = scratch.depth_m.ptr<float>(v);
@@ -317,22 +322,34 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
         const double haze = range_m / (range_m + haze_m);
         colour = (1.0 - haze) * shade * *base + haze * kSkyHorizon;
       } else if (above_ground && d_W.z() < 0.0) {
-        const double t = -o_W.z() / d_W.z();
-        const double x = o_W.x() + t * d_W.x(), y = o_W.y() + t * d_W.y();
-        const double range_m = t * d_W.norm();
-        // The pixel's footprint on the ground, stretched by the grazing angle, picks the texture level.
-        const double texels = range_m * inv_f * std::min(range_m * inv_height, 20.0) * (1.0 / kGroundTexelM);
-        const int level = std::min(top_level, texels < 1.0 ? 0 : floorLog2(texels) + 1);
+        // Plain scalars here: this branch runs for most pixels.
+        const double dx = d_W.x(), dy = d_W.y(), dz = d_W.z();
+        const double t = -o_W.z() / dz;
+        const double x = o_W.x() + t * dx, y = o_W.y() + t * dy;
+        const double range_sq = t * t * (dx * dx + dy * dy + dz * dz);
+        // The pixel's footprint on the ground (range / f, stretched by the grazing angle range / height,
+        // at most 20x) in level-0 texels picks the texture level: the finest with texels >= footprint.
+        const double texels = std::min(range_sq * inv_height, 20.0 * std::sqrt(range_sq)) * footprint_scale;
+        const int level = texels < 1.0 ? 0 : std::min(top_level, floorLog2(texels) + 1);
         const int size = kGroundSize >> level;
-        const double inv_texel = 1.0 / (kGroundTexelM * static_cast<double>(1 << level));
+        const double inv_texel = inv_texel_m[static_cast<std::size_t>(level)];
         const std::int64_t i = fastFloor(x * inv_texel) & (size - 1), j = fastFloor(y * inv_texel) & (size - 1);
         const double shade = levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)];
-        const double haze = range_m / (range_m + haze_m);
-        colour = (1.0 - haze) * shade * kGrass + haze * kSkyHorizon;
+        const double range_m = std::sqrt(range_sq);
+        const double keep = haze_m / (range_m + haze_m);  // 1 - haze
+        cv::Vec3b& px = row[u];
+        px[0] = toByte(keep * shade * kGrass[0] + (1.0 - keep) * kSkyHorizon[0]);
+        px[1] = toByte(keep * shade * kGrass[1] + (1.0 - keep) * kSkyHorizon[1]);
+        px[2] = toByte(keep * shade * kGrass[2] + (1.0 - keep) * kSkyHorizon[2]);
+        continue;
       } else {
-        const double horizontal = std::sqrt(d_W.x() * d_W.x() + d_W.y() * d_W.y());
-        const double s = std::clamp(d_W.z() / std::max(horizontal, 1e-9), 0.0, 1.0);
-        colour = (1.0 - s) * kSkyHorizon + s * kSkyZenith;
+        // Sine of the elevation, from 0 at the horizon to 1 at the zenith.
+        const double s = std::max(0.0, d_W.z()) / d_W.norm();
+        cv::Vec3b& px = row[u];
+        px[0] = toByte(kSkyHorizon[0] + s * (kSkyZenith[0] - kSkyHorizon[0]));
+        px[1] = toByte(kSkyHorizon[1] + s * (kSkyZenith[1] - kSkyHorizon[1]));
+        px[2] = toByte(kSkyHorizon[2] + s * (kSkyZenith[2] - kSkyHorizon[2]));
+        continue;
       }
       store(row[u], colour);
     }

@@ -1,7 +1,8 @@
 // render_frames: flies a scenario with the truth-fed baseline follower (as `aerotrack sim` does in
 // keypoint mode) and writes what the image-mode gimbal camera would see at a few instants as PNGs,
-// with the projected keypoint torso drawn in a second copy, so a person can look at the renderer's
-// output. A developer tool, not part of the product.
+// with the projected keypoints and torso drawn in a second copy and a third view from 9 m behind the
+// person (where obstacles come between), so a person can look at the renderer's output. A developer tool, not part of
+// the product.
 //
 //   render_frames SCENARIO.yaml OUT_DIR [SEED] [FRAMES]
 #include <chrono>
@@ -88,6 +89,19 @@ int main(int argc, char** argv) {
     }
     std::snprintf(name, sizeof(name), "/frame_%02d_keypoints.png", frame);
     cv::imwrite(out_dir + name, bgr);
+    // A third view from 9 m behind the person at 1.6 m, where obstacles come between (occlusion).
+    {
+      const Eigen::Vector3d forward(std::cos(person.heading_rad), std::sin(person.heading_rad), 0.0);
+      const Eigen::Vector3d eye = person.p_W_m - 9.0 * forward + Eigen::Vector3d(0.0, 0.0, 1.6);
+      const Eigen::Vector3d z = (person.p_W_m + Eigen::Vector3d(0.0, 0.0, 0.9) - eye).normalized();
+      const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+      Eigen::Isometry3d T_far = Eigen::Isometry3d::Identity();
+      T_far.linear() << x, z.cross(x), z;
+      T_far.translation() = eye;
+      renderer->render((*sim)->obstacles(), T_far, &person, bgr, scratch);
+      std::snprintf(name, sizeof(name), "/frame_%02d_far.png", frame);
+      cv::imwrite(out_dir + name, bgr);
+    }
     std::printf("frame %d at %.2f s: person %s, torso %.1f px, depth %.2f m\n", frame, rt::nsToSeconds(t),
                 pl.visible ? "in front" : "behind", (pl.mid_hip_px - pl.neck_px).norm(), pl.depth_m);
     ++frame;

@@ -66,7 +66,7 @@ class PersonSprite {
  public:
   /// Reads the photo, checks the spec against its size, segments it and builds the pyramid.
   /// Errors (missing, unreadable or corrupt file, crop outside the photo, nothing segmented) name
-  /// the file. Allocates; takes about 0.1-0.3 s for the default photo.
+  /// the file. Allocates; takes about 1 s for the default photo (GrabCut; 2-core development machine).
   static rt::Expected<PersonSprite> load(const PersonSpriteSpec& spec);
 
   const std::vector<cv::Mat>& levels() const { return levels_; }
