@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "aerotrack/mapping/mapping_task.hpp"
+#include "aerotrack/perception/detection_task.hpp"
 
 namespace aerotrack::app {
 namespace {
@@ -39,6 +40,7 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   server.finish();
 
   if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
+  if (root.has("perception")) c.perception = perception::parseDetectorParams(root.child("perception"));
 
   if (root.has("realtime")) {
     const rt::ConfigNode rt_node = root.child("realtime");
@@ -98,6 +100,28 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "unknown_is_occupied" << YAML::Value << m.grid.unknown_is_occupied;
     out << YAML::Key << "recenter_distance_m" << YAML::Value << m.grid.recenter_distance_m;
     out << YAML::Key << "octree_snapshot_every_n_frames" << YAML::Value << m.octree_snapshot_every_n_frames;
+    out << YAML::EndMap;
+  }
+  if (c.perception) {
+    const perception::DetectorParams& p = *c.perception;
+    out << YAML::Key << "perception" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "model_dir" << YAML::Value << p.model_dir;
+    out << YAML::Key << "tracking_model" << YAML::Value << p.tracking_model;
+    out << YAML::Key << "search_model" << YAML::Value << p.search_model;
+    out << YAML::Key << "dnn_backend" << YAML::Value << p.dnn.backend;
+    out << YAML::Key << "dnn_target" << YAML::Value << p.dnn.target;
+    out << YAML::Key << "min_person_score" << YAML::Value << p.min_person_score;
+    out << YAML::Key << "min_multipose_score" << YAML::Value << p.min_multipose_score;
+    out << YAML::Key << "torso_min_joint_score" << YAML::Value << p.torso.min_joint_score;
+    out << YAML::Key << "torso_border_margin_px" << YAML::Value << p.torso.border_margin_px;
+    out << YAML::Key << "tracker" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "gate_torso_multiples" << YAML::Value << p.tracker.gate_torso_multiples;
+    out << YAML::Key << "max_torso_ratio" << YAML::Value << p.tracker.max_torso_ratio;
+    out << YAML::Key << "max_appearance_distance" << YAML::Value << p.tracker.max_appearance_distance;
+    out << YAML::Key << "appearance_weight" << YAML::Value << p.tracker.appearance_weight;
+    out << YAML::Key << "lost_after_s" << YAML::Value << p.tracker.lost_after_s;
+    out << YAML::Key << "appearance_rate" << YAML::Value << p.tracker.appearance_rate;
+    out << YAML::EndMap;
     out << YAML::EndMap;
   }
   out << YAML::Key << "realtime" << YAML::Value << YAML::BeginMap;

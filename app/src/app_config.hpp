@@ -10,6 +10,7 @@
 
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/mapping/mapper.hpp"
+#include "aerotrack/perception/detector.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "aerotrack/rt/task.hpp"
@@ -30,6 +31,8 @@ struct AppConfig {
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.
   trajectory_server::TrajectoryServerParams trajectory_server;
   std::optional<mapping::MapperParams> mapping;  ///< `mapping:` section; needed by the mapping task.
+  /// `perception:` section; needed by the detection task. model_dir "default" is resolved by the app.
+  std::optional<perception::DetectorParams> perception;
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };

@@ -36,17 +36,23 @@ class OdometryTask final : public rt::Task {
   rt::TimeNs last_stamp_ns_ = -1;
 };
 
-/// Moves detection results from a keypoint-mode gimbal camera to the detections stream.
+/// Publishes the gimbal camera's output: images on the images channel (for the detection task),
+/// or, from a keypoint-mode camera (the simulator's), its detection results straight onto the
+/// detections stream.
 class GimbalCameraTask final : public rt::Task {
  public:
-  GimbalCameraTask(hal::GimbalCamera& device, rt::SpscQueue<hal::DetectionFrame>& out) : device_(device), out_(out) {}
+  GimbalCameraTask(hal::GimbalCamera& device, rt::SpscQueue<hal::DetectionFrame>& detections,
+                   rt::SharedSlot<hal::ImageFrame>& images)
+      : device_(device), detections_(detections), images_(images) {}
   void step(rt::TimeNs now_ns) override {
-    while (const auto frame = device_.grabDetections(now_ns)) out_.try_push(*frame);
+    if (auto image = device_.grab(now_ns)) images_.write(std::move(image));
+    while (const auto frame = device_.grabDetections(now_ns)) detections_.try_push(*frame);
   }
 
  private:
   hal::GimbalCamera& device_;
-  rt::SpscQueue<hal::DetectionFrame>& out_;
+  rt::SpscQueue<hal::DetectionFrame>& detections_;
+  rt::SharedSlot<hal::ImageFrame>& images_;
 };
 
 /// Publishes each new depth frame on the depth channel.

@@ -109,6 +109,7 @@ int simCommand(const ParsedArgs& args) {
   if (!ran) return fail(ran.error().message);
   info.interrupted = stop.load();
   info.map = mapSummary((*system)->mappingTask(), info.timings);
+  info.perception = perceptionSummary((*system)->detectionTask());
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
   const nlohmann::json summary = simSummary(sim, info);

@@ -31,6 +31,20 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
   return out;
 }
 
+nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
+  if (task == nullptr) return nullptr;
+  const rt::TimingSnapshot detect = task->detectStats().snapshot();
+  return {{"frames_detected", task->framesDetected()},
+          {"frames_with_target", task->framesWithTarget()},
+          {"target_ratio", task->framesDetected() > 0 ? static_cast<double>(task->framesWithTarget()) /
+                                                            static_cast<double>(task->framesDetected())
+                                                      : 0.0},
+          {"failures", task->failures()},
+          {"detect_ms_p50", detect.p50_ms},
+          {"detect_ms_p99", detect.p99_ms},
+          {"detect_ms_max", detect.max_ms}};
+}
+
 nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
   const hal::sim::SimMetrics& m = sim.metrics();
   const hal::sim::ScenarioInstance& trial = sim.scenario();
@@ -59,6 +73,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"realtime_factor", run.wall_time_s > 0.0 ? run.sim_time_s / run.wall_time_s : 0.0},
       {"tasks", timingJson(run.timings)},
       {"map", run.map},
+      {"perception", run.perception},
   };
   if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
   return out;

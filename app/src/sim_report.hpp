@@ -10,6 +10,7 @@
 
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
+#include "aerotrack/perception/detection_task.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "report.hpp"
 
@@ -23,8 +24,12 @@ struct RunInfo {
   bool interrupted = false;
   std::string trace_hash;  ///< lockstep only
   std::vector<TaskTiming> timings;
-  nlohmann::json map;  ///< mapSummary()
+  nlohmann::json map;         ///< mapSummary()
+  nlohmann::json perception;  ///< perceptionSummary()
 };
+
+/// The perception section of summary.json (null if the run had no detection task).
+nlohmann::json perceptionSummary(const perception::DetectionTask* task);
 
 /// The map section of summary.json (null if the run had no mapping task).
 nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<TaskTiming>& timings);

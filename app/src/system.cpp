@@ -3,12 +3,13 @@
 
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "device_tasks.hpp"
+#include "paths.hpp"
 
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry", "gimbal_camera",     "depth_camera",
-          "gimbal",    "mapping",  "trajectory_server", "baseline_follow"};
+  return {"sim_world", "odometry",  "gimbal_camera",     "depth_camera",   "gimbal",
+          "mapping",   "detection", "trajectory_server", "baseline_follow"};
 }
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
@@ -44,7 +45,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   } else if (spec.name == "odometry") {
     task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream);
   } else if (spec.name == "gimbal_camera") {
-    task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections);
+    task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections, channels_.images);
   } else if (spec.name == "depth_camera") {
     task = std::make_unique<DepthCameraTask>(*devices_.depth_camera, channels_.depth);
   } else if (spec.name == "mapping") {
@@ -56,6 +57,16 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                                channels_.local_grid, channels_.octree, stats_clock_);
     mapping_task_ = mapping_task.get();
     task = std::move(mapping_task);
+  } else if (spec.name == "detection") {
+    if (!config_.perception) return rt::Error{where + ": task 'detection' needs a perception: section"};
+    perception::DetectorParams params = *config_.perception;
+    if (params.model_dir == "default") params.model_dir = modelDir();
+    auto detector = perception::Detector::create(params);
+    if (!detector) return rt::Error{config_.source + ": perception: " + detector.error().message};
+    auto detection_task = std::make_unique<perception::DetectionTask>(std::move(detector.value()), channels_.images,
+                                                                      channels_.detections, stats_clock_);
+    detection_task_ = detection_task.get();
+    task = std::move(detection_task);
   } else if (spec.name == "gimbal") {
     task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state);
   } else if (spec.name == "trajectory_server") {

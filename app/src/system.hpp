@@ -10,6 +10,7 @@
 
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
+#include "aerotrack/perception/detection_task.hpp"
 #include "aerotrack/rt/doorbell.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
@@ -27,6 +28,7 @@ struct Channels {
   rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
   rt::SpscQueue<hal::DetectionFrame> detections{16, rt::OverflowPolicy::kDropOldest};
   rt::SharedSlot<hal::DepthFrame> depth;
+  rt::SharedSlot<hal::ImageFrame> images;  ///< gimbal-camera images (image-mode cameras), for the detector
   rt::LatestSlot<hal::GimbalState> gimbal_state;
   rt::SpscQueue<hal::OdometrySample> odometry_stream{
       256, rt::OverflowPolicy::kDropOldest};  ///< every sample, for the mapper
@@ -47,6 +49,8 @@ class System {
   const AppConfig& config() const { return config_; }
   /// The mapping task, if the table has one (for its statistics).
   const mapping::MappingTask* mappingTask() const { return mapping_task_; }
+  /// The detection task, if the table has one (for its statistics).
+  const perception::DetectionTask* detectionTask() const { return detection_task_; }
 
   /// Names of the tasks this build knows, for messages and tests.
   static std::vector<std::string> knownTasks();
@@ -62,6 +66,7 @@ class System {
   std::vector<std::unique_ptr<rt::Doorbell>> doorbells_;
   std::vector<rt::TaskBinding> bindings_;
   const mapping::MappingTask* mapping_task_ = nullptr;
+  const perception::DetectionTask* detection_task_ = nullptr;
   rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };
 
