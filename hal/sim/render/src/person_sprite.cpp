@@ -50,7 +50,7 @@ void drawStrokes(cv::Mat& mask, const std::vector<std::array<double, 4>>& stroke
 rt::Status validate(const PersonSpriteSpec& s) {
   const auto fail = [](const std::string& what) { return rt::Status(rt::Error{"person sprite: " + what}); };
   if (s.image_path.empty()) return fail("image_path is empty");
-  const auto [x, y, w, h] = s.crop_px;
+  const int x = s.crop_px[0], y = s.crop_px[1], w = s.crop_px[2], h = s.crop_px[3];
   if (x < 0 || y < 0 || w < 8 || h < 8) return fail("crop_px must be [x >= 0, y >= 0, width >= 8, height >= 8]");
   const auto inside = [&](const Eigen::Vector2d& p) {
     return finite(p) && p.x() >= x && p.x() <= x + w && p.y() >= y && p.y() <= y + h;
@@ -146,10 +146,10 @@ rt::Expected<PersonSprite> PersonSprite::load(const PersonSpriteSpec& spec) {
   sprite.mid_hip_px_ = spec.mid_hip_px - origin;
   sprite.soles_px_ = spec.soles_px - origin;
   sprite.turned_right_ = spec.turned_right;
-  const cv::Mat opaque = alpha >= 0.5F;
+  const cv::Mat opaque = alpha >= 0.5;
   sprite.opaque_pixels_ = cv::countNonZero(opaque);
   if (sprite.opaque_pixels_ < 100) return rt::Error{where + "segmentation kept almost nothing of the person"};
-  const cv::Rect bounds = cv::boundingRect(alpha > 0.02F);
+  const cv::Rect bounds = cv::boundingRect(alpha > 0.02);
   sprite.silhouette_px_ = Eigen::Vector4d(bounds.x, bounds.y, bounds.x + bounds.width, bounds.y + bounds.height);
   return sprite;
 }

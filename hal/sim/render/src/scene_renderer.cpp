@@ -52,7 +52,7 @@ int floorLog2(double x) {
 
 /// Rounds a colour channel; every colour drawn is a non-negative blend, so only the top needs a clamp.
 std::uint8_t toByte(double c) {
-  return static_cast<std::uint8_t>(std::min(c, 255.0) + 0.5);
+  return static_cast<std::uint8_t>(std::min(c, 255.0) + 0.5);  // NOLINT(bugprone-incorrect-roundings): c >= 0
 }
 
 void store(cv::Vec3b& px, const Colour& c) {
@@ -160,7 +160,7 @@ rt::Expected<SceneRenderer> SceneRenderer::create(const SceneRenderParams& param
       double shade = (((i / 32) + (j / 32)) & 1) ? 1.06 : 0.94;
       shade += 0.22 * (hash01(i / 4, j / 4, 1) - 0.5);
       shade += 0.16 * (hash01(i, j, 2) - 0.5);
-      level[static_cast<std::size_t>(j * kGroundSize + i)] = static_cast<float>(shade);
+      level[static_cast<std::size_t>(j) * kGroundSize + static_cast<std::size_t>(i)] = static_cast<float>(shade);
     }
   }
   for (int size = kGroundSize; size >= 1; size /= 2) {
@@ -170,8 +170,10 @@ rt::Expected<SceneRenderer> SceneRenderer::create(const SceneRenderParams& param
     std::vector<float> down(static_cast<std::size_t>(half) * half);
     for (int j = 0; j < half; ++j) {
       for (int i = 0; i < half; ++i) {
-        const auto at = [&](int x, int y) { return level[static_cast<std::size_t>(y * size + x)]; };
-        down[static_cast<std::size_t>(j * half + i)] =
+        const auto at = [&](int x, int y) {
+          return level[static_cast<std::size_t>(y) * static_cast<std::size_t>(size) + static_cast<std::size_t>(x)];
+        };
+        down[static_cast<std::size_t>(j) * static_cast<std::size_t>(half) + static_cast<std::size_t>(i)] =
             0.25F * (at(2 * i, 2 * j) + at(2 * i + 1, 2 * j) + at(2 * i, 2 * j + 1) + at(2 * i + 1, 2 * j + 1));
       }
     }
@@ -186,7 +188,7 @@ void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& 
   bgr.create(k.height_px, k.width_px, CV_8UC3);
   scratch.depth_m.create(k.height_px, k.width_px, CV_32FC1);
   scratch.obstacle_id.create(k.height_px, k.width_px, CV_32SC1);
-  scratch.depth_m.setTo(cv::Scalar(kInf));
+  scratch.depth_m.setTo(cv::Scalar(static_cast<double>(kInf)));
   scratch.obstacle_id.setTo(cv::Scalar(-1));
   rasterObstacles(world, T_WC, scratch);
   shade(world, T_WC, scratch, bgr);
@@ -283,7 +285,7 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
       const int id = id_row[u];
       Colour colour;
       if (id >= 0) {
-        const double t = depth_row[u];
+        const double t = static_cast<double>(depth_row[u]);
         const Eigen::Vector3d p_W = o_W + t * d_W;
         Eigen::Vector3d n_W = Eigen::Vector3d::Zero();
         double albedo = 0.85 + 0.3 * hash01(id, 0, 3);
@@ -334,7 +336,8 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
         const int size = kGroundSize >> level;
         const double inv_texel = inv_texel_m[static_cast<std::size_t>(level)];
         const std::int64_t i = fastFloor(x * inv_texel) & (size - 1), j = fastFloor(y * inv_texel) & (size - 1);
-        const double shade = levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)];
+        const double shade =
+            static_cast<double>(levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)]);
         const double range_m = std::sqrt(range_sq);
         const double keep = haze_m / (range_m + haze_m);  // 1 - haze
         cv::Vec3b& px = row[u];
