@@ -32,7 +32,7 @@ int fail(const std::string& message) {
 pid_t launchTrial(const std::string& self, const ParsedArgs& args, std::int64_t seed, const std::string& dir) {
   std::vector<std::string> argv{
       self, "sim", "--scenario", args.values.at("scenario"), "--seed", std::to_string(seed), "--out", dir};
-  for (const char* passthrough : {"speed", "config"})
+  for (const char* passthrough : {"speed", "camera", "config"})
     if (args.values.count(passthrough) != 0) {
       argv.push_back(std::string("--") + passthrough);
       argv.push_back(args.values.at(passthrough));

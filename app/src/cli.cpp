@@ -28,6 +28,9 @@ std::vector<CommandSpec> commandTable() {
        {{"scenario", "NAME|FILE", true, "scenario name in config/scenarios/ or a YAML file"},
         {"seed", "N", false, "random seed (default 1)"},
         {"speed", "MPS", false, "the person's walking speed on every leg (before the seed's jitter)"},
+        {"camera", "keypoints|image", false,
+         "gimbal camera: simulated detector output, or rendered images for the real detector (default: the "
+         "scenario's)"},
         {"out", "DIR", false, "write summary.json and topdown.png here (default out/sim-<scenario>-<seed>)"},
         {"mode", "proposed|baseline", false, "planner mode (arrives with the closed loop, issue 9)"},
         {"realtime", "", false, "run at 1x on the real-time executor instead of lockstep"},
@@ -39,6 +42,7 @@ std::vector<CommandSpec> commandTable() {
        {{"scenario", "NAME|FILE", true, "scenario name in config/scenarios/ or a YAML file"},
         {"trials", "N", true, "number of seeds (1..N)"},
         {"speed", "MPS", false, "the person's walking speed (as sim --speed)"},
+        {"camera", "keypoints|image", false, "gimbal camera mode (as sim --camera)"},
         {"mode", "proposed|baseline", false, "planner mode (arrives with the closed loop, issue 9)"},
         {"out", "DIR", false, "results folder (default out/bench-<scenario>)"},
         {"jobs", "J", false, "trials run at once (default: the number of CPUs)"},

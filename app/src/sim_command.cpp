@@ -1,8 +1,10 @@
-// `aerotrack sim --scenario NAME|FILE [--seed N] [--speed MPS] [--out DIR] [--realtime] [--config FILE]`:
+// `aerotrack sim --scenario NAME|FILE [--seed N] [--speed MPS] [--camera keypoints|image] [--out DIR] [--realtime]
+// [--config FILE]`:
 // one closed-loop trial in the built-in simulator, on the lockstep executor (deterministic, as
 // fast as the CPU allows) or at 1x on threads with --realtime. Writes DIR/summary.json and
-// DIR/topdown.png. Until the planner and gimbal controller land, the drone is flown by the
-// simulator's truth-fed baseline_follow stand-in (README, "Status").
+// DIR/topdown.png. With --camera image the gimbal camera renders frames and the real detector
+// (the detection task) finds the person in them. Until the planner and gimbal controller land, the drone is flown by
+// the simulator's truth-fed baseline_follow stand-in (README, "Status").
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -82,8 +84,15 @@ int simCommand(const ParsedArgs& args) {
   if (!config) return fail(config.error().message);
   if (!config->hal.usesSim()) return fail(config->source + ": hal: no device uses the sim backend");
   const std::string scenario_name = args.values.at("scenario");
-  const auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
+  auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
   if (!trial) return fail(trial.error().message);
+  if (args.has("camera")) {
+    const std::string camera = args.values.at("camera");
+    if (camera != "keypoints" && camera != "image")
+      return fail("--camera: expected keypoints or image, got '" + camera + "'");
+    trial->spec.gimbal_camera.mode =
+        camera == "image" ? hal::sim::GimbalCameraMode::kImage : hal::sim::GimbalCameraMode::kKeypoints;
+  }
   config->sim.scenario = scenario_name;
   config->sim.seed = static_cast<std::uint64_t>(*seed);
   const std::string out_dir = args.valueOr("out", "out/sim-" + trial->spec.name + "-" + std::to_string(*seed));
