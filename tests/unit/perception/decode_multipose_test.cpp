@@ -129,8 +129,7 @@ MultiPoseResult referenceDecode(const Heads& h, const DecodeConstants& c) {
         for (int x = 0; x < kGrid; ++x) {
           const float d2 = (static_cast<float>(y) - ky) * (static_cast<float>(y) - ky) +
                            (static_cast<float>(x) - kx) * (static_cast<float>(x) - kx);
-          const auto e =
-              static_cast<float>(std::exp(static_cast<double>((-1.0F * d2) / (kGrid * c.sigma_scale))));
+          const auto e = static_cast<float>(std::exp(static_cast<double>((-1.0F * d2) / (kGrid * c.sigma_scale))));
           const auto& bx = boxes[static_cast<std::size_t>(n)];
           const float inside = (static_cast<float>(y) >= bx[0] && static_cast<float>(y) < bx[2] &&
                                 static_cast<float>(x) >= bx[1] && static_cast<float>(x) < bx[3])
