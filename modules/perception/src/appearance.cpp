@@ -41,8 +41,12 @@ void vote(const cv::Vec3b& px, std::array<double, kAppearanceBins>& counts) {
   const int lower = static_cast<int>(std::floor(position)) % kHueBins;
   const int upper = (lower + 1) % kHueBins;
   const double upper_share = position - std::floor(position);
-  counts[static_cast<std::size_t>(lower * kSaturationBins + sat_bin)] += 1.0 - upper_share;
-  counts[static_cast<std::size_t>(upper * kSaturationBins + sat_bin)] += upper_share;
+  const auto bin = [&](int hue_bin) {
+    return static_cast<std::size_t>(hue_bin) * static_cast<std::size_t>(kSaturationBins) +
+           static_cast<std::size_t>(sat_bin);
+  };
+  counts[bin(lower)] += 1.0 - upper_share;
+  counts[bin(upper)] += upper_share;
 }
 
 }  // namespace

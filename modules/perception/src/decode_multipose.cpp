@@ -17,6 +17,14 @@ namespace {
 
 constexpr int kJoints = static_cast<int>(hal::kNumKeypoints);
 
+/// Where joint k's y and x sit in a per-instance array of 2 x 17 values.
+std::size_t yIndex(int k) {
+  return 2 * static_cast<std::size_t>(k);
+}
+std::size_t xIndex(int k) {
+  return 2 * static_cast<std::size_t>(k) + 1;
+}
+
 bool sameGrid(const HeadView& a, const HeadView& b) {
   return a.data != nullptr && b.data != nullptr && a.height == b.height && a.width == b.width && a.height > 0 &&
          a.width > 0;
@@ -89,7 +97,7 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
 
   // 3. Boxes and regressed joints of each instance.
   std::array<Box, kMaxMultiPoseInstances> boxes{};
-  std::array<std::array<float, 2 * kJoints>, kMaxMultiPoseInstances> regressed{};
+  std::array<std::array<float, 2 * hal::kNumKeypoints>, kMaxMultiPoseInstances> regressed{};
   const auto fh = static_cast<float>(h), fw = static_cast<float>(w);
   for (std::size_t n = 0; n < top.size(); ++n) {
     const int cy = top[n].index / w;
@@ -101,8 +109,8 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
     boxes[n] = {clip(centre_y - size_y * c.box_half, fh), clip(centre_x - size_x * c.box_half, fw),
                 clip(centre_y + size_y * c.box_half, fh), clip(centre_x + size_x * c.box_half, fw)};
     for (int k = 0; k < kJoints; ++k) {
-      regressed[n][static_cast<std::size_t>(2 * k)] = static_cast<float>(cy) + heads.regress.at(2 * k, cy, cx);
-      regressed[n][static_cast<std::size_t>(2 * k + 1)] = static_cast<float>(cx) + heads.regress.at(2 * k + 1, cy, cx);
+      regressed[n][yIndex(k)] = static_cast<float>(cy) + heads.regress.at(2 * k, cy, cx);
+      regressed[n][xIndex(k)] = static_cast<float>(cx) + heads.regress.at(2 * k + 1, cy, cx);
     }
   }
 
@@ -121,8 +129,8 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
     float score_sum = 0.0F;
     float count = 0.0F;
     for (int k = 0; k < kJoints; ++k) {
-      const float jy = regressed[n][static_cast<std::size_t>(2 * k)];
-      const float jx = regressed[n][static_cast<std::size_t>(2 * k + 1)];
+      const float jy = regressed[n][yIndex(k)];
+      const float jx = regressed[n][xIndex(k)];
       // Weights are >= 0 and zero outside the box, so starting from cell 0 with value 0 and taking
       // only larger values gives tf.argMax's first maximum, also when every value is zero.
       int best_y = 0, best_x = 0;
@@ -136,9 +144,8 @@ MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstan
           }
       float score = 0.0F;
       for (std::size_t m = 0; m < top.size(); ++m)
-        score = std::max(score,
-                         weighted(heads, boxes[m], regressed[m][static_cast<std::size_t>(2 * k)],
-                                  regressed[m][static_cast<std::size_t>(2 * k + 1)], sigma_cells2, k, best_y, best_x));
+        score = std::max(score, weighted(heads, boxes[m], regressed[m][yIndex(k)], regressed[m][xIndex(k)],
+                                         sigma_cells2, k, best_y, best_x));
       NormalisedKeypoint& kp = out.keypoints[static_cast<std::size_t>(k)];
       kp.y = (static_cast<float>(best_y) + heads.offset.at(2 * k, best_y, best_x)) * c.coord_scale_y;
       kp.x = (static_cast<float>(best_x) + heads.offset.at(2 * k + 1, best_y, best_x)) * c.coord_scale_x;

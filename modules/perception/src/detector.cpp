@@ -29,7 +29,7 @@ void mapKeypoints(const NormalisedPose& pose, const InputTransform& t, hal::Pers
   for (std::size_t k = 0; k < hal::kNumKeypoints; ++k) {
     p.keypoints[k].u_px = t.toImageU(static_cast<double>(pose[k].x) * s);
     p.keypoints[k].v_px = t.toImageV(static_cast<double>(pose[k].y) * s);
-    p.keypoints[k].score = pose[k].score;
+    p.keypoints[k].score = static_cast<double>(pose[k].score);
   }
 }
 
@@ -87,7 +87,7 @@ hal::PersonDetection multiPoseToImage(const MultiPoseInstance& instance, const I
                                       int height_px) {
   hal::PersonDetection p;
   mapKeypoints(instance.keypoints, transform, p);
-  p.score = instance.score;
+  p.score = static_cast<double>(instance.score);
   const double s = transform.input_size_px;
   clipBox(p, transform.toImageU(static_cast<double>(instance.box_xmin) * s),
           transform.toImageV(static_cast<double>(instance.box_ymin) * s),

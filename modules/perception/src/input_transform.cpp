@@ -65,7 +65,7 @@ bool cropAroundPerson(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& key
 
 cv::Mat makeInputBlob(int input_size_px) {
   const int shape[] = {1, 3, input_size_px, input_size_px};
-  return cv::Mat(4, shape, CV_32F, cv::Scalar(0.0F));
+  return cv::Mat(4, shape, CV_32F, cv::Scalar(0.0));
 }
 
 void fillInputBlob(const cv::Mat& bgr, const InputTransform& transform, TransformScratch& scratch, cv::Mat& blob) {

@@ -157,7 +157,13 @@ rt::Expected<MoveNetModel> MoveNetModel::load(const std::string& model_dir, cons
   for (const std::string& wanted : model.output_names_) {
     bool found = false;
     for (const std::string& o : outputs) found = found || o == wanted;
-    if (!found) return rt::Error{onnx_path + ": the network has no output '" + wanted + "' (convert it again)"};
+    if (!found) {
+      std::string message = onnx_path;
+      message += ": the network has no output '";
+      message += wanted;
+      message += "' (convert it again)";
+      return rt::Error{message};
+    }
   }
   return model;
 }
