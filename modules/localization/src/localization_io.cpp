@@ -1,0 +1,265 @@
+// Calibration CSV and parameter YAML of the localization (see localization_io.hpp). YAML is read
+// through rt::ConfigNode, so its errors have the project's "file:line: key: message" form.
+#include "aerotrack/localization/localization_io.hpp"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string_view>
+
+#include "aerotrack/rt/config_node.hpp"
+
+namespace aerotrack::localization {
+namespace {
+
+constexpr std::array<std::string_view, 5> kColumns = {"torso_px", "u_px", "x_m", "y_m", "z_m"};
+constexpr std::size_t kRequiredColumns = 4;  // z_m is optional
+constexpr double kHuge = 1e300;
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> splitFields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = line.find(',', start);
+    fields.push_back(
+        trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+std::optional<double> parseNumber(std::string_view text) {
+  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+std::string formatNumber(double value) {
+  std::array<char, 32> buffer{};
+  const auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  if (ec != std::errc()) return "nan";
+  return std::string(buffer.data(), end);
+}
+
+rt::Expected<std::string> readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return rt::Error{path + ": cannot open file"};
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return rt::Error{path + ": cannot read file"};
+  return text.str();
+}
+
+rt::Status writeFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return rt::Error{path + ": cannot open file for writing"};
+  out << text;
+  out.flush();
+  if (!out) return rt::Error{path + ": cannot write file"};
+  return rt::ok();
+}
+
+}  // namespace
+
+rt::Expected<std::vector<LocalizationSample>> parseSamplesCsv(const std::string& text, const std::string& source_name) {
+  std::vector<LocalizationSample> samples;
+  std::array<int, kColumns.size()> column_of{};  // field index of each known column, -1 if absent
+  column_of.fill(-1);
+  std::size_t field_count = 0;
+  bool have_header = false;
+  std::size_t line_number = 0;
+  std::size_t start = 0;
+  const std::string_view all(text);
+  while (start < all.size()) {
+    const std::size_t newline = all.find('\n', start);
+    const std::string_view line =
+        trim(all.substr(start, newline == std::string_view::npos ? std::string_view::npos : newline - start));
+    start = newline == std::string_view::npos ? all.size() : newline + 1;
+    ++line_number;
+    if (line.empty()) continue;
+    const std::string where = source_name + ":" + std::to_string(line_number) + ": ";
+    const std::vector<std::string_view> fields = splitFields(line);
+    if (!have_header) {
+      for (std::size_t f = 0; f < fields.size(); ++f) {
+        std::size_t c = 0;
+        while (c < kColumns.size() && kColumns[c] != fields[f]) ++c;
+        if (c == kColumns.size()) {
+          return rt::Error{where + "unknown column '" + std::string(fields[f]) +
+                           "' (the header is torso_px,u_px,x_m,y_m[,z_m])"};
+        }
+        if (column_of[c] >= 0) return rt::Error{where + "column " + std::string(fields[f]) + " appears twice"};
+        column_of[c] = static_cast<int>(f);
+      }
+      for (std::size_t c = 0; c < kRequiredColumns; ++c) {
+        if (column_of[c] < 0) return rt::Error{where + "missing column " + std::string(kColumns[c])};
+      }
+      field_count = fields.size();
+      have_header = true;
+      continue;
+    }
+    if (fields.size() != field_count) {
+      return rt::Error{where + "expected " + std::to_string(field_count) + " fields, got " +
+                       std::to_string(fields.size())};
+    }
+    std::array<double, kColumns.size()> values{};
+    values.fill(std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t c = 0; c < kColumns.size(); ++c) {
+      if (column_of[c] < 0) continue;
+      const std::string_view field = fields[static_cast<std::size_t>(column_of[c])];
+      const std::optional<double> value = parseNumber(field);
+      if (!value) {
+        return rt::Error{where + std::string(kColumns[c]) + ": expected a finite number, got '" + std::string(field) +
+                         "'"};
+      }
+      values[c] = *value;
+    }
+    if (!(values[0] > 0.0)) {
+      return rt::Error{where + "torso_px: must be > 0, got " + formatNumber(values[0])};
+    }
+    samples.push_back({values[0], values[1], values[2], values[3], values[4]});
+  }
+  if (!have_header) return rt::Error{source_name + ": empty file (expected the header torso_px,u_px,x_m,y_m)"};
+  if (samples.empty()) return rt::Error{source_name + ": no data rows after the header"};
+  return samples;
+}
+
+rt::Expected<std::vector<LocalizationSample>> readSamplesCsv(const std::string& path) {
+  rt::Expected<std::string> text = readFile(path);
+  if (!text) return text.error();
+  return parseSamplesCsv(*text, path);
+}
+
+std::string formatSamplesCsv(std::span<const LocalizationSample> samples) {
+  bool with_z = false;
+  for (const LocalizationSample& s : samples) with_z = with_z || std::isfinite(s.z_m);
+  std::string text = with_z ? "torso_px,u_px,x_m,y_m,z_m\n" : "torso_px,u_px,x_m,y_m\n";
+  for (const LocalizationSample& s : samples) {
+    text +=
+        formatNumber(s.torso_px) + "," + formatNumber(s.u_px) + "," + formatNumber(s.x_m) + "," + formatNumber(s.y_m);
+    if (with_z) text += "," + formatNumber(s.z_m);
+    text += "\n";
+  }
+  return text;
+}
+
+rt::Status writeSamplesCsv(std::span<const LocalizationSample> samples, const std::string& path) {
+  return writeFile(path, formatSamplesCsv(samples));
+}
+
+std::string formatParamsYaml(const LocalizationParams& params) {
+  std::string text =
+      "# aerotrack localization parameters (issue 6; paper Sect. IV-B). predict(torso_px, u_px) gives p_C\n"
+      "# in metres, camera frame x forward, y left, z up.\n";
+  text += "model: " + std::string(toString(params.model)) + "\n";
+  text += "z_m: " + formatNumber(params.z_m) + "\n";
+  text += "fit_samples: " + std::to_string(params.fit_samples) + "\n";
+  text += "fit_mean_error_m: " + formatNumber(params.fit_mean_error_m) + "\n";
+  const auto line = [&text](const char* key, double value) {
+    text += "  " + std::string(key) + ": " + formatNumber(value) + "\n";
+  };
+  if (params.model == LocalizationModel::kPaper) {
+    const PaperModelParams& p = params.paper;
+    text +=
+        "# x = l1_m e^(k1_per_px L) + l2_m e^(k2_per_px L); y = (l3 e^(k3_per_px u) + l4 e^(k4_per_px u)) (x + b_m)\n";
+    text += "paper:\n";
+    line("l1_m", p.l1_m);
+    line("k1_per_px", p.k1_per_px);
+    line("l2_m", p.l2_m);
+    line("k2_per_px", p.k2_per_px);
+    line("l3", p.l3);
+    line("k3_per_px", p.k3_per_px);
+    line("l4", p.l4);
+    line("k4_per_px", p.k4_per_px);
+    line("b_m", p.b_m);
+  } else {
+    const PinholeModelParams& p = params.pinhole;
+    text += "# x = fy_px torso_m / L + x_offset_m + x_inv_sq_m_px2 / L^2;\n";
+    text += "# y = -x (u - cx_px) / fx_px (1 + y_scale_correction) + y_offset_m\n";
+    text += "pinhole:\n";
+    line("fx_px", p.fx_px);
+    line("fy_px", p.fy_px);
+    line("cx_px", p.cx_px);
+    line("torso_m", p.torso_m);
+    line("x_offset_m", p.x_offset_m);
+    line("x_inv_sq_m_px2", p.x_inv_sq_m_px2);
+    line("y_scale_correction", p.y_scale_correction);
+    line("y_offset_m", p.y_offset_m);
+  }
+  return text;
+}
+
+rt::Status writeParamsYaml(const LocalizationParams& params, const std::string& path) {
+  if (rt::Status valid = validate(params); !valid) return rt::Error{path + ": not written: " + valid.error().message};
+  return writeFile(path, formatParamsYaml(params));
+}
+
+namespace {
+
+LocalizationParams parseParams(const rt::ConfigNode& root) {
+  LocalizationParams params;
+  const std::string model = root.getEnum("model", {"paper", "pinhole"});
+  params.model = model == "paper" ? LocalizationModel::kPaper : LocalizationModel::kPinhole;
+  params.z_m = root.getDouble("z_m", -kHuge, kHuge);
+  params.fit_samples = root.getUint64("fit_samples");
+  params.fit_mean_error_m = root.getDouble("fit_mean_error_m", 0.0, kHuge);
+  if (params.model == LocalizationModel::kPaper) {
+    const rt::ConfigNode node = root.child("paper");
+    PaperModelParams& p = params.paper;
+    p.l1_m = node.getDouble("l1_m", -kHuge, kHuge);
+    p.k1_per_px = node.getDouble("k1_per_px", -kHuge, kHuge);
+    p.l2_m = node.getDouble("l2_m", -kHuge, kHuge);
+    p.k2_per_px = node.getDouble("k2_per_px", -kHuge, kHuge);
+    p.l3 = node.getDouble("l3", -kHuge, kHuge);
+    p.k3_per_px = node.getDouble("k3_per_px", -kHuge, kHuge);
+    p.l4 = node.getDouble("l4", -kHuge, kHuge);
+    p.k4_per_px = node.getDouble("k4_per_px", -kHuge, kHuge);
+    p.b_m = node.getDouble("b_m", -kHuge, kHuge);
+    node.finish();
+  } else {
+    const rt::ConfigNode node = root.child("pinhole");
+    PinholeModelParams& p = params.pinhole;
+    p.fx_px = node.getDouble("fx_px", 1e-9, kHuge);
+    p.fy_px = node.getDouble("fy_px", 1e-9, kHuge);
+    p.cx_px = node.getDouble("cx_px", -kHuge, kHuge);
+    p.torso_m = node.getDouble("torso_m", -kHuge, kHuge);
+    p.x_offset_m = node.getDouble("x_offset_m", -kHuge, kHuge);
+    p.x_inv_sq_m_px2 = node.getDouble("x_inv_sq_m_px2", -kHuge, kHuge);
+    p.y_scale_correction = node.getDouble("y_scale_correction", -kHuge, kHuge);
+    p.y_offset_m = node.getDouble("y_offset_m", -kHuge, kHuge);
+    node.finish();
+  }
+  root.finish();
+  if (rt::Status valid = validate(params); !valid) root.fail("model", valid.error().message);
+  return params;
+}
+
+}  // namespace
+
+rt::Expected<LocalizationParams> parseParamsYaml(const std::string& text, const std::string& source_name) {
+  rt::Expected<rt::ConfigNode> root = rt::ConfigNode::fromString(text, source_name);
+  if (!root) return root.error();
+  const rt::ConfigNode node = *root;
+  return rt::parseConfig<LocalizationParams>([&node] { return parseParams(node); });
+}
+
+rt::Expected<LocalizationParams> readParamsYaml(const std::string& path) {
+  rt::Expected<rt::ConfigNode> root = rt::ConfigNode::loadFile(path);
+  if (!root) return root.error();
+  const rt::ConfigNode node = *root;
+  return rt::parseConfig<LocalizationParams>([&node] { return parseParams(node); });
+}
+
+}  // namespace aerotrack::localization
