@@ -1,0 +1,54 @@
+// Camera to world (issue 6, item 4; the paper's Sect. IV-B: "p_C is converted to p_W through
+// coordinate transformation"). The localization gives the person's position p_C in the gimbal
+// camera's frame C (x forward along the optical axis, y left, z up: FLU). The camera sits on a
+// yaw gimbal: the gimbal frame G is the body frame B turned by the encoder angle psi about body
+// z (unwrapped, multi-turn, from body x), with its origin at the gimbal's rotation centre p_BG
+// (fixed in B); C is fixed in G by T_GC. So
+//   T_WC = T_WB * Translation(p_BG) * Rz(psi) * T_GC,    p_WT = T_WC * p_C,
+// with T_WB and psi taken at the image's capture time. This matches the simulator exactly
+// (hal/sim Simulation::cameraPose: R_WC_optical = R_WB Rz(psi) R_FLU_optical, camera centre
+// p_WB + R_WB mount_B_m): there p_BG = gimbal_camera.mount_m and T_GC = identity, and the
+// simulator's optical frame (x right, y down, z forward) is C turned by opticalAxesInCamera().
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include "aerotrack/estimation/gimbal_history.hpp"
+#include "aerotrack/mapping/pose_history.hpp"
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/time.hpp"
+
+namespace aerotrack::estimation {
+
+struct GimbalCameraExtrinsics {
+  Eigen::Vector3d p_BG_m = Eigen::Vector3d::Zero();        ///< Gimbal rotation centre in B (sim: mount_m).
+  Eigen::Isometry3d T_GC = Eigen::Isometry3d::Identity();  ///< Camera C (FLU) in the gimbal frame G.
+};
+
+/// Reads `{mount_m: [x, y, z], camera_in_gimbal_m: [x, y, z], camera_in_gimbal_rpy_rad: [r, p, y]}`
+/// (all required; rpy: roll about x, then pitch about y, then yaw about z, R = Rz(yaw) Ry(pitch)
+/// Rx(roll)). Throws rt::ConfigError naming the key (use inside rt::parseConfig).
+GimbalCameraExtrinsics parseGimbalCameraExtrinsics(const rt::ConfigNode& node);
+
+/// The rotation from the optical frame (OpenCV: x right, y down, z forward) to C (FLU):
+/// R_C_optical, so that T_WC_optical = T_WC * R_C_optical. Pure.
+Eigen::Matrix3d opticalAxesInCamera();
+
+/// T_WC (C the FLU camera frame) for the body pose T_WB and the unwrapped gimbal angle. Pure,
+/// reentrant, allocation-free.
+Eigen::Isometry3d cameraPoseInWorld(const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
+                                    const GimbalCameraExtrinsics& extrinsics);
+
+/// p_WT = T_WC p_C (metres). Pure, reentrant, allocation-free.
+Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
+                              const GimbalCameraExtrinsics& extrinsics);
+
+/// cameraToWorld with T_WB and the gimbal angle interpolated from the histories at the image's
+/// capture time stamp_ns. Error (saying which history and why) if either lookup fails or p_C is
+/// not finite. Thread safety: as the histories' const lookups. Allocation: only for an error.
+rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
+                                              const mapping::PoseHistory& poses, const GimbalAngleHistory& gimbal,
+                                              const GimbalCameraExtrinsics& extrinsics);
+
+}  // namespace aerotrack::estimation

@@ -1,0 +1,145 @@
+// TargetEstimator: the followed person's position and velocity in the world, p_WT and v_WT, with
+// covariance, from the localization's single-frame positions (issue 6, item 5; the paper's
+// Sect. IV-B output p_t^w feeds its prediction, Sect. V). A Kalman filter with a constant-velocity
+// model: state [p_WT; v_WT] (metres, m/s; W world ENU), continuous white-noise acceleration with
+// separate horizontal and vertical spectral densities, so that over dt the process noise per axis
+// is q [dt^3/3, dt^2/2; dt^2/2, dt]. Measurements are 3D positions with their own or a default
+// noise; the update uses the Joseph form.
+//  - Gating: a measurement whose squared Mahalanobis distance to the prediction exceeds
+//    gate_chi2 is rejected (a jump the person cannot make: a wrong detection, a bystander). After
+//    reinit_after_rejections rejections in a row the filter restarts at the newest measurement
+//    (it had lost the person, not the detector).
+//  - Latency: each measurement is applied at its capture time. The estimator keeps the last
+//    replay_window_s of measurements with the filter state after each; a late (out-of-sequence)
+//    measurement is inserted in time order and the filter is re-run from the state before it, so
+//    the estimate is exactly the one it would be had the measurement arrived on time.
+//  - Dropouts: estimate(now) predicts from the newest state to now (covariance grows);
+//    `lost` once no measurement was accepted for lost_after_s; the next measurement restarts it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/time.hpp"
+
+namespace aerotrack::estimation {
+
+struct TargetEstimatorParams {
+  /// Spectral density of the white acceleration noise, horizontal (x, y) and vertical (z), in
+  /// m^2/s^3: about (typical acceleration)^2 x (its duration). > 0.
+  double accel_psd_xy_m2ps3 = 0.4;
+  double accel_psd_z_m2ps3 = 0.05;
+  /// Default measurement noise (standard deviation per axis), metres, used when a measurement
+  /// carries none; > 0.
+  double measurement_std_xy_m = 0.15;
+  double measurement_std_z_m = 0.3;
+  double initial_speed_std_mps = 1.5;  ///< Velocity uncertainty at (re)start, per axis; > 0.
+  /// Rejection threshold on the squared Mahalanobis distance (3 degrees of freedom): 16.27 is the
+  /// chi-square 99.9% quantile. > 0.
+  double gate_chi2 = 16.27;
+  int reinit_after_rejections = 8;  ///< Consecutive rejections that restart the filter; >= 1.
+  double lost_after_s = 1.0;        ///< No accepted measurement for this long: lost; > 0.
+  /// Out-of-sequence window: measurements older than the newest minus this are refused; > 0.
+  double replay_window_s = 0.5;
+  std::size_t max_buffered_measurements = 64;  ///< Buffer size (allocated once); >= 2.
+};
+
+/// Ok if every field is in its documented range; the error names the field.
+rt::Status validate(const TargetEstimatorParams& params);
+
+/// Reads the estimator's config section: every field of TargetEstimatorParams by its name, all
+/// required (accel_psd_xy_m2ps3, accel_psd_z_m2ps3, measurement_std_xy_m, measurement_std_z_m,
+/// initial_speed_std_mps, gate_chi2, reinit_after_rejections, lost_after_s, replay_window_s,
+/// max_buffered_measurements). Throws rt::ConfigError naming the key (use inside rt::parseConfig).
+TargetEstimatorParams parseTargetEstimatorParams(const rt::ConfigNode& node);
+
+/// One localized position of the person.
+struct TargetMeasurement {
+  rt::TimeNs stamp_ns = 0;                           ///< Capture time of the image.
+  Eigen::Vector3d p_WT_m = Eigen::Vector3d::Zero();  ///< Position in W, metres.
+  double std_xy_m = 0.0;                             ///< Noise per horizontal axis, metres; 0: the params' default.
+  double std_z_m = 0.0;                              ///< Noise vertically, metres; 0: the params' default.
+};
+
+enum class MeasurementVerdict : std::uint8_t {
+  kAccepted,         ///< Used in a Kalman update.
+  kStarted,          ///< (Re)started the filter: first measurement, after `lost`, or after repeated rejections.
+  kRejectedGate,     ///< Outside the Mahalanobis gate.
+  kRejectedTooOld,   ///< Older than the replay window (or than the state folded out of it).
+  kRejectedInvalid,  ///< Non-finite position or negative noise.
+};
+const char* toString(MeasurementVerdict verdict);
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+struct TargetEstimate {
+  rt::TimeNs stamp_ns = 0;   ///< The time the estimate is for.
+  bool initialised = false;  ///< False: no measurement yet; the rest is meaningless.
+  bool lost = true;          ///< No accepted measurement for lost_after_s (or never).
+  Eigen::Vector3d p_WT_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_WT_mps = Eigen::Vector3d::Zero();
+  Matrix6d covariance = Matrix6d::Identity();  ///< Of [p_WT_m; v_WT_mps] (m^2, m^2/s, m^2/s^2).
+  rt::TimeNs last_accepted_ns = 0;             ///< Capture time of the newest accepted measurement.
+};
+
+/// Thread safety: none (one owner). Allocation: the buffer, once, in create(); add() and
+/// estimate() never allocate.
+class TargetEstimator {
+ public:
+  static rt::Expected<TargetEstimator> create(const TargetEstimatorParams& params);
+
+  /// Applies a measurement at its capture time (re-running the newer ones if it is late). Returns
+  /// the verdict at the time of the call (a later out-of-sequence arrival may change the verdicts
+  /// of the measurements after it, exactly as if they had arrived in order).
+  /// Cost: O(measurements after it in the window).
+  MeasurementVerdict add(const TargetMeasurement& measurement);
+
+  /// The state predicted to now_ns from the newest state (now_ns before it: the newest state
+  /// itself, stamped with its own time). `lost` is judged at now_ns.
+  TargetEstimate estimate(rt::TimeNs now_ns) const;
+
+  /// Forgets everything (the buffer keeps its memory).
+  void reset();
+
+  std::uint64_t acceptedCount() const { return accepted_; }
+  std::uint64_t rejectedCount() const { return rejected_; }
+  const TargetEstimatorParams& params() const { return params_; }
+
+ private:
+  struct State {
+    bool initialised = false;
+    rt::TimeNs stamp_ns = 0;
+    Vector6d x = Vector6d::Zero();
+    Matrix6d P = Matrix6d::Identity();
+    rt::TimeNs last_accepted_ns = 0;
+    int consecutive_rejections = 0;
+  };
+  struct Entry {
+    TargetMeasurement measurement;
+    State after;
+    MeasurementVerdict verdict = MeasurementVerdict::kAccepted;
+  };
+
+  explicit TargetEstimator(const TargetEstimatorParams& params);
+  /// The filter step: state (at or before m's time) and m -> the state at m's time.
+  MeasurementVerdict step(State& state, const TargetMeasurement& m) const;
+  void start(State& state, const TargetMeasurement& m) const;
+  void predict(State& state, rt::TimeNs t_ns) const;
+  const State& newest() const { return buffer_.empty() ? anchor_ : buffer_.back().after; }
+
+  TargetEstimatorParams params_;
+  State anchor_;                    ///< The state after the measurements folded out of the buffer.
+  std::vector<Entry> buffer_;       ///< Measurements in the replay window, in capture-time order.
+  bool folded_any_ = false;         ///< Some measurement was folded into anchor_.
+  rt::TimeNs folded_until_ns_ = 0;  ///< Capture time of the newest folded measurement: older ones are refused.
+  std::uint64_t accepted_ = 0;
+  std::uint64_t rejected_ = 0;
+};
+
+}  // namespace aerotrack::estimation

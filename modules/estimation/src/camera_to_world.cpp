@@ -1,0 +1,60 @@
+// Camera to world through the yaw gimbal (see camera_to_world.hpp).
+#include "aerotrack/estimation/camera_to_world.hpp"
+
+#include <string>
+#include <vector>
+
+namespace aerotrack::estimation {
+
+GimbalCameraExtrinsics parseGimbalCameraExtrinsics(const rt::ConfigNode& node) {
+  GimbalCameraExtrinsics e;
+  const std::vector<double> mount = node.getDoubleList("mount_m", 3, -10.0, 10.0);
+  const std::vector<double> offset = node.getDoubleList("camera_in_gimbal_m", 3, -10.0, 10.0);
+  const std::vector<double> rpy = node.getDoubleList("camera_in_gimbal_rpy_rad", 3, -7.0, 7.0);
+  node.finish();
+  e.p_BG_m = Eigen::Vector3d(mount[0], mount[1], mount[2]);
+  e.T_GC.linear() =
+      (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  e.T_GC.translation() = Eigen::Vector3d(offset[0], offset[1], offset[2]);
+  return e;
+}
+
+Eigen::Matrix3d opticalAxesInCamera() {
+  Eigen::Matrix3d R;  // columns: optical x (right) = -y_C, optical y (down) = -z_C, optical z = x_C
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return R;
+}
+
+Eigen::Isometry3d cameraPoseInWorld(const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
+                                    const GimbalCameraExtrinsics& extrinsics) {
+  Eigen::Isometry3d T_BG = Eigen::Isometry3d::Identity();
+  T_BG.linear() = Eigen::AngleAxisd(gimbal_angle_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T_BG.translation() = extrinsics.p_BG_m;
+  return T_WB * T_BG * extrinsics.T_GC;
+}
+
+Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
+                              const GimbalCameraExtrinsics& extrinsics) {
+  return cameraPoseInWorld(T_WB, gimbal_angle_rad, extrinsics) * p_C_m;
+}
+
+rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
+                                              const mapping::PoseHistory& poses, const GimbalAngleHistory& gimbal,
+                                              const GimbalCameraExtrinsics& extrinsics) {
+  if (!p_C_m.allFinite()) return rt::Error{"camera to world: p_C is not finite"};
+  const mapping::PoseLookup pose = poses.lookup(stamp_ns);
+  if (pose.status != mapping::PoseLookupStatus::kOk) {
+    return rt::Error{std::string("camera to world: no body pose at t = ") + std::to_string(stamp_ns) +
+                     " ns: " + mapping::toString(pose.status)};
+  }
+  const GimbalAngleLookup angle = gimbal.lookup(stamp_ns);
+  if (angle.status != HistoryLookupStatus::kOk) {
+    return rt::Error{std::string("camera to world: no gimbal angle at t = ") + std::to_string(stamp_ns) +
+                     " ns: " + toString(angle.status)};
+  }
+  return cameraToWorld(p_C_m, pose.T_WB, angle.angle_rad, extrinsics);
+}
+
+}  // namespace aerotrack::estimation

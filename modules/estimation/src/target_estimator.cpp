@@ -1,0 +1,233 @@
+// The target estimator: constant-velocity Kalman filter with gating and out-of-sequence replay
+// (see target_estimator.hpp).
+#include "aerotrack/estimation/target_estimator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+namespace aerotrack::estimation {
+namespace {
+
+using Matrix3d = Eigen::Matrix3d;
+using Matrix36d = Eigen::Matrix<double, 3, 6>;
+
+bool positiveFinite(double v) {
+  return std::isfinite(v) && v > 0.0;
+}
+
+}  // namespace
+
+rt::Status validate(const TargetEstimatorParams& p) {
+  const auto positive = [](const char* name, double v) -> rt::Status {
+    if (!positiveFinite(v)) return rt::Error{std::string("target estimator: ") + name + " must be finite and > 0"};
+    return rt::ok();
+  };
+  for (const auto& [name, value] : {std::pair<const char*, double>{"accel_psd_xy_m2ps3", p.accel_psd_xy_m2ps3},
+                                    {"accel_psd_z_m2ps3", p.accel_psd_z_m2ps3},
+                                    {"measurement_std_xy_m", p.measurement_std_xy_m},
+                                    {"measurement_std_z_m", p.measurement_std_z_m},
+                                    {"initial_speed_std_mps", p.initial_speed_std_mps},
+                                    {"gate_chi2", p.gate_chi2},
+                                    {"lost_after_s", p.lost_after_s},
+                                    {"replay_window_s", p.replay_window_s}}) {
+    if (rt::Status s = positive(name, value); !s) return s;
+  }
+  if (p.reinit_after_rejections < 1) return rt::Error{"target estimator: reinit_after_rejections must be >= 1"};
+  if (p.max_buffered_measurements < 2) return rt::Error{"target estimator: max_buffered_measurements must be >= 2"};
+  return rt::ok();
+}
+
+TargetEstimatorParams parseTargetEstimatorParams(const rt::ConfigNode& node) {
+  TargetEstimatorParams p;
+  p.accel_psd_xy_m2ps3 = node.getDouble("accel_psd_xy_m2ps3", 1e-6, 1e3);
+  p.accel_psd_z_m2ps3 = node.getDouble("accel_psd_z_m2ps3", 1e-6, 1e3);
+  p.measurement_std_xy_m = node.getDouble("measurement_std_xy_m", 1e-4, 100.0);
+  p.measurement_std_z_m = node.getDouble("measurement_std_z_m", 1e-4, 100.0);
+  p.initial_speed_std_mps = node.getDouble("initial_speed_std_mps", 1e-3, 100.0);
+  p.gate_chi2 = node.getDouble("gate_chi2", 0.1, 1e6);
+  p.reinit_after_rejections = node.getInt("reinit_after_rejections", 1, 10000);
+  p.lost_after_s = node.getDouble("lost_after_s", 1e-3, 3600.0);
+  p.replay_window_s = node.getDouble("replay_window_s", 1e-3, 60.0);
+  p.max_buffered_measurements = static_cast<std::size_t>(node.getInt("max_buffered_measurements", 2, 100000));
+  node.finish();
+  return p;
+}
+
+const char* toString(MeasurementVerdict verdict) {
+  switch (verdict) {
+    case MeasurementVerdict::kAccepted:
+      return "accepted";
+    case MeasurementVerdict::kStarted:
+      return "started";
+    case MeasurementVerdict::kRejectedGate:
+      return "rejected_gate";
+    case MeasurementVerdict::kRejectedTooOld:
+      return "rejected_too_old";
+    case MeasurementVerdict::kRejectedInvalid:
+      return "rejected_invalid";
+  }
+  return "unknown";
+}
+
+rt::Expected<TargetEstimator> TargetEstimator::create(const TargetEstimatorParams& params) {
+  if (rt::Status status = validate(params); !status) return status.error();
+  return TargetEstimator(params);
+}
+
+TargetEstimator::TargetEstimator(const TargetEstimatorParams& params) : params_(params) {
+  buffer_.reserve(params.max_buffered_measurements);
+}
+
+void TargetEstimator::reset() {
+  anchor_ = State{};
+  buffer_.clear();
+  folded_any_ = false;
+  folded_until_ns_ = 0;
+}
+
+void TargetEstimator::start(State& state, const TargetMeasurement& m) const {
+  const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params_.measurement_std_xy_m;
+  const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params_.measurement_std_z_m;
+  state.initialised = true;
+  state.stamp_ns = m.stamp_ns;
+  state.x.head<3>() = m.p_WT_m;
+  state.x.tail<3>().setZero();
+  state.P.setZero();
+  state.P.diagonal() << std_xy * std_xy, std_xy * std_xy, std_z * std_z,
+      Eigen::Vector3d::Constant(params_.initial_speed_std_mps * params_.initial_speed_std_mps);
+  state.last_accepted_ns = m.stamp_ns;
+  state.consecutive_rejections = 0;
+}
+
+void TargetEstimator::predict(State& state, rt::TimeNs t_ns) const {
+  if (t_ns <= state.stamp_ns) return;
+  const double dt = rt::nsToSeconds(t_ns - state.stamp_ns);
+  // x' = F x with F = [I dt I; 0 I]; P' = F P F^T + Q, computed blockwise.
+  state.x.head<3>() += dt * state.x.tail<3>();
+  const Matrix3d Ppp = state.P.topLeftCorner<3, 3>();
+  const Matrix3d Ppv = state.P.topRightCorner<3, 3>();
+  const Matrix3d Pvv = state.P.bottomRightCorner<3, 3>();
+  const Matrix3d new_Ppv = Ppv + dt * Pvv;
+  state.P.topLeftCorner<3, 3>() = Ppp + dt * (Ppv + Ppv.transpose()) + dt * dt * Pvv;
+  state.P.topRightCorner<3, 3>() = new_Ppv;
+  state.P.bottomLeftCorner<3, 3>() = new_Ppv.transpose();
+  const Eigen::Vector3d q(params_.accel_psd_xy_m2ps3, params_.accel_psd_xy_m2ps3, params_.accel_psd_z_m2ps3);
+  for (int i = 0; i < 3; ++i) {
+    state.P(i, i) += q[i] * dt * dt * dt / 3.0;
+    state.P(i, i + 3) += q[i] * dt * dt / 2.0;
+    state.P(i + 3, i) += q[i] * dt * dt / 2.0;
+    state.P(i + 3, i + 3) += q[i] * dt;
+  }
+  state.stamp_ns = t_ns;
+}
+
+MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& m) const {
+  const rt::DurationNs lost_after_ns = rt::secondsToNs(params_.lost_after_s);
+  if (!state.initialised || m.stamp_ns - state.last_accepted_ns > lost_after_ns) {
+    start(state, m);
+    return MeasurementVerdict::kStarted;
+  }
+  State predicted = state;
+  predict(predicted, m.stamp_ns);
+  const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params_.measurement_std_xy_m;
+  const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params_.measurement_std_z_m;
+  const Eigen::Vector3d r_diag(std_xy * std_xy, std_xy * std_xy, std_z * std_z);
+  const Eigen::Vector3d innovation = m.p_WT_m - predicted.x.head<3>();
+  Matrix3d S = predicted.P.topLeftCorner<3, 3>();
+  S.diagonal() += r_diag;
+  const Eigen::LLT<Matrix3d> llt(S);
+  const double mahalanobis_sq = innovation.dot(llt.solve(innovation));
+  if (llt.info() != Eigen::Success || !(mahalanobis_sq <= params_.gate_chi2)) {
+    if (++state.consecutive_rejections >= params_.reinit_after_rejections) {
+      start(state, m);
+      return MeasurementVerdict::kStarted;
+    }
+    return MeasurementVerdict::kRejectedGate;  // state stays at its own time; prediction composes exactly
+  }
+  // K = P H^T S^-1 with H = [I 0]; Joseph form (I - K H) P (I - K H)^T + K R K^T.
+  const Eigen::Matrix<double, 6, 3> PHt = predicted.P.leftCols<3>();
+  const Eigen::Matrix<double, 6, 3> K = llt.solve(PHt.transpose()).transpose();
+  predicted.x += K * innovation;
+  Matrix6d I_KH = Matrix6d::Identity();
+  I_KH.leftCols<3>() -= K;
+  predicted.P = I_KH * predicted.P * I_KH.transpose() + K * r_diag.asDiagonal() * K.transpose();
+  predicted.last_accepted_ns = m.stamp_ns;
+  predicted.consecutive_rejections = 0;
+  state = predicted;
+  return MeasurementVerdict::kAccepted;
+}
+
+MeasurementVerdict TargetEstimator::add(const TargetMeasurement& m) {
+  if (!m.p_WT_m.allFinite() || !std::isfinite(m.std_xy_m) || !std::isfinite(m.std_z_m) || m.std_xy_m < 0.0 ||
+      m.std_z_m < 0.0) {
+    ++rejected_;
+    return MeasurementVerdict::kRejectedInvalid;
+  }
+  const rt::DurationNs window_ns = rt::secondsToNs(params_.replay_window_s);
+  if ((folded_any_ && m.stamp_ns < folded_until_ns_) ||
+      (!buffer_.empty() && m.stamp_ns < buffer_.back().measurement.stamp_ns - window_ns)) {
+    ++rejected_;
+    return MeasurementVerdict::kRejectedTooOld;
+  }
+  // Make room: fold the oldest into the anchor (a measurement older than it is then too old).
+  if (buffer_.size() == buffer_.capacity()) {
+    anchor_ = buffer_.front().after;
+    folded_any_ = true;
+    folded_until_ns_ = buffer_.front().measurement.stamp_ns;
+    buffer_.erase(buffer_.begin());
+    if (m.stamp_ns < folded_until_ns_) {
+      ++rejected_;
+      return MeasurementVerdict::kRejectedTooOld;
+    }
+  }
+  // Insert after the entries with the same or an earlier capture time, then re-run from there.
+  const auto position = std::upper_bound(buffer_.begin(), buffer_.end(), m.stamp_ns,
+                                         [](rt::TimeNs t, const Entry& e) { return t < e.measurement.stamp_ns; });
+  const auto index = static_cast<std::size_t>(position - buffer_.begin());
+  buffer_.insert(position, Entry{m, State{}, MeasurementVerdict::kAccepted});
+  for (std::size_t i = index; i < buffer_.size(); ++i) {
+    State state = i == 0 ? anchor_ : buffer_[i - 1].after;
+    buffer_[i].verdict = step(state, buffer_[i].measurement);
+    buffer_[i].after = state;
+  }
+  const MeasurementVerdict verdict = buffer_[index].verdict;
+  if (verdict == MeasurementVerdict::kRejectedGate) {
+    ++rejected_;
+  } else {
+    ++accepted_;
+  }
+  // Fold the measurements that left the window into the anchor.
+  const rt::TimeNs window_start_ns = buffer_.back().measurement.stamp_ns - window_ns;
+  std::size_t fold = 0;
+  while (fold + 1 < buffer_.size() && buffer_[fold].measurement.stamp_ns < window_start_ns) ++fold;
+  if (fold > 0) {
+    anchor_ = buffer_[fold - 1].after;
+    folded_any_ = true;
+    folded_until_ns_ = buffer_[fold - 1].measurement.stamp_ns;
+    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(fold));
+  }
+  return verdict;
+}
+
+TargetEstimate TargetEstimator::estimate(rt::TimeNs now_ns) const {
+  State state = newest();
+  TargetEstimate e;
+  e.initialised = state.initialised;
+  if (!state.initialised) {
+    e.stamp_ns = now_ns;
+    return e;
+  }
+  predict(state, now_ns);
+  e.stamp_ns = state.stamp_ns;
+  e.p_WT_m = state.x.head<3>();
+  e.v_WT_mps = state.x.tail<3>();
+  e.covariance = state.P;
+  e.last_accepted_ns = state.last_accepted_ns;
+  e.lost = now_ns - state.last_accepted_ns > rt::secondsToNs(params_.lost_after_s);
+  return e;
+}
+
+}  // namespace aerotrack::estimation
