@@ -10,5 +10,8 @@ int runCommand(const ParsedArgs& args);
 int simCommand(const ParsedArgs& args);
 int benchCommand(const ParsedArgs& args);
 int detectCommand(const ParsedArgs& args);
+int datasetCommand(const ParsedArgs& args);
+int calibrateCommand(const ParsedArgs& args);
+int evalLocalizationCommand(const ParsedArgs& args);
 
 }  // namespace aerotrack::app

@@ -42,6 +42,9 @@ int main(int argc, char** argv) {
     if (args->command == "sim") return simCommand(*args);
     if (args->command == "bench") return benchCommand(*args);
     if (args->command == "detect") return detectCommand(*args);
+    if (args->command == "dataset") return datasetCommand(*args);
+    if (args->command == "calibrate") return calibrateCommand(*args);
+    if (args->command == "eval-localization") return evalLocalizationCommand(*args);
     std::fprintf(stderr, "aerotrack: command '%s' has no handler\n", args->command.c_str());
     return 1;
   } catch (const std::exception& e) {

@@ -7,13 +7,6 @@
 namespace aerotrack::hal::sim {
 namespace {
 
-/// Camera axes (OpenCV: x right, y down, z forward) in a forward-left-up frame.
-Eigen::Matrix3d opticalAxesInFlu() {
-  Eigen::Matrix3d R;
-  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
-  return R;
-}
-
 std::mt19937_64 streamRng(std::uint64_t seed, std::uint64_t stream) {
   std::seed_seq seq{seed, stream, std::uint64_t{0x5eed}};
   return std::mt19937_64(seq);

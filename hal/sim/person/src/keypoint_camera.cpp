@@ -25,6 +25,12 @@ std::size_t idx(CocoKeypoint k) {
 
 }  // namespace
 
+Eigen::Matrix3d opticalAxesInFlu() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return R;
+}
+
 CameraIntrinsics pinholeIntrinsics(int width_px, int height_px, double horizontal_fov_rad) {
   CameraIntrinsics k;
   k.width_px = width_px;

@@ -45,6 +45,10 @@ struct KeypointCameraParams {
 /// probabilities in [0, 1], 1 <= min_visible_keypoints <= 17, 0 < min_score <= max_score <= 1.
 rt::Status validate(const KeypointCameraParams& params);
 
+/// The camera's optical axes (OpenCV: x right, y down, z forward) expressed in a forward-left-up
+/// frame (the gimbal's, the body's): R_FLU_optical. Pure.
+Eigen::Matrix3d opticalAxesInFlu();
+
 /// True if the straight segment between the two world points (metres) is unobstructed. Supplied by
 /// the obstacle world; an empty function means nothing is ever obstructed.
 using LineOfSight = std::function<bool(const Eigen::Vector3d& from_W_m, const Eigen::Vector3d& to_W_m)>;
