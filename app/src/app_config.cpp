@@ -1,8 +1,11 @@
 // Composition of the config sections: see app_config.hpp.
 #include "app_config.hpp"
 
+#include <filesystem>
+
 #include <yaml-cpp/yaml.h>
 
+#include "aerotrack/localization/localization_io.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/perception/detection_task.hpp"
 
@@ -41,6 +44,7 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
 
   if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
   if (root.has("perception")) c.perception = perception::parseDetectorParams(root.child("perception"));
+  if (root.has("estimation")) c.estimation = parseEstimation(root.child("estimation"), c.source);
 
   if (root.has("realtime")) {
     const rt::ConfigNode rt_node = root.child("realtime");
@@ -56,6 +60,33 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   root.finish();
   return c;
 }
+
+std::array<double, 3> triple(const std::vector<double>& v) {
+  return {v[0], v[1], v[2]};
+}
+
+}  // namespace
+
+EstimationConfig parseEstimation(const rt::ConfigNode& node, const std::string& config_path) {
+  EstimationConfig e;
+  std::filesystem::path params_path = node.getString("localization_params");
+  if (params_path.is_relative()) params_path = std::filesystem::path(config_path).parent_path() / params_path;
+  std::error_code ec;
+  e.localization_params_path = std::filesystem::weakly_canonical(params_path, ec).string();
+  if (ec) e.localization_params_path = params_path.string();
+  auto localization = localization::readParamsYaml(e.localization_params_path);
+  if (!localization) node.fail("localization_params", localization.error().message);
+  e.task.localization = *localization;
+  const rt::ConfigNode camera = node.child("gimbal_camera");
+  e.mount_m = triple(camera.getDoubleList("mount_m", 3, -10.0, 10.0));
+  e.camera_in_gimbal_m = triple(camera.getDoubleList("camera_in_gimbal_m", 3, -10.0, 10.0));
+  e.camera_in_gimbal_rpy_rad = triple(camera.getDoubleList("camera_in_gimbal_rpy_rad", 3, -7.0, 7.0));
+  estimation::parseTargetTaskParams(node, e.task);
+  node.finish();
+  return e;
+}
+
+namespace {
 
 rt::Expected<AppConfig> parseFrom(rt::Expected<rt::ConfigNode> root) {
   if (!root) return root.error();
@@ -121,6 +152,34 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "appearance_weight" << YAML::Value << p.tracker.appearance_weight;
     out << YAML::Key << "lost_after_s" << YAML::Value << p.tracker.lost_after_s;
     out << YAML::Key << "appearance_rate" << YAML::Value << p.tracker.appearance_rate;
+    out << YAML::EndMap;
+    out << YAML::EndMap;
+  }
+  if (c.estimation) {
+    const EstimationConfig& e = *c.estimation;
+    const estimation::TargetEstimatorParams& k = e.task.estimator;
+    const auto list = [](const std::array<double, 3>& a) { return std::vector<double>(a.begin(), a.end()); };
+    out << YAML::Key << "estimation" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "localization_params" << YAML::Value << e.localization_params_path;
+    out << YAML::Key << "gimbal_camera" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "mount_m" << YAML::Value << YAML::Flow << list(e.mount_m);
+    out << YAML::Key << "camera_in_gimbal_m" << YAML::Value << YAML::Flow << list(e.camera_in_gimbal_m);
+    out << YAML::Key << "camera_in_gimbal_rpy_rad" << YAML::Value << YAML::Flow << list(e.camera_in_gimbal_rpy_rad);
+    out << YAML::EndMap;
+    out << YAML::Key << "measurement_std_per_m" << YAML::Value << e.task.measurement_std_per_m;
+    out << YAML::Key << "min_measurement_std_m" << YAML::Value << e.task.min_measurement_std_m;
+    out << YAML::Key << "max_wait_s" << YAML::Value << rt::nsToSeconds(e.task.max_wait_ns);
+    out << YAML::Key << "estimator" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "accel_psd_xy_m2ps3" << YAML::Value << k.accel_psd_xy_m2ps3;
+    out << YAML::Key << "accel_psd_z_m2ps3" << YAML::Value << k.accel_psd_z_m2ps3;
+    out << YAML::Key << "measurement_std_xy_m" << YAML::Value << k.measurement_std_xy_m;
+    out << YAML::Key << "measurement_std_z_m" << YAML::Value << k.measurement_std_z_m;
+    out << YAML::Key << "initial_speed_std_mps" << YAML::Value << k.initial_speed_std_mps;
+    out << YAML::Key << "gate_chi2" << YAML::Value << k.gate_chi2;
+    out << YAML::Key << "reinit_after_rejections" << YAML::Value << k.reinit_after_rejections;
+    out << YAML::Key << "lost_after_s" << YAML::Value << k.lost_after_s;
+    out << YAML::Key << "replay_window_s" << YAML::Value << k.replay_window_s;
+    out << YAML::Key << "max_buffered_measurements" << YAML::Value << k.max_buffered_measurements;
     out << YAML::EndMap;
     out << YAML::EndMap;
   }

@@ -3,11 +3,13 @@
 // modules, rt); this file only composes them and owns the top-level keys.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
 #include <optional>
 
+#include "aerotrack/estimation/target_task.hpp"
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/mapping/mapper.hpp"
 #include "aerotrack/perception/detector.hpp"
@@ -24,6 +26,14 @@ struct VehicleConfig {
   double max_accel_mps2 = 4.0;
 };
 
+/// The `estimation:` section: the target pipeline's parameters, with the localization regression
+/// loaded from the file it names (relative paths: from the config file's folder).
+struct EstimationConfig {
+  std::string localization_params_path;                                               ///< Resolved.
+  std::array<double, 3> mount_m{}, camera_in_gimbal_m{}, camera_in_gimbal_rpy_rad{};  ///< As written.
+  estimation::TargetTaskParams task;
+};
+
 struct AppConfig {
   std::string source;  ///< The file it was read from.
   VehicleConfig vehicle;
@@ -33,9 +43,14 @@ struct AppConfig {
   std::optional<mapping::MapperParams> mapping;  ///< `mapping:` section; needed by the mapping task.
   /// `perception:` section; needed by the detection task. model_dir "default" is resolved by the app.
   std::optional<perception::DetectorParams> perception;
+  std::optional<EstimationConfig> estimation;  ///< `estimation:` section; needed by the target task.
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };
+
+/// Reads the `estimation:` section; config_path locates relative localization_params paths.
+/// Throws rt::ConfigError naming the key (use inside rt::parseConfig).
+EstimationConfig parseEstimation(const rt::ConfigNode& node, const std::string& config_path);
 
 /// Loads and checks a config file. The error names the file, line and key.
 rt::Expected<AppConfig> loadAppConfig(const std::string& path);

@@ -4,6 +4,9 @@
 
 #include <memory>
 
+#include <algorithm>
+
+#include "aerotrack/estimation/target_estimator.hpp"
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/hal/sim/baseline_follower.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
@@ -15,24 +18,27 @@
 namespace aerotrack::app {
 
 /// Polls the odometry device and publishes each new sample (by stamp): the newest on the
-/// odometry channel, every one on the stream that feeds the mapper's pose history.
+/// odometry channel, every one on the streams that feed the pose histories of the mapper and of
+/// the target task (one consumer each).
 class OdometryTask final : public rt::Task {
  public:
   OdometryTask(hal::Odometry& device, rt::LatestSlot<hal::OdometrySample>& out,
-               rt::SpscQueue<hal::OdometrySample>& stream)
-      : device_(device), out_(out), stream_(stream) {}
+               rt::SpscQueue<hal::OdometrySample>& mapping_stream, rt::SpscQueue<hal::OdometrySample>& target_stream)
+      : device_(device), out_(out), mapping_stream_(mapping_stream), target_stream_(target_stream) {}
   void step(rt::TimeNs now_ns) override {
     const auto sample = device_.read(now_ns);
     if (!sample || sample->stamp_ns <= last_stamp_ns_) return;
     last_stamp_ns_ = sample->stamp_ns;
     out_.write(*sample);
-    stream_.try_push(*sample);
+    mapping_stream_.try_push(*sample);
+    target_stream_.try_push(*sample);
   }
 
  private:
   hal::Odometry& device_;
   rt::LatestSlot<hal::OdometrySample>& out_;
-  rt::SpscQueue<hal::OdometrySample>& stream_;
+  rt::SpscQueue<hal::OdometrySample>& mapping_stream_;
+  rt::SpscQueue<hal::OdometrySample>& target_stream_;
   rt::TimeNs last_stamp_ns_ = -1;
 };
 
@@ -68,17 +74,27 @@ class DepthCameraTask final : public rt::Task {
   rt::SharedSlot<hal::DepthFrame>& out_;
 };
 
-/// Publishes the gimbal encoder's newest reading.
+/// Publishes the gimbal encoder's newest reading, and every new one (by stamp) on the stream that
+/// feeds the target task's angle history.
 class GimbalEncoderTask final : public rt::Task {
  public:
-  GimbalEncoderTask(hal::Gimbal& device, rt::LatestSlot<hal::GimbalState>& out) : device_(device), out_(out) {}
+  GimbalEncoderTask(hal::Gimbal& device, rt::LatestSlot<hal::GimbalState>& out, rt::SpscQueue<hal::GimbalState>& stream)
+      : device_(device), out_(out), stream_(stream) {}
   void step(rt::TimeNs now_ns) override {
-    if (const auto state = device_.read(now_ns)) out_.write(*state);
+    const auto state = device_.read(now_ns);
+    if (!state) return;
+    out_.write(*state);
+    if (state->stamp_ns > last_stamp_ns_) {
+      last_stamp_ns_ = state->stamp_ns;
+      stream_.try_push(*state);
+    }
   }
 
  private:
   hal::Gimbal& device_;
   rt::LatestSlot<hal::GimbalState>& out_;
+  rt::SpscQueue<hal::GimbalState>& stream_;
+  rt::TimeNs last_stamp_ns_ = -1;
 };
 
 /// Advances the simulation to the executor's time (the physics of sim backends).
@@ -114,6 +130,46 @@ class BaselineFollowTask final : public rt::Task {
   hal::sim::BaselineFollower follower_;
   hal::VehicleLink& vehicle_;
   hal::Gimbal& gimbal_;
+};
+
+/// Simulator only: compares the target estimate with where the person really is, at every step
+/// while the person walks and the estimate is live (horizontal errors; the estimate is carried to
+/// the step's time by its own velocity). The numbers go into summary.json ("estimation").
+class TargetTruthCheckTask final : public rt::Task {
+ public:
+  TargetTruthCheckTask(std::shared_ptr<hal::sim::Simulation> sim,
+                       const rt::LatestSlot<estimation::TargetEstimate>& estimate)
+      : sim_(std::move(sim)), estimate_(estimate) {}
+  void step(rt::TimeNs now_ns) override {
+    const auto truth = sim_->truthOut().read();
+    if (!truth || !truth->person_walking) return;
+    ++steps_;
+    const auto estimate = estimate_.read();
+    if (!estimate || !estimate->initialised || estimate->lost) return;
+    ++live_steps_;
+    const double ahead_s = rt::nsToSeconds(now_ns - estimate->stamp_ns);
+    const Eigen::Vector2d p_m = (estimate->p_WT_m + ahead_s * estimate->v_WT_mps).head<2>();
+    const double position_error_m = (p_m - truth->person_p_W_m.head<2>()).norm();
+    const double velocity_error_mps = (estimate->v_WT_mps - truth->person_v_W_mps).head<2>().norm();
+    position_error_sum_m_ += position_error_m;
+    velocity_error_sum_mps_ += velocity_error_mps;
+    position_error_max_m_ = std::max(position_error_max_m_, position_error_m);
+  }
+  std::uint64_t steps() const { return steps_; }
+  std::uint64_t liveSteps() const { return live_steps_; }
+  double positionErrorMeanM() const {
+    return live_steps_ ? position_error_sum_m_ / static_cast<double>(live_steps_) : 0.0;
+  }
+  double positionErrorMaxM() const { return position_error_max_m_; }
+  double velocityErrorMeanMps() const {
+    return live_steps_ ? velocity_error_sum_mps_ / static_cast<double>(live_steps_) : 0.0;
+  }
+
+ private:
+  std::shared_ptr<hal::sim::Simulation> sim_;
+  const rt::LatestSlot<estimation::TargetEstimate>& estimate_;
+  std::uint64_t steps_ = 0, live_steps_ = 0;
+  double position_error_sum_m_ = 0.0, velocity_error_sum_mps_ = 0.0, position_error_max_m_ = 0.0;
 };
 
 }  // namespace aerotrack::app

@@ -119,6 +119,7 @@ int simCommand(const ParsedArgs& args) {
   info.interrupted = stop.load();
   info.map = mapSummary((*system)->mappingTask(), info.timings);
   info.perception = perceptionSummary((*system)->detectionTask());
+  info.estimation = estimationSummary((*system)->targetTask(), (*system)->targetCheckTask());
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
   const nlohmann::json summary = simSummary(sim, info);

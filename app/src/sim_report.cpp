@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "device_tasks.hpp"
 #include "paths.hpp"
 
 namespace aerotrack::app {
@@ -28,6 +29,25 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
   out["octree_snapshots"] = snapshot.runs;
   out["octree_snapshot_ms_p50"] = snapshot.p50_ms;
   out["octree_snapshot_ms_max"] = snapshot.max_ms;
+  return out;
+}
+
+nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check) {
+  if (task == nullptr) return nullptr;
+  const estimation::TargetTaskStats& s = task->stats();
+  nlohmann::json out = {{"detections", s.detections},
+                        {"unreliable", s.unreliable},
+                        {"no_pose", s.no_pose},
+                        {"accepted", s.accepted},
+                        {"rejected", s.rejected}};
+  if (check != nullptr) {
+    out["checked_steps"] = check->steps();
+    out["live_ratio"] =
+        check->steps() ? static_cast<double>(check->liveSteps()) / static_cast<double>(check->steps()) : 0.0;
+    out["position_error_mean_m"] = check->positionErrorMeanM();
+    out["position_error_max_m"] = check->positionErrorMaxM();
+    out["velocity_error_mean_mps"] = check->velocityErrorMeanMps();
+  }
   return out;
 }
 
@@ -74,6 +94,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"tasks", timingJson(run.timings)},
       {"map", run.map},
       {"perception", run.perception},
+      {"estimation", run.estimation},
   };
   if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
   return out;

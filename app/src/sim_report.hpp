@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "aerotrack/estimation/target_task.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/perception/detection_task.hpp"
@@ -26,7 +27,12 @@ struct RunInfo {
   std::vector<TaskTiming> timings;
   nlohmann::json map;         ///< mapSummary()
   nlohmann::json perception;  ///< perceptionSummary()
+  nlohmann::json estimation;  ///< estimationSummary()
 };
+
+class TargetTruthCheckTask;
+/// The estimation section of summary.json (null if the run had no target task).
+nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check);
 
 /// The perception section of summary.json (null if the run had no detection task).
 nlohmann::json perceptionSummary(const perception::DetectionTask* task);

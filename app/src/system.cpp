@@ -8,8 +8,8 @@
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry",  "gimbal_camera",     "depth_camera",   "gimbal",
-          "mapping",   "detection", "trajectory_server", "baseline_follow"};
+  return {"sim_world", "odometry", "gimbal_camera", "depth_camera",      "gimbal",         "mapping",
+          "detection", "target",   "target_check",  "trajectory_server", "baseline_follow"};
 }
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
@@ -36,14 +36,20 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
 rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   const std::string where = config_.source + ": tasks[" + std::to_string(index) + "]";
   std::unique_ptr<rt::Task> task;
-  if (spec.name == "sim_world" || spec.name == "baseline_follow") {
+  if (spec.name == "sim_world" || spec.name == "baseline_follow" || spec.name == "target_check") {
     if (!devices_.simulation) return rt::Error{where + ": task '" + spec.name + "' needs a sim backend in hal"};
-    if (spec.name == "sim_world")
+    if (spec.name == "sim_world") {
       task = std::make_unique<SimWorldTask>(devices_.simulation);
-    else
+    } else if (spec.name == "target_check") {
+      auto check = std::make_unique<TargetTruthCheckTask>(devices_.simulation, channels_.target);
+      target_check_task_ = check.get();
+      task = std::move(check);
+    } else {
       task = std::make_unique<BaselineFollowTask>(devices_.simulation, *devices_.vehicle_link, *devices_.gimbal);
+    }
   } else if (spec.name == "odometry") {
-    task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream);
+    task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream,
+                                          channels_.odometry_target_stream);
   } else if (spec.name == "gimbal_camera") {
     task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections, channels_.images);
   } else if (spec.name == "depth_camera") {
@@ -67,8 +73,17 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                                                       channels_.detections, stats_clock_);
     detection_task_ = detection_task.get();
     task = std::move(detection_task);
+  } else if (spec.name == "target") {
+    if (!config_.estimation) return rt::Error{where + ": task 'target' needs an estimation: section"};
+    auto target =
+        estimation::TargetTask::create(config_.estimation->task, channels_.detections, channels_.odometry_target_stream,
+                                       channels_.gimbal_stream, channels_.target);
+    if (!target) return rt::Error{config_.source + ": estimation: " + target.error().message};
+    auto target_task = std::make_unique<estimation::TargetTask>(std::move(target.value()));
+    target_task_ = target_task.get();
+    task = std::move(target_task);
   } else if (spec.name == "gimbal") {
-    task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state);
+    task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state, channels_.gimbal_stream);
   } else if (spec.name == "trajectory_server") {
     auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
         config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);

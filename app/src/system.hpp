@@ -21,6 +21,8 @@
 
 namespace aerotrack::app {
 
+class TargetTruthCheckTask;
+
 /// Every channel of the process. Names here are the names a task's `trigger` may use.
 struct Channels {
   rt::LatestSlot<hal::OdometrySample> odometry;
@@ -28,7 +30,12 @@ struct Channels {
   rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
   rt::SpscQueue<hal::DetectionFrame> detections{16, rt::OverflowPolicy::kDropOldest};
   rt::SharedSlot<hal::DepthFrame> depth;
-  rt::SharedSlot<hal::ImageFrame> images;  ///< gimbal-camera images (image-mode cameras), for the detector
+  rt::SharedSlot<hal::ImageFrame> images;
+  rt::SpscQueue<hal::OdometrySample> odometry_target_stream{256,
+                                                            rt::OverflowPolicy::kDropOldest};  ///< for the target task
+  rt::SpscQueue<hal::GimbalState> gimbal_stream{512, rt::OverflowPolicy::kDropOldest};  ///< every encoder reading
+  rt::LatestSlot<estimation::TargetEstimate> target;  ///< the target estimator's newest estimate  ///< gimbal-camera
+                                                      ///< images (image-mode cameras), for the detector
   rt::LatestSlot<hal::GimbalState> gimbal_state;
   rt::SpscQueue<hal::OdometrySample> odometry_stream{
       256, rt::OverflowPolicy::kDropOldest};  ///< every sample, for the mapper
@@ -49,6 +56,10 @@ class System {
   const AppConfig& config() const { return config_; }
   /// The mapping task, if the table has one (for its statistics).
   const mapping::MappingTask* mappingTask() const { return mapping_task_; }
+  /// The simulator's check of the target estimate against the truth, if the table has one.
+  const TargetTruthCheckTask* targetCheckTask() const { return target_check_task_; }
+  /// The target task, if the table has one (for its statistics).
+  const estimation::TargetTask* targetTask() const { return target_task_; }
   /// The detection task, if the table has one (for its statistics).
   const perception::DetectionTask* detectionTask() const { return detection_task_; }
 
@@ -67,6 +78,8 @@ class System {
   std::vector<rt::TaskBinding> bindings_;
   const mapping::MappingTask* mapping_task_ = nullptr;
   const perception::DetectionTask* detection_task_ = nullptr;
+  const estimation::TargetTask* target_task_ = nullptr;
+  const TargetTruthCheckTask* target_check_task_ = nullptr;
   rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };
 

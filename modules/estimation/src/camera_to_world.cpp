@@ -1,6 +1,7 @@
 // Camera to world through the yaw gimbal (see camera_to_world.hpp).
 #include "aerotrack/estimation/camera_to_world.hpp"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -36,13 +37,17 @@ Eigen::Isometry3d cameraPoseInWorld(const Eigen::Isometry3d& T_WB, double gimbal
 }
 
 Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
-                              const GimbalCameraExtrinsics& extrinsics) {
-  return cameraPoseInWorld(T_WB, gimbal_angle_rad, extrinsics) * p_C_m;
+                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
+  const Eigen::Isometry3d T_WC = cameraPoseInWorld(T_WB, gimbal_angle_rad, extrinsics);
+  if (frame == CameraFrame::kCamera) return T_WC * p_C_m;
+  const Eigen::Vector3d forward_W = T_WC.linear().col(0);
+  const double heading_rad = std::atan2(forward_W.y(), forward_W.x());
+  return T_WC.translation() + Eigen::AngleAxisd(heading_rad, Eigen::Vector3d::UnitZ()) * p_C_m;
 }
 
 rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
                                               const mapping::PoseHistory& poses, const GimbalAngleHistory& gimbal,
-                                              const GimbalCameraExtrinsics& extrinsics) {
+                                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
   if (!p_C_m.allFinite()) return rt::Error{"camera to world: p_C is not finite"};
   const mapping::PoseLookup pose = poses.lookup(stamp_ns);
   if (pose.status != mapping::PoseLookupStatus::kOk) {
@@ -54,7 +59,7 @@ rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::
     return rt::Error{std::string("camera to world: no gimbal angle at t = ") + std::to_string(stamp_ns) +
                      " ns: " + toString(angle.status)};
   }
-  return cameraToWorld(p_C_m, pose.T_WB, angle.angle_rad, extrinsics);
+  return cameraToWorld(p_C_m, pose.T_WB, angle.angle_rad, extrinsics, frame);
 }
 
 }  // namespace aerotrack::estimation

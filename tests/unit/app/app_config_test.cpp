@@ -22,9 +22,14 @@ std::string readFile(const std::string& path) {
 
 const std::string kConfigDir = AEROTRACK_SOURCE_DIR "/config";
 
-/// config/sim.yaml with one line replaced (or removed if `with` is empty).
+/// config/sim.yaml with one line replaced (or removed if `with` is empty). The text is parsed as
+/// "sim.yaml" (no folder), so the file it names relative to config/ is made absolute.
 std::string simYamlWith(const std::string& line, const std::string& with) {
   std::string text = readFile(kConfigDir + "/sim.yaml");
+  const std::string relative = "localization_params: localization.yaml";
+  const auto at_params = text.find(relative);
+  EXPECT_NE(at_params, std::string::npos);
+  text.replace(at_params, relative.size(), "localization_params: " + kConfigDir + "/localization.yaml");
   const auto pos = text.find(line);
   EXPECT_NE(pos, std::string::npos) << line;
   text.replace(pos, line.size(), with);
@@ -99,6 +104,13 @@ TEST(AppConfig, GivenBadTaskRowsThenErrorNamesTheRow) {
                 ": tasks[1]: task 'odometry': needs exactly one of rate_hz (periodic) or trigger (event)");
   const std::string twice = simYamlWith("{name: odometry, ", "{name: sim_world, ");
   EXPECT_EQ(errorOf(twice), at(twice, "  - {name: sim_world") + ": tasks: task 'sim_world' appears twice in the table");
+}
+
+TEST(AppConfig, GivenAMissingLocalizationFileThenErrorNamesTheKeyAndTheFile) {
+  const std::string yaml = simYamlWith("localization_params: " + kConfigDir + "/localization.yaml",
+                                       "localization_params: /nowhere/params.yaml");
+  EXPECT_EQ(errorOf(yaml), at(yaml, "  localization_params") +
+                               ": estimation.localization_params: /nowhere/params.yaml: cannot open file");
 }
 
 TEST(AppConfig, GivenBadBackendThenErrorNamesIt) {

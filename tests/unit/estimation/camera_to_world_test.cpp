@@ -81,6 +81,30 @@ TEST(CameraToWorld, GivenTheSimulatorsConventionThenTheOpticalPoseMatchesItExact
   expectNear(p_C, Eigen::Vector3d(4.0, -0.5, 0.0));
 }
 
+TEST(CameraToWorld, GivenAPitchedDroneThenTheLevelFrameIgnoresThePitchAndKeepsTheHeading) {
+  // The drone pitches 10 degrees nose down while yawed 90 degrees; the gimbal adds 90 more, so the
+  // camera heads along -x. A regression fitted on a level camera says: 2.5 m ahead, 0.3 m left,
+  // 1.7 m below. In the level frame that is exactly where the person is, whatever the pitch.
+  GimbalCameraExtrinsics e;
+  e.p_BG_m = Eigen::Vector3d(0.1, 0.0, 0.0);
+  Eigen::Isometry3d T_WB = Eigen::Isometry3d::Identity();
+  T_WB.linear() = (Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()) *
+                   Eigen::AngleAxisd(10.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()))
+                      .toRotationMatrix();
+  T_WB.translation() = Eigen::Vector3d(5.0, 1.0, 1.7);
+  const Eigen::Vector3d p_C(2.5, 0.3, -1.7);
+  const Eigen::Vector3d camera_W = cameraPoseInWorld(T_WB, M_PI / 2, e).translation();
+  const Eigen::Vector3d level = cameraToWorld(p_C, T_WB, M_PI / 2, e, CameraFrame::kLevel);
+  // The camera's heading: body x (world +y) turned 90 degrees left: world -x.
+  EXPECT_NEAR(level.x(), camera_W.x() - 2.5, 1e-9);
+  EXPECT_NEAR(level.y(), camera_W.y() - 0.3, 1e-9);
+  EXPECT_NEAR(level.z(), camera_W.z() - 1.7, 1e-9);
+  // Read in the tilted camera frame, the same numbers land 0.3 m nearer: the error the level
+  // frame removes.
+  const Eigen::Vector3d tilted = cameraToWorld(p_C, T_WB, M_PI / 2, e, CameraFrame::kCamera);
+  EXPECT_GT((tilted - level).head<2>().norm(), 0.25);
+}
+
 TEST(CameraToWorld, GivenHistoriesThenTheCaptureTimeIsInterpolatedNotTheLatest) {
   // Given odometry at 0 and 100 ms (moving 1 m along x, yaw 0 -> 90 degrees) and gimbal samples
   // at 0 and 100 ms (0 -> 90 degrees).

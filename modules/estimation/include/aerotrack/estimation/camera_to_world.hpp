@@ -40,15 +40,24 @@ Eigen::Matrix3d opticalAxesInCamera();
 Eigen::Isometry3d cameraPoseInWorld(const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
                                     const GimbalCameraExtrinsics& extrinsics);
 
-/// p_WT = T_WC p_C (metres). Pure, reentrant, allocation-free.
+/// Which frame p_C is given in. kCamera: the camera's own frame C, tilted with the body. kLevel: a
+/// gravity-aligned frame at the camera with the camera's heading -- the frame of a localization
+/// regression fitted on a level camera (the paper's x_c, y_c, z_c): reading its output in the
+/// tilted frame would swing the person by the drone's pitch (10 degrees of pitch moves a person
+/// 2.5 m ahead and 1.7 m below by 0.3 m).
+enum class CameraFrame : std::uint8_t { kCamera, kLevel };
+
+/// p_WT = T_WC p_C (kCamera), or the camera's position plus p_C turned by the camera's heading
+/// (kLevel), in metres. Pure, reentrant, allocation-free.
 Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
-                              const GimbalCameraExtrinsics& extrinsics);
+                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame = CameraFrame::kCamera);
 
 /// cameraToWorld with T_WB and the gimbal angle interpolated from the histories at the image's
 /// capture time stamp_ns. Error (saying which history and why) if either lookup fails or p_C is
 /// not finite. Thread safety: as the histories' const lookups. Allocation: only for an error.
 rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
                                               const mapping::PoseHistory& poses, const GimbalAngleHistory& gimbal,
-                                              const GimbalCameraExtrinsics& extrinsics);
+                                              const GimbalCameraExtrinsics& extrinsics,
+                                              CameraFrame frame = CameraFrame::kCamera);
 
 }  // namespace aerotrack::estimation

@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include "aerotrack/rt/bitwise_copyable.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/time.hpp"
@@ -143,3 +144,9 @@ class TargetEstimator {
 };
 
 }  // namespace aerotrack::estimation
+
+// A TargetEstimate travels through rt::LatestSlot: its Eigen members are fixed-size arrays of
+// doubles (see rt/bitwise_copyable.hpp).
+static_assert(std::is_standard_layout_v<aerotrack::estimation::TargetEstimate>);
+template <>
+struct aerotrack::rt::IsBitwiseCopyable<aerotrack::estimation::TargetEstimate> : std::true_type {};

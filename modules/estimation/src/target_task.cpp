@@ -1,0 +1,100 @@
+// The target pipeline task: see target_task.hpp.
+#include "aerotrack/estimation/target_task.hpp"
+
+#include <algorithm>
+
+namespace aerotrack::estimation {
+
+void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params) {
+  params.extrinsics = parseGimbalCameraExtrinsics(node.child("gimbal_camera"));
+  params.measurement_std_per_m = node.getDouble("measurement_std_per_m", 0.0, 1.0);
+  params.min_measurement_std_m = node.getDouble("min_measurement_std_m", 0.001, 10.0);
+  params.max_wait_ns = rt::secondsToNs(node.getDouble("max_wait_s", 0.0, 2.0));
+  params.estimator = parseTargetEstimatorParams(node.child("estimator"));
+}
+
+rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
+                                            rt::SpscQueue<hal::DetectionFrame>& detections,
+                                            rt::SpscQueue<hal::OdometrySample>& odometry,
+                                            rt::SpscQueue<hal::GimbalState>& gimbal,
+                                            rt::LatestSlot<TargetEstimate>& out) {
+  if (auto s = localization::validate(params.localization); !s) return rt::Error{"localization: " + s.error().message};
+  auto poses = mapping::PoseHistory::create({});
+  if (!poses) return poses.error();
+  auto gimbal_history = GimbalAngleHistory::create({});
+  if (!gimbal_history) return gimbal_history.error();
+  auto estimator = TargetEstimator::create(params.estimator);
+  if (!estimator) return rt::Error{"estimator: " + estimator.error().message};
+  return TargetTask(params, std::move(poses.value()), std::move(gimbal_history.value()), std::move(estimator.value()),
+                    detections, odometry, gimbal, out);
+}
+
+TargetTask::TargetTask(const TargetTaskParams& params, mapping::PoseHistory poses, GimbalAngleHistory gimbal_history,
+                       TargetEstimator estimator, rt::SpscQueue<hal::DetectionFrame>& detections,
+                       rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
+                       rt::LatestSlot<TargetEstimate>& out)
+    : params_(params),
+      poses_(std::move(poses)),
+      gimbal_history_(std::move(gimbal_history)),
+      estimator_(std::move(estimator)),
+      detections_(detections),
+      odometry_(odometry),
+      gimbal_(gimbal),
+      out_(out) {}
+
+void TargetTask::process(const hal::DetectionFrame& frame) {
+  const auto& person = frame.persons[static_cast<std::size_t>(frame.target_index)];
+  const perception::TorsoFeatures torso =
+      perception::torsoFeatures(person.keypoints, frame.intrinsics.width_px, frame.intrinsics.height_px, params_.torso);
+  if (!torso.reliable) {
+    ++stats_.unreliable;
+    return;
+  }
+  const Eigen::Vector3d p_C_m = localization::predict(params_.localization, torso.torso_px, torso.u_px);
+  // The regression was fitted on a level camera: read its output in the level frame.
+  const auto p_WT_m =
+      cameraToWorldAt(frame.stamp_ns, p_C_m, poses_, gimbal_history_, params_.extrinsics, CameraFrame::kLevel);
+  if (!p_WT_m) {
+    ++stats_.no_pose;
+    return;
+  }
+  TargetMeasurement m;
+  m.stamp_ns = frame.stamp_ns;
+  m.p_WT_m = *p_WT_m;
+  m.std_xy_m = std::max(params_.min_measurement_std_m, params_.measurement_std_per_m * p_C_m.head<2>().norm());
+  const MeasurementVerdict verdict = estimator_.add(m);
+  if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted)
+    ++stats_.accepted;
+  else
+    ++stats_.rejected;
+}
+
+void TargetTask::step(rt::TimeNs now_ns) {
+  while (const auto sample = odometry_.try_pop())
+    if (poses_.push(*sample) == mapping::PushResult::kAccepted) newest_pose_ns_ = sample->stamp_ns;
+  while (const auto state = gimbal_.try_pop())
+    if (gimbal_history_.push(*state)) newest_gimbal_ns_ = state->stamp_ns;
+  while (const auto frame = detections_.try_pop()) {
+    if (frame->target_index < 0 || frame->target_index >= static_cast<int>(frame->person_count)) continue;
+    ++stats_.detections;
+    if (pending_count_ == pending_.size()) {  // far behind: give up on the oldest
+      ++stats_.no_pose;
+      std::move(pending_.begin() + 1, pending_.end(), pending_.begin());
+      --pending_count_;
+    }
+    pending_[pending_count_++] = *frame;
+  }
+  std::size_t done = 0;
+  for (; done < pending_count_; ++done) {
+    const hal::DetectionFrame& frame = pending_[done];
+    const bool covered = newest_pose_ns_ >= frame.stamp_ns && newest_gimbal_ns_ >= frame.stamp_ns;
+    if (!covered && now_ns - frame.stamp_ns < params_.max_wait_ns) break;  // readings still on their way
+    process(frame);
+  }
+  std::move(pending_.begin() + static_cast<std::ptrdiff_t>(done),
+            pending_.begin() + static_cast<std::ptrdiff_t>(pending_count_), pending_.begin());
+  pending_count_ -= done;
+  out_.write(estimator_.estimate(now_ns));
+}
+
+}  // namespace aerotrack::estimation
