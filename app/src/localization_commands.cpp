@@ -6,6 +6,7 @@
 // otherwise; only the pinhole model uses it. --model auto (the default) fits both models on 80 %
 // of the data, keeps the one with the lower mean error on the other 20 %, and refits it on all.
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <numbers>
 
@@ -43,7 +44,7 @@ rt::Expected<localization::LocalizationModel> chooseModel(const std::vector<loca
   std::vector<localization::LocalizationSample> train, held_out;
   for (std::size_t i = 0; i < data.size(); ++i) (i % 5 == 4 ? held_out : train).push_back(data[i]);
   if (held_out.size() < 5) return rt::Error{"--model auto needs at least 25 samples (or give --model)"};
-  double best_error = INFINITY;
+  double best_error = std::numeric_limits<double>::infinity();
   localization::LocalizationModel best = localization::LocalizationModel::kPaper;
   for (const auto model : {localization::LocalizationModel::kPaper, localization::LocalizationModel::kPinhole}) {
     auto params = localization::fit(model, train, intrinsics);
