@@ -1,0 +1,250 @@
+// The Bezier target prediction as one QP per axis (see target_predictor.hpp).
+#include "aerotrack/prediction/target_predictor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+namespace aerotrack::prediction {
+namespace {
+
+bool positiveFinite(double v) {
+  return std::isfinite(v) && v > 0.0;
+}
+
+/// sum_i points[i] b_i^degree(s).
+Eigen::Vector3d evaluate(std::span<const Eigen::Vector3d> points, int degree, double s) {
+  std::array<double, kMaxBezierDegree + 1> b{};
+  bernsteinBasis(degree, s, b);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int i = 0; i <= degree; ++i) p += b[static_cast<std::size_t>(i)] * points[static_cast<std::size_t>(i)];
+  return p;
+}
+
+}  // namespace
+
+rt::Status validate(const TargetPredictorParams& p) {
+  if (p.bezier_degree < 3 || p.bezier_degree > kMaxBezierDegree) {
+    return rt::Error{"target predictor: bezier_degree must be in 3.." + std::to_string(kMaxBezierDegree)};
+  }
+  for (const auto& [name, value] : {std::pair<const char*, double>{"window_s", p.window_s},
+                                    {"horizon_s", p.horizon_s},
+                                    {"weight_half_life_s", p.weight_half_life_s},
+                                    {"max_speed_mps", p.max_speed_mps},
+                                    {"max_accel_mps2", p.max_accel_mps2},
+                                    {"max_data_age_s", p.max_data_age_s}}) {
+    if (!positiveFinite(value)) return rt::Error{std::string("target predictor: ") + name + " must be finite and > 0"};
+  }
+  if (!std::isfinite(p.accel_energy_weight_s3) || p.accel_energy_weight_s3 < 0.0) {
+    return rt::Error{"target predictor: accel_energy_weight_s3 must be finite and >= 0"};
+  }
+  if (p.min_samples < 2) return rt::Error{"target predictor: min_samples must be >= 2"};
+  if (p.max_samples < p.min_samples) return rt::Error{"target predictor: max_samples must be >= min_samples"};
+  if (p.qp_max_iterations < 1) return rt::Error{"target predictor: qp_max_iterations must be >= 1"};
+  return rt::ok();
+}
+
+TargetPredictorParams parseTargetPredictorParams(const rt::ConfigNode& node) {
+  TargetPredictorParams p;
+  p.bezier_degree = node.getInt("bezier_degree", 3, kMaxBezierDegree);
+  p.window_s = node.getDouble("window_s", 0.05, 60.0);
+  p.horizon_s = node.getDouble("horizon_s", 0.01, 60.0);
+  p.weight_half_life_s = node.getDouble("weight_half_life_s", 1e-3, 3600.0);
+  p.accel_energy_weight_s3 = node.getDouble("accel_energy_weight_s3", 0.0, 1e6);
+  p.max_speed_mps = node.getDouble("max_speed_mps", 1e-3, 100.0);
+  p.max_accel_mps2 = node.getDouble("max_accel_mps2", 1e-3, 100.0);
+  p.fit_z = node.getBool("fit_z");
+  p.pin_to_newest = node.getBool("pin_to_newest");
+  p.min_samples = node.getInt("min_samples", 2, 100000);
+  p.max_data_age_s = node.getDouble("max_data_age_s", 1e-3, 3600.0);
+  p.max_samples = node.getInt("max_samples", 2, 100000);
+  p.qp_max_iterations = node.getInt("qp_max_iterations", 1, 100000);
+  node.finish();
+  return p;
+}
+
+Eigen::Vector3d TargetPrediction::position(rt::TimeNs t_ns) const {
+  const double s = rt::nsToSeconds(t_ns - start_ns) / durationS();
+  return evaluate(control_points_W_m, degree, s);
+}
+
+Eigen::Vector3d TargetPrediction::velocityControlPoint(int i) const {
+  const auto k = static_cast<std::size_t>(i);
+  return static_cast<double>(degree) / durationS() * (control_points_W_m[k + 1] - control_points_W_m[k]);
+}
+
+Eigen::Vector3d TargetPrediction::accelerationControlPoint(int i) const {
+  const auto k = static_cast<std::size_t>(i);
+  const double t = durationS();
+  return static_cast<double>(degree * (degree - 1)) / (t * t) *
+         (control_points_W_m[k + 2] - 2.0 * control_points_W_m[k + 1] + control_points_W_m[k]);
+}
+
+Eigen::Vector3d TargetPrediction::velocity(rt::TimeNs t_ns) const {
+  std::array<Eigen::Vector3d, kMaxBezierDegree> points{};
+  for (int i = 0; i < degree; ++i) points[static_cast<std::size_t>(i)] = velocityControlPoint(i);
+  return evaluate(points, degree - 1, rt::nsToSeconds(t_ns - start_ns) / durationS());
+}
+
+Eigen::Vector3d TargetPrediction::acceleration(rt::TimeNs t_ns) const {
+  std::array<Eigen::Vector3d, kMaxBezierDegree> points{};
+  for (int i = 0; i + 1 < degree; ++i) points[static_cast<std::size_t>(i)] = accelerationControlPoint(i);
+  return evaluate(points, degree - 2, rt::nsToSeconds(t_ns - start_ns) / durationS());
+}
+
+rt::Expected<TargetPredictor> TargetPredictor::create(const TargetPredictorParams& params) {
+  if (rt::Status status = validate(params); !status) return status.error();
+  const int n = params.bezier_degree;
+  DenseQpSolverParams qp;
+  qp.max_variables = n + 1;
+  qp.max_equalities = 1;
+  qp.max_inequalities = 2 * n + 2 * (n - 1);
+  qp.max_iterations = params.qp_max_iterations;
+  auto solver = DenseQpSolver::create(qp);
+  if (!solver) return solver.error();
+  return TargetPredictor(params, std::move(solver.value()));
+}
+
+TargetPredictor::TargetPredictor(const TargetPredictorParams& params, DenseQpSolver solver)
+    : params_(params), solver_(std::move(solver)) {
+  const int n = params.bezier_degree;
+  const int m_in = 2 * n + 2 * (n - 1);
+  samples_.reserve(static_cast<std::size_t>(params.max_samples));
+  energy_unit_.setZero(n + 1, n + 1);
+  accelerationEnergyMatrix(n, 1.0, energy_unit_);
+  basis_.setZero(n + 1, params.max_samples);
+  weights_.setZero(params.max_samples);
+  hessian_.setZero(n + 1, n + 1);
+  gradient_.setZero(n + 1);
+  a_eq_.setZero(1, n + 1);
+  b_eq_.setZero(1);
+  a_in_.setZero(m_in, n + 1);
+  b_in_.setZero(m_in);
+  for (auto& warm : warm_active_) warm.reserve(static_cast<std::size_t>(m_in));
+}
+
+void TargetPredictor::reset() {
+  samples_.clear();
+  for (auto& warm : warm_active_) warm.clear();
+}
+
+bool TargetPredictor::add(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_WT_m) {
+  if (!p_WT_m.allFinite() || (!samples_.empty() && stamp_ns <= samples_.back().stamp_ns)) return false;
+  const rt::TimeNs oldest_kept_ns = stamp_ns - rt::secondsToNs(params_.window_s);
+  const auto first_kept =
+      std::find_if(samples_.begin(), samples_.end(), [&](const Sample& s) { return s.stamp_ns >= oldest_kept_ns; });
+  samples_.erase(samples_.begin(), first_kept);
+  if (samples_.size() == samples_.capacity()) samples_.erase(samples_.begin());
+  samples_.push_back(Sample{stamp_ns, p_WT_m});
+  return true;
+}
+
+rt::Expected<TargetPrediction> TargetPredictor::predict(rt::TimeNs now_ns) {
+  const int count = static_cast<int>(samples_.size());
+  if (count < params_.min_samples) {
+    return rt::Error{"target predictor: " + std::to_string(count) + " estimates in the window, need " +
+                     std::to_string(params_.min_samples)};
+  }
+  const Sample& newest = samples_.back();
+  const rt::TimeNs effective_now_ns = std::max(now_ns, newest.stamp_ns);
+  const double age_s = rt::nsToSeconds(effective_now_ns - newest.stamp_ns);
+  if (age_s > params_.max_data_age_s) {
+    return rt::Error{"target predictor: newest estimate is " + std::to_string(age_s) + " s old"};
+  }
+  const int n = params_.bezier_degree;
+  const int size = n + 1;
+  const rt::TimeNs start_ns = samples_.front().stamp_ns;
+  const rt::TimeNs end_ns = effective_now_ns + rt::secondsToNs(params_.horizon_s);
+  const double duration_s = rt::nsToSeconds(end_ns - start_ns);
+
+  // Residual term: H = 2 sum_k w_k b_k b_k' (w normalised to sum 1), g_axis = -2 sum_k w_k b_k p_k.
+  // Positions are taken relative to the newest estimate (conditioning far from the origin).
+  double weight_sum = 0.0;
+  for (int k = 0; k < count; ++k) {
+    const Sample& sample = samples_[static_cast<std::size_t>(k)];
+    const double age_k_s = rt::nsToSeconds(newest.stamp_ns - sample.stamp_ns);
+    weights_(k) = std::exp2(-age_k_s / params_.weight_half_life_s);
+    weight_sum += weights_(k);
+    std::array<double, kMaxBezierDegree + 1> b{};
+    bernsteinBasis(n, rt::nsToSeconds(sample.stamp_ns - start_ns) / duration_s, b);
+    for (int i = 0; i < size; ++i) basis_(i, k) = b[static_cast<std::size_t>(i)];
+  }
+  weights_.head(count) /= weight_sum;
+  hessian_ = (2.0 * params_.accel_energy_weight_s3 / (duration_s * duration_s * duration_s)) * energy_unit_;
+  for (int k = 0; k < count; ++k) {
+    for (int c = 0; c < size; ++c) {
+      for (int r = c; r < size; ++r) hessian_(r, c) += 2.0 * weights_(k) * basis_(r, k) * basis_(c, k);
+    }
+  }
+  for (int c = 0; c < size; ++c) {
+    for (int r = 0; r < c; ++r) hessian_(r, c) = hessian_(c, r);
+  }
+
+  // Hodograph bounds: +-(n/T)(c_{i+1} - c_i) >= -v_max, +-(n(n-1)/T^2)(c_{i+2} - 2c_{i+1} + c_i) >= -a_max.
+  a_in_.setZero();
+  const double v_scale = static_cast<double>(n) / duration_s;
+  const double a_scale = static_cast<double>(n * (n - 1)) / (duration_s * duration_s);
+  int row = 0;
+  for (int i = 0; i < n; ++i) {
+    for (const double sign : {1.0, -1.0}) {
+      a_in_(row, i) = -sign * v_scale;
+      a_in_(row, i + 1) = sign * v_scale;
+      b_in_(row) = -params_.max_speed_mps;
+      ++row;
+    }
+  }
+  for (int i = 0; i + 1 < n; ++i) {
+    for (const double sign : {1.0, -1.0}) {
+      a_in_(row, i) = sign * a_scale;
+      a_in_(row, i + 1) = -2.0 * sign * a_scale;
+      a_in_(row, i + 2) = sign * a_scale;
+      b_in_(row) = -params_.max_accel_mps2;
+      ++row;
+    }
+  }
+  const int m_eq = params_.pin_to_newest ? 1 : 0;
+  if (params_.pin_to_newest) {
+    for (int i = 0; i < size; ++i) a_eq_(0, i) = basis_(i, count - 1);
+    b_eq_(0) = 0.0;  // relative to the newest estimate
+  }
+
+  TargetPrediction prediction;
+  prediction.degree = n;
+  prediction.start_ns = start_ns;
+  prediction.end_ns = end_ns;
+  prediction.now_ns = effective_now_ns;
+  prediction.newest_data_ns = newest.stamp_ns;
+  prediction.samples_used = count;
+  const int axes = params_.fit_z ? 3 : 2;
+  for (int axis = 0; axis < axes; ++axis) {
+    gradient_.setZero();
+    for (int k = 0; k < count; ++k) {
+      const double offset = samples_[static_cast<std::size_t>(k)].p_WT_m(axis) - newest.p_WT_m(axis);
+      gradient_ -= (2.0 * weights_(k) * offset) * basis_.col(k);
+    }
+    const QpProblem problem{hessian_, gradient_, a_eq_.topRows(m_eq), b_eq_.head(m_eq), a_in_, b_in_};
+    std::vector<int>& warm = warm_active_[static_cast<std::size_t>(axis)];
+    const QpResult result = solver_.solve(problem, warm);
+    prediction.qp_iterations += result.iterations;
+    if (result.status != QpStatus::kOptimal) {
+      warm.clear();
+      return rt::Error{std::string("target predictor: QP ") + toString(result.status) + " on axis " +
+                       std::to_string(axis)};
+    }
+    const auto active = solver_.activeInequalities();
+    warm.assign(active.begin(), active.end());  // within the reserved capacity
+    const auto x = solver_.solution();
+    for (int i = 0; i < size; ++i) {
+      prediction.control_points_W_m[static_cast<std::size_t>(i)](axis) = x(i) + newest.p_WT_m(axis);
+    }
+  }
+  if (!params_.fit_z) {
+    double z_m = 0.0;
+    for (int k = 0; k < count; ++k) z_m += weights_(k) * samples_[static_cast<std::size_t>(k)].p_WT_m.z();
+    for (int i = 0; i < size; ++i) prediction.control_points_W_m[static_cast<std::size_t>(i)].z() = z_m;
+  }
+  return prediction;
+}
+
+}  // namespace aerotrack::prediction
