@@ -1,0 +1,170 @@
+// Occlusion-aware kinodynamic path search (paper Sect. V-B), a hybrid A* in the style of Fast-Planner's
+// kinodynamic A* (Zhou et al., RA-L 2019). State x = (p, v) in the world frame W; the input is an
+// acceleration u, discretised per axis and held for a primitive duration tau (motion primitives). Node
+// cost f_c = g_c + h_c with
+//   g_c = sum over primitives of (|u|^2 tau + rho tau)   (the discretised J_t = integral |u|^2 + rho T),
+//   h_c = lambda_h D(x_c, x_g) + P_time + P_occ          (paper Eq. for h_c),
+// where D is the OBVP cost to the goal (obvp.hpp), P_time = time_penalty_per_s * T*(x_c, x_g) and P_occ a
+// constant added when the segment from the node to the person's predicted position at the node's time is
+// blocked in the grid (LocalGrid::lineOfSight). The baseline mode (occlusion_aware = false) leaves P_occ
+// out: the paper's comparison. The goal x_g is a weighted mix of the person's current and predicted states
+// held at the tracking distance (makeTrackingGoal). Primitives are checked against the velocity and
+// acceleration limits (per axis) and sampled against the inflated grid at most half a cell apart; near the
+// goal an analytic one-shot OBVP cubic to the goal is tried (collision- and limit-checked). The closed set
+// is a hash on the discretised (p, v). When the expansion budget runs out, the path to the expanded node
+// with the smallest D to the goal is returned (a partial path).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/expected.hpp"
+
+namespace aerotrack::planning {
+
+struct KinodynamicSearchParams {
+  double max_velocity_mps = 3.0;             ///< Per-axis speed limit; > 0.
+  double max_acceleration_mps2 = 3.0;        ///< Per-axis acceleration limit (inputs and one-shot); > 0.
+  int acceleration_steps = 1;                ///< Inputs per axis: k / steps * max_acceleration, k in [-steps, steps].
+  double primitive_duration_s = 0.3;         ///< tau, how long each input is held; > 0.
+  double time_weight = 10.0;                 ///< rho in J_t (cost per second of flight).
+  double heuristic_weight = 5.0;             ///< lambda_h on D (Fast-Planner: 5); 1 keeps the heuristic admissible.
+  double time_penalty_per_s = 0.0;           ///< P_time = this * T*(x_c, x_g); >= 0.
+  double occlusion_penalty = 200.0;          ///< P_occ for a node that cannot see the person; >= 0.
+  bool occlusion_aware = true;               ///< false: the baseline (no P_occ, no line-of-sight checks).
+  double position_resolution_m = 0.1;        ///< Closed-set cell size in position; > 0.
+  double velocity_resolution_mps = 0.5;      ///< Closed-set cell size in velocity; > 0.
+  double goal_tolerance_m = 0.2;             ///< A node this close to the goal position ...
+  double goal_velocity_tolerance_mps = 0.5;  ///< ... and velocity counts as reached.
+  double one_shot_distance_m = 3.0;          ///< Try the analytic one-shot from nodes this close to the goal.
+  int max_expansions = 3000;                 ///< Budget: nodes expanded before the best partial path is returned.
+  int max_nodes = 30000;                     ///< Node pool size (allocated once); the search also stops when full.
+};
+
+/// Reads every key of a `search:` section (every field above) and calls
+/// finish(). Throws rt::ConfigError (file:line: key: message) on a missing, unknown or out-of-range key.
+KinodynamicSearchParams parseKinodynamicSearchParams(const rt::ConfigNode& node);
+
+/// Position and velocity in W.
+struct KinematicState {
+  Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_W_mps = Eigen::Vector3d::Zero();
+};
+
+struct TrackingGoalParams {
+  double predicted_weight = 0.5;     ///< w in x_g = (1 - w) x_tc + w x_tp; in [0, 1].
+  double tracking_distance_m = 2.5;  ///< Horizontal distance held from the mixed person position; >= 0.
+};
+
+/// The goal state: the mix of the person's current and predicted states, moved horizontally towards the
+/// drone by tracking_distance_m (behind the person's velocity when the drone is right above it, -x when the
+/// person stands still too), at the drone's altitude p_drone_W_m.z(); velocity: the mixed person velocity
+/// with z = 0. Pure, allocation-free, thread-safe.
+KinematicState makeTrackingGoal(const KinematicState& person_now, const KinematicState& person_predicted,
+                                const Eigen::Vector3d& p_drone_W_m, const TrackingGoalParams& params);
+
+/// The person's (predicted) position in W at an absolute time t_s (the clock of start_time_s below).
+using PersonPositionFn = std::function<Eigen::Vector3d(double t_s)>;
+
+/// One piece of the path: p(t) = p0 + v0 t + a0 t^2 / 2 + jerk t^3 / 6 for t in [0, duration_s]. Motion
+/// primitives have jerk 0; the final one-shot piece is the OBVP cubic.
+struct PathSegment {
+  Eigen::Vector3d p0_W_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v0_W_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d a0_W_mps2 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d jerk_W_mps3 = Eigen::Vector3d::Zero();
+  double duration_s = 0.0;
+};
+
+enum class SearchStatus : std::uint8_t {
+  kReachedGoal,   ///< The path ends at the goal (one-shot) or within the goal tolerances.
+  kPartial,       ///< Budget (expansions or node pool) exhausted: path to the node closest to the goal.
+  kNoPath,        ///< Every reachable state was expanded without reaching the goal; the path is empty.
+  kStartBlocked,  ///< The start is not free in the grid, outside the window, or beyond the limits.
+  kInvalidInput,  ///< Non-finite start, goal or start time.
+};
+std::string_view toString(SearchStatus status);
+
+struct SearchPath {
+  SearchStatus status = SearchStatus::kNoPath;
+  std::vector<PathSegment> segments;  ///< Empty unless kReachedGoal or kPartial.
+  double cost = 0.0;                  ///< g of the path (J_t of its pieces, P_occ not included).
+  double duration_s = 0.0;            ///< Sum of the segment durations.
+  int expansions = 0;                 ///< Nodes expanded.
+  int occluded_nodes = 0;             ///< Nodes along the path (primitive ends) that could not see the person.
+  double end_heuristic = 0.0;         ///< D(end, goal): 0 when the goal was reached by the one-shot.
+
+  /// The path at time t_s from its start (clamped to [0, duration_s]). Empty path: zero state.
+  KinematicState stateAt(double t_s) const;
+  Eigen::Vector3d accelerationAt(double t_s) const;
+};
+
+/// The search, with its scratch memory (node pool, hash table, open list) allocated once in create() and
+/// reused by every search(). Not thread-safe: one instance per thread. Copyable and movable.
+class KinodynamicSearch {
+ public:
+  /// Validates params (every field in its documented range) and allocates the scratch memory.
+  static rt::Expected<KinodynamicSearch> create(const KinodynamicSearchParams& params);
+
+  const KinodynamicSearchParams& params() const { return params_; }
+  /// Switches the occlusion penalty on or off (the baseline mode) without reallocating.
+  void setOcclusionAware(bool occlusion_aware) { params_.occlusion_aware = occlusion_aware; }
+
+  /// Searches from start to goal in `grid` (blocked = LocalGrid::isOccupied, which applies the inflation
+  /// and the grid's unknown policy; the path must also stay in the window). start_time_s is the absolute
+  /// time of the start state: a node reached after t seconds asks person_W_m(start_time_s + t) for the
+  /// line-of-sight check (not called in the baseline mode; may be empty then). Writes `path` (its vectors
+  /// keep their capacity, so a reused path allocates nothing once warm) and returns path.status. No clock is
+  /// read: the budget is max_expansions. Cost O(expansions * primitives * (samples + line of sight)).
+  SearchStatus search(const mapping::LocalGrid& grid, const KinematicState& start, const KinematicState& goal,
+                      double start_time_s, const PersonPositionFn& person_W_m, SearchPath& path);
+
+  /// h_c without P_occ: heuristic_weight * D + P_time (exposed for tests).
+  double heuristic(const KinematicState& from, const KinematicState& goal) const;
+
+ private:
+  struct Node {
+    Eigen::Vector3d p;
+    Eigen::Vector3d v;
+    Eigen::Vector3d u;  // input of the primitive that reached this node
+    double g = 0.0;
+    double f = 0.0;
+    double d = 0.0;  // unweighted D to the goal
+    double t = 0.0;  // seconds since the start
+    std::int64_t key = 0;
+    int parent = -1;
+    bool closed = false;
+    bool occluded = false;
+  };
+  struct OpenEntry {
+    double f;
+    int node;
+    bool operator<(const OpenEntry& other) const { return f > other.f; }  // min-heap via std::push_heap
+  };
+
+  explicit KinodynamicSearch(const KinodynamicSearchParams& params);
+  std::int64_t keyOf(const Eigen::Vector3d& p, const Eigen::Vector3d& v) const;
+  int* findSlot(std::int64_t key);  // the slot holding key's node, or the empty slot where it goes
+  bool primitiveFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p, const Eigen::Vector3d& v,
+                     const Eigen::Vector3d& u, double duration_s) const;
+  bool oneShot(const mapping::LocalGrid& grid, const Node& from, const KinematicState& goal, PathSegment& shot,
+               double& cost) const;
+  void writePath(int end_node, const PathSegment* shot, double shot_cost, SearchPath& path);
+
+  KinodynamicSearchParams params_;
+  std::vector<Eigen::Vector3d> inputs_;
+  std::vector<Node> nodes_;
+  std::vector<int> table_;                  // node index per slot
+  std::vector<std::uint32_t> table_stamp_;  // slot valid when equal to stamp_
+  std::uint32_t stamp_ = 0;
+  std::vector<OpenEntry> open_;
+  std::vector<int> chain_;  // scratch for writePath
+};
+
+}  // namespace aerotrack::planning

@@ -1,0 +1,402 @@
+// Occlusion-aware kinodynamic hybrid A* (see kinodynamic_search.hpp; paper Sect. V-B).
+#include "aerotrack/planning/kinodynamic_search.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "aerotrack/planning/obvp.hpp"
+
+namespace aerotrack::planning {
+namespace {
+
+bool finite(const Eigen::Vector3d& x) {
+  return x.allFinite();
+}
+
+bool withinLimits(const Eigen::Vector3d& v, double limit) {
+  return v.cwiseAbs().maxCoeff() <= limit + 1e-9;
+}
+
+Eigen::Vector3d positionOf(const PathSegment& s, double t) {
+  return s.p0_W_m + t * (s.v0_W_mps + t * (0.5 * s.a0_W_mps2 + (t / 6.0) * s.jerk_W_mps3));
+}
+
+// Sampling step along a path: half a grid cell, so that no cell is skipped by more than a corner.
+double sampleStepM(const mapping::LocalGrid& grid) {
+  return 0.5 * grid.params().resolution_m;
+}
+
+bool pointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p) {
+  return grid.inWindow(p) && !grid.isOccupied(p);
+}
+
+// The chord between two samples at most half a cell apart: every cell it passes through (DDA) must be
+// unblocked and in the window. The curve strays from its chord by at most a dt^2 / 8 (about 0.1 mm at
+// 3 m/s^2 and 0.05 m / 3 m/s), so a corner it clips between samples is still caught.
+bool chordFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return pointFree(grid, b) && grid.segmentFree(a, b);
+}
+
+}  // namespace
+
+std::string_view toString(SearchStatus status) {
+  switch (status) {
+    case SearchStatus::kReachedGoal:
+      return "reached_goal";
+    case SearchStatus::kPartial:
+      return "partial";
+    case SearchStatus::kNoPath:
+      return "no_path";
+    case SearchStatus::kStartBlocked:
+      return "start_blocked";
+    case SearchStatus::kInvalidInput:
+      return "invalid_input";
+  }
+  return "unknown";
+}
+
+KinodynamicSearchParams parseKinodynamicSearchParams(const rt::ConfigNode& node) {
+  KinodynamicSearchParams p;
+  p.max_velocity_mps = node.getDouble("max_velocity_mps", 0.1, 30.0);
+  p.max_acceleration_mps2 = node.getDouble("max_acceleration_mps2", 0.1, 50.0);
+  p.acceleration_steps = node.getInt("acceleration_steps", 1, 4);
+  p.primitive_duration_s = node.getDouble("primitive_duration_s", 0.01, 2.0);
+  p.time_weight = node.getDouble("time_weight", 1e-3, 1e4);
+  p.heuristic_weight = node.getDouble("heuristic_weight", 0.0, 100.0);
+  p.time_penalty_per_s = node.getDouble("time_penalty_per_s", 0.0, 1e4);
+  p.occlusion_penalty = node.getDouble("occlusion_penalty", 0.0, 1e6);
+  p.occlusion_aware = node.getBool("occlusion_aware");
+  p.position_resolution_m = node.getDouble("position_resolution_m", 0.01, 5.0);
+  p.velocity_resolution_mps = node.getDouble("velocity_resolution_mps", 0.01, 10.0);
+  p.goal_tolerance_m = node.getDouble("goal_tolerance_m", 0.0, 5.0);
+  p.goal_velocity_tolerance_mps = node.getDouble("goal_velocity_tolerance_mps", 0.0, 10.0);
+  p.one_shot_distance_m = node.getDouble("one_shot_distance_m", 0.0, 50.0);
+  p.max_expansions = node.getInt("max_expansions", 1, 10'000'000);
+  p.max_nodes = node.getInt("max_nodes", 2, 10'000'000);
+  node.finish();
+  return p;
+}
+
+KinematicState makeTrackingGoal(const KinematicState& person_now, const KinematicState& person_predicted,
+                                const Eigen::Vector3d& p_drone_W_m, const TrackingGoalParams& params) {
+  const double w = std::clamp(params.predicted_weight, 0.0, 1.0);
+  const Eigen::Vector3d p_mix = (1.0 - w) * person_now.p_W_m + w * person_predicted.p_W_m;
+  const Eigen::Vector3d v_mix = (1.0 - w) * person_now.v_W_mps + w * person_predicted.v_W_mps;
+  Eigen::Vector2d away = (p_drone_W_m - p_mix).head<2>();
+  if (away.norm() < 1e-6) away = -v_mix.head<2>();
+  if (away.norm() < 1e-6) away = Eigen::Vector2d(-1.0, 0.0);
+  away.normalize();
+  KinematicState goal;
+  goal.p_W_m.head<2>() = p_mix.head<2>() + params.tracking_distance_m * away;
+  goal.p_W_m.z() = p_drone_W_m.z();
+  goal.v_W_mps = Eigen::Vector3d(v_mix.x(), v_mix.y(), 0.0);
+  return goal;
+}
+
+KinematicState SearchPath::stateAt(double t_s) const {
+  KinematicState state;
+  if (segments.empty()) return state;
+  double t = std::clamp(t_s, 0.0, duration_s);
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const PathSegment& s = segments[i];
+    if (t <= s.duration_s || i + 1 == segments.size()) {
+      t = std::min(t, s.duration_s);
+      state.p_W_m = positionOf(s, t);
+      state.v_W_mps = s.v0_W_mps + t * (s.a0_W_mps2 + 0.5 * t * s.jerk_W_mps3);
+      return state;
+    }
+    t -= s.duration_s;
+  }
+  return state;
+}
+
+Eigen::Vector3d SearchPath::accelerationAt(double t_s) const {
+  if (segments.empty()) return Eigen::Vector3d::Zero();
+  double t = std::clamp(t_s, 0.0, duration_s);
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const PathSegment& s = segments[i];
+    if (t <= s.duration_s || i + 1 == segments.size()) {
+      t = std::min(t, s.duration_s);
+      return s.a0_W_mps2 + t * s.jerk_W_mps3;
+    }
+    t -= s.duration_s;
+  }
+  return Eigen::Vector3d::Zero();
+}
+
+rt::Expected<KinodynamicSearch> KinodynamicSearch::create(const KinodynamicSearchParams& params) {
+  const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  const auto non_negative = [](double x) { return std::isfinite(x) && x >= 0.0; };
+  if (!positive(params.max_velocity_mps) || !positive(params.max_acceleration_mps2) ||
+      !positive(params.primitive_duration_s) || !positive(params.time_weight) ||
+      !positive(params.position_resolution_m) || !positive(params.velocity_resolution_mps)) {
+    return rt::Error{"kinodynamic search: limits, primitive duration, time weight and resolutions must be > 0"};
+  }
+  if (!non_negative(params.heuristic_weight) || !non_negative(params.time_penalty_per_s) ||
+      !non_negative(params.occlusion_penalty) || !non_negative(params.goal_tolerance_m) ||
+      !non_negative(params.goal_velocity_tolerance_mps) || !non_negative(params.one_shot_distance_m)) {
+    return rt::Error{"kinodynamic search: weights, penalties and tolerances must be finite and >= 0"};
+  }
+  if (params.acceleration_steps < 1 || params.acceleration_steps > 4) {
+    return rt::Error{"kinodynamic search: acceleration_steps must be in [1, 4]"};
+  }
+  if (params.max_expansions < 1 || params.max_nodes < 2) {
+    return rt::Error{"kinodynamic search: max_expansions must be >= 1 and max_nodes >= 2"};
+  }
+  return KinodynamicSearch(params);
+}
+
+KinodynamicSearch::KinodynamicSearch(const KinodynamicSearchParams& params) : params_(params) {
+  const int steps = params.acceleration_steps;
+  const double step_mps2 = params.max_acceleration_mps2 / steps;
+  for (int z = -steps; z <= steps; ++z) {
+    for (int y = -steps; y <= steps; ++y) {
+      for (int x = -steps; x <= steps; ++x) inputs_.emplace_back(x * step_mps2, y * step_mps2, z * step_mps2);
+    }
+  }
+  nodes_.resize(static_cast<std::size_t>(params.max_nodes));
+  std::size_t capacity = 1;
+  while (capacity < 2 * nodes_.size()) capacity <<= 1;
+  table_.assign(capacity, -1);
+  table_stamp_.assign(capacity, 0);
+  // One open entry per child generated: at most max_expansions * inputs (capped; past the cap the open list
+  // may grow once, and keeps that capacity).
+  const std::size_t pushes = static_cast<std::size_t>(params.max_expansions) * inputs_.size() + 1;
+  open_.reserve(std::min<std::size_t>(pushes, std::size_t{1} << 22));
+  chain_.reserve(static_cast<std::size_t>(params.max_nodes));
+}
+
+std::int64_t KinodynamicSearch::keyOf(const Eigen::Vector3d& p, const Eigen::Vector3d& v) const {
+  // 12 bits per position axis (+-409.6 m at 0.2 m), 9 bits per velocity axis: wraps harmlessly beyond (the
+  // key only has to tell apart states inside one window).
+  std::uint64_t key = 0;
+  for (int i = 0; i < 3; ++i) {
+    const auto cell = static_cast<std::int64_t>(std::floor(p[i] / params_.position_resolution_m));
+    key = (key << 12) | (static_cast<std::uint64_t>(cell) & 0xFFFu);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const auto cell = static_cast<std::int64_t>(std::floor(v[i] / params_.velocity_resolution_mps));
+    key = (key << 9) | (static_cast<std::uint64_t>(cell) & 0x1FFu);
+  }
+  return static_cast<std::int64_t>(key);
+}
+
+int* KinodynamicSearch::findSlot(std::int64_t key) {
+  const std::size_t mask = table_.size() - 1;
+  std::size_t slot = static_cast<std::size_t>(static_cast<std::uint64_t>(key) * 0x9E3779B97F4A7C15ull >> 20) & mask;
+  while (true) {
+    if (table_stamp_[slot] != stamp_) {
+      table_stamp_[slot] = stamp_;
+      table_[slot] = -1;
+      return &table_[slot];
+    }
+    const int node = table_[slot];
+    if (node < 0 || nodes_[static_cast<std::size_t>(node)].key == key) return &table_[slot];
+    slot = (slot + 1) & mask;
+  }
+}
+
+bool KinodynamicSearch::primitiveFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p,
+                                      const Eigen::Vector3d& v, const Eigen::Vector3d& u, double duration_s) const {
+  const double length_bound_m = v.norm() * duration_s + 0.5 * u.norm() * duration_s * duration_s;
+  const int samples = std::max(1, static_cast<int>(std::ceil(length_bound_m / sampleStepM(grid))));
+  const double dt = duration_s / samples;
+  Eigen::Vector3d previous = p;
+  for (int i = 1; i <= samples; ++i) {
+    const double t = i * dt;
+    const Eigen::Vector3d next = p + t * (v + 0.5 * t * u);
+    if (!chordFree(grid, previous, next)) return false;
+    previous = next;
+  }
+  return true;
+}
+
+bool KinodynamicSearch::oneShot(const mapping::LocalGrid& grid, const Node& from, const KinematicState& goal,
+                                PathSegment& shot, double& cost) const {
+  const ObvpSolution obvp = solveObvp(from.p, from.v, goal.p_W_m, goal.v_W_mps, params_.time_weight);
+  const double t_end = obvp.duration_s;
+  if (!(t_end > 1e-6)) return false;
+  const ObvpCubic cubic = obvpCubic(from.p, from.v, goal.p_W_m, goal.v_W_mps, t_end);
+  shot = PathSegment{from.p, from.v, cubic.a0_mps2, cubic.jerk_mps3, t_end};
+  // Acceleration is linear in t: its ends bound it. Velocity is quadratic per axis: ends and the vertex.
+  if (!withinLimits(cubic.a0_mps2, params_.max_acceleration_mps2) ||
+      !withinLimits(cubic.a0_mps2 + t_end * cubic.jerk_mps3, params_.max_acceleration_mps2) ||
+      !withinLimits(goal.v_W_mps, params_.max_velocity_mps)) {
+    return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double j = cubic.jerk_mps3[i];
+    if (std::abs(j) < 1e-12) continue;
+    const double t_vertex = -cubic.a0_mps2[i] / j;
+    if (t_vertex > 0.0 && t_vertex < t_end) {
+      const double v = from.v[i] + t_vertex * (cubic.a0_mps2[i] + 0.5 * t_vertex * j);
+      if (std::abs(v) > params_.max_velocity_mps + 1e-9) return false;
+    }
+  }
+  const double length_bound_m = (goal.p_W_m - from.p).norm() + 0.5 * t_end * (from.v.norm() + goal.v_W_mps.norm()) +
+                                t_end * t_end * cubic.a0_mps2.norm();
+  const int samples = std::max(1, static_cast<int>(std::ceil(length_bound_m / sampleStepM(grid))));
+  Eigen::Vector3d previous = from.p;
+  for (int i = 1; i <= samples; ++i) {
+    const Eigen::Vector3d next = positionOf(shot, t_end * i / samples);
+    if (!chordFree(grid, previous, next)) return false;
+    previous = next;
+  }
+  cost = obvp.cost;
+  return true;
+}
+
+double KinodynamicSearch::heuristic(const KinematicState& from, const KinematicState& goal) const {
+  const ObvpSolution obvp = solveObvp(from.p_W_m, from.v_W_mps, goal.p_W_m, goal.v_W_mps, params_.time_weight);
+  return params_.heuristic_weight * obvp.cost + params_.time_penalty_per_s * obvp.duration_s;
+}
+
+void KinodynamicSearch::writePath(int end_node, const PathSegment* shot, double shot_cost, SearchPath& path) {
+  chain_.clear();
+  for (int n = end_node; n >= 0; n = nodes_[static_cast<std::size_t>(n)].parent) chain_.push_back(n);
+  path.segments.clear();
+  path.occluded_nodes = 0;
+  const double tau = params_.primitive_duration_s;
+  // chain_ runs end -> start; the start node has no primitive.
+  for (auto it = chain_.rbegin(); it != chain_.rend(); ++it) {
+    const Node& node = nodes_[static_cast<std::size_t>(*it)];
+    if (node.occluded) ++path.occluded_nodes;
+    if (node.parent < 0) continue;
+    const Node& parent = nodes_[static_cast<std::size_t>(node.parent)];
+    path.segments.push_back(PathSegment{parent.p, parent.v, node.u, Eigen::Vector3d::Zero(), tau});
+  }
+  const Node& end = nodes_[static_cast<std::size_t>(end_node)];
+  path.cost = end.g;
+  path.duration_s = end.t;
+  path.end_heuristic = end.d;
+  if (shot != nullptr) {
+    path.segments.push_back(*shot);
+    path.cost += shot_cost;
+    path.duration_s += shot->duration_s;
+    path.end_heuristic = 0.0;
+  }
+}
+
+SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const KinematicState& start,
+                                       const KinematicState& goal, double start_time_s,
+                                       const PersonPositionFn& person_W_m, SearchPath& path) {
+  path.segments.clear();
+  path.cost = 0.0;
+  path.duration_s = 0.0;
+  path.expansions = 0;
+  path.occluded_nodes = 0;
+  path.end_heuristic = 0.0;
+  const auto finish = [&path](SearchStatus status) {
+    path.status = status;
+    return status;
+  };
+  if (!finite(start.p_W_m) || !finite(start.v_W_mps) || !finite(goal.p_W_m) || !finite(goal.v_W_mps) ||
+      !std::isfinite(start_time_s)) {
+    return finish(SearchStatus::kInvalidInput);
+  }
+  if (!pointFree(grid, start.p_W_m) || !withinLimits(start.v_W_mps, params_.max_velocity_mps)) {
+    return finish(SearchStatus::kStartBlocked);
+  }
+  const bool check_occlusion = params_.occlusion_aware && params_.occlusion_penalty > 0.0 && person_W_m;
+  const auto occluded = [&](const Eigen::Vector3d& p, double t) {
+    return check_occlusion && !grid.lineOfSight(p, person_W_m(start_time_s + t));
+  };
+  const auto evaluate = [&](Node& node) {
+    const ObvpSolution obvp = solveObvp(node.p, node.v, goal.p_W_m, goal.v_W_mps, params_.time_weight);
+    node.d = obvp.cost;
+    node.occluded = occluded(node.p, node.t);
+    const double h = params_.heuristic_weight * obvp.cost + params_.time_penalty_per_s * obvp.duration_s +
+                     (node.occluded ? params_.occlusion_penalty : 0.0);
+    node.f = node.g + h;
+  };
+
+  if (++stamp_ == 0) {  // wrapped: invalidate every slot explicitly once
+    std::fill(table_stamp_.begin(), table_stamp_.end(), 0u);
+    stamp_ = 1;
+  }
+  open_.clear();
+  int used = 0;
+  Node& root = nodes_[0];
+  root = Node{start.p_W_m, start.v_W_mps, Eigen::Vector3d::Zero(),           0.0, 0.0,
+              0.0,         0.0,           keyOf(start.p_W_m, start.v_W_mps), -1,  false,
+              false};
+  evaluate(root);
+  *findSlot(root.key) = 0;
+  used = 1;
+  open_.push_back({root.f, 0});
+  int best_partial = 0;
+  bool pool_full = false;
+  const double tau = params_.primitive_duration_s;
+  const double vmax = params_.max_velocity_mps;
+  PathSegment shot;
+  double shot_cost = 0.0;
+
+  while (!open_.empty()) {
+    std::pop_heap(open_.begin(), open_.end());
+    const OpenEntry entry = open_.back();
+    open_.pop_back();
+    Node& current = nodes_[static_cast<std::size_t>(entry.node)];
+    if (current.closed || entry.f > current.f) continue;  // stale entry
+    if (path.expansions >= params_.max_expansions || pool_full) {
+      writePath(best_partial, nullptr, 0.0, path);
+      return finish(SearchStatus::kPartial);
+    }
+    current.closed = true;
+    ++path.expansions;
+    const int current_index = entry.node;
+    if (current.d < nodes_[static_cast<std::size_t>(best_partial)].d) best_partial = current_index;
+
+    const double distance_m = (current.p - goal.p_W_m).norm();
+    if (distance_m <= params_.goal_tolerance_m &&
+        (current.v - goal.v_W_mps).cwiseAbs().maxCoeff() <= params_.goal_velocity_tolerance_mps) {
+      writePath(current_index, nullptr, 0.0, path);
+      return finish(SearchStatus::kReachedGoal);
+    }
+    if (distance_m <= params_.one_shot_distance_m && oneShot(grid, current, goal, shot, shot_cost)) {
+      writePath(current_index, &shot, shot_cost, path);
+      return finish(SearchStatus::kReachedGoal);
+    }
+
+    const Eigen::Vector3d p = current.p;
+    const Eigen::Vector3d v = current.v;
+    const double g = current.g;
+    const double t = current.t;
+    for (const Eigen::Vector3d& u : inputs_) {
+      const Eigen::Vector3d v_next = v + tau * u;
+      if (!withinLimits(v_next, vmax)) continue;
+      const Eigen::Vector3d p_next = p + tau * (v + 0.5 * tau * u);
+      const std::int64_t key = keyOf(p_next, v_next);
+      int* slot = findSlot(key);
+      const double g_next = g + (u.squaredNorm() + params_.time_weight) * tau;
+      if (*slot >= 0) {
+        const Node& existing = nodes_[static_cast<std::size_t>(*slot)];
+        if (existing.closed || existing.g <= g_next) continue;
+      }
+      if (!primitiveFree(grid, p, v, u, tau)) continue;
+      int index = *slot;
+      if (index < 0) {
+        if (used >= params_.max_nodes) {
+          pool_full = true;
+          break;
+        }
+        index = used++;
+        *slot = index;
+      }
+      Node& child = nodes_[static_cast<std::size_t>(index)];
+      child = Node{p_next, v_next, u, g_next, 0.0, 0.0, t + tau, key, current_index, false, false};
+      evaluate(child);
+      open_.push_back({child.f, index});
+      std::push_heap(open_.begin(), open_.end());
+    }
+  }
+  if (pool_full) {
+    writePath(best_partial, nullptr, 0.0, path);
+    return finish(SearchStatus::kPartial);
+  }
+  path.segments.clear();
+  return finish(SearchStatus::kNoPath);
+}
+
+}  // namespace aerotrack::planning

@@ -1,0 +1,280 @@
+// Tests of the occlusion-aware kinodynamic search (kinodynamic_search.hpp, paper Sect. V-B): the paper's
+// occlusion figure (two ways around an obstacle; the shorter loses sight of the person) with and without
+// the occlusion penalty, limits and collisions checked by dense sampling of the returned path, the
+// heuristic against the cost of real paths, the failure values, the budget and the config parser.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "aerotrack/planning/kinodynamic_search.hpp"
+#include "aerotrack/planning/obvp.hpp"
+#include "search_test_util.hpp"
+
+namespace aerotrack::planning {
+namespace {
+
+using test::checkPath;
+using test::makeBoxGrid;
+using test::OccupiedBox;
+
+KinodynamicSearch makeSearch(const KinodynamicSearchParams& params) {
+  auto search = KinodynamicSearch::create(params);
+  EXPECT_TRUE(search.has_value()) << (search ? "" : search.error().message);
+  return std::move(search).value();
+}
+
+KinematicState at(double x, double y, double z) {
+  KinematicState s;
+  s.p_W_m = Eigen::Vector3d(x, y, z);
+  return s;
+}
+
+// The paper's occlusion figure: an obstacle x in [2.5, 3.5], y in [-1, 2], through the whole window
+// height, between the start (0, 0) and the goal (6, 0). Going below it (y < -1.25, way A) is shorter than
+// going above it (y > 2.25, way B). The person stands at (4.5, 4): the start, way B and the goal see them;
+// along way A the obstacle hides the person until the drone has passed it.
+struct OcclusionFigure {
+  mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(10.0, 9.0, 3.0), Eigen::Vector3d(3.0, 1.25, 1.5),
+                                        {{Eigen::Vector3d(2.5, -1.0, -1.0), Eigen::Vector3d(3.5, 2.0, 4.0)}});
+  KinematicState start = at(0.0, 0.0, 1.5);
+  KinematicState goal = at(6.0, 0.0, 1.5);
+  PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(4.5, 4.0, 1.5); };
+};
+
+// Samples (every 10 ms) of the path from which the person cannot be seen.
+int occludedSamples(const SearchPath& path, const OcclusionFigure& figure) {
+  int occluded = 0;
+  for (double t = 0.0; t <= path.duration_s; t += 0.01) {
+    if (!figure.grid.lineOfSight(path.stateAt(t).p_W_m, figure.person(t))) ++occluded;
+  }
+  return occluded;
+}
+
+double maxY(const SearchPath& path) {
+  double y = -1e9;
+  for (double t = 0.0; t <= path.duration_s; t += 0.01) y = std::max(y, path.stateAt(t).p_W_m.y());
+  return y;
+}
+double minY(const SearchPath& path) {
+  double y = 1e9;
+  for (double t = 0.0; t <= path.duration_s; t += 0.01) y = std::min(y, path.stateAt(t).p_W_m.y());
+  return y;
+}
+
+TEST(KinodynamicSearch, GivenThePaperOcclusionFigureWhenOcclusionAwareThenItTakesTheVisibleLongerWay) {
+  const OcclusionFigure figure;
+  KinodynamicSearch search = makeSearch(KinodynamicSearchParams{});
+  SearchPath path;
+  ASSERT_EQ(search.search(figure.grid, figure.start, figure.goal, 0.0, figure.person, path),
+            SearchStatus::kReachedGoal);
+  EXPECT_GT(maxY(path), 2.0) << "went around the top (way B)";
+  EXPECT_GT(minY(path), -1.0) << "never went below the obstacle (way A)";
+  EXPECT_TRUE(figure.grid.lineOfSight(figure.start.p_W_m, figure.person(0.0))) << "the start sees the person";
+}
+
+TEST(KinodynamicSearch, GivenThePaperOcclusionFigureWhenBaselineThenItTakesTheShorterWay) {
+  const OcclusionFigure figure;
+  KinodynamicSearchParams params;
+  params.occlusion_aware = false;
+  KinodynamicSearch search = makeSearch(params);
+  SearchPath path;
+  ASSERT_EQ(search.search(figure.grid, figure.start, figure.goal, 0.0, figure.person, path),
+            SearchStatus::kReachedGoal);
+  EXPECT_LT(minY(path), -1.0) << "went around the bottom (way A)";
+  EXPECT_LT(maxY(path), 2.0);
+  EXPECT_GT(occludedSamples(path, figure), 0) << "way A loses sight of the person";
+
+  // The same instance switched back to occlusion-aware takes way B, and its path sees the person more.
+  SearchPath aware;
+  search.setOcclusionAware(true);
+  ASSERT_EQ(search.search(figure.grid, figure.start, figure.goal, 0.0, figure.person, aware),
+            SearchStatus::kReachedGoal);
+  EXPECT_GT(maxY(aware), 2.0);
+  EXPECT_LT(occludedSamples(aware, figure), occludedSamples(path, figure));
+  EXPECT_GT(aware.duration_s, path.duration_s) << "the visible way is the longer one";
+}
+
+TEST(KinodynamicSearch, GivenRandomQueriesInAClutteredGridThenPathsRespectTheLimitsAndStayFree) {
+  std::vector<OccupiedBox> boxes;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> xy(-4.5, 4.5);
+  for (int i = 0; i < 12; ++i) {
+    const Eigen::Vector3d c(xy(rng), xy(rng), 0.0);
+    boxes.push_back({c + Eigen::Vector3d(-0.3, -0.3, -1.0), c + Eigen::Vector3d(0.3, 0.3, 5.0)});
+  }
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(12.0, 12.0, 3.0), Eigen::Vector3d(0.0, 0.0, 1.5), boxes);
+  KinodynamicSearchParams params;
+  params.max_velocity_mps = 2.0;
+  params.max_acceleration_mps2 = 2.5;
+  KinodynamicSearch search = makeSearch(params);
+  std::uniform_real_distribution<double> v(-1.5, 1.5);
+  int reached = 0;
+  int queries = 0;
+  SearchPath path;
+  while (queries < 40) {
+    KinematicState start = at(xy(rng), xy(rng), 1.5);
+    KinematicState goal = at(xy(rng), xy(rng), 1.2);
+    start.v_W_mps = Eigen::Vector3d(v(rng), v(rng), 0.0);
+    goal.v_W_mps = Eigen::Vector3d(v(rng), v(rng), 0.0);
+    if (grid.isOccupied(start.p_W_m) || grid.isOccupied(goal.p_W_m)) continue;
+    ++queries;
+    const PersonPositionFn person = [&](double /*t_s*/) -> Eigen::Vector3d {
+      return goal.p_W_m + Eigen::Vector3d(2.5, 0.0, 0.0);
+    };
+    const SearchStatus status = search.search(grid, start, goal, 0.0, person, path);
+    if (status == SearchStatus::kReachedGoal) ++reached;
+    if (status != SearchStatus::kReachedGoal && status != SearchStatus::kPartial) continue;
+    const test::PathCheck check = checkPath(path, grid);
+    EXPECT_LE(check.max_speed_axis_mps, params.max_velocity_mps + 1e-6) << "query " << queries;
+    EXPECT_LE(check.max_acceleration_axis_mps2, params.max_acceleration_mps2 + 1e-6) << "query " << queries;
+    EXPECT_EQ(check.blocked_samples, 0) << "query " << queries << " of " << check.samples << " samples";
+    EXPECT_LT((path.stateAt(0.0).p_W_m - start.p_W_m).norm(), 1e-9);
+    if (status == SearchStatus::kReachedGoal) {
+      EXPECT_LE((path.stateAt(path.duration_s).p_W_m - goal.p_W_m).norm(), params.goal_tolerance_m + 1e-9);
+    }
+  }
+  EXPECT_GE(reached, 30) << "most random queries in a sparse clutter reach the goal";
+}
+
+TEST(KinodynamicSearch, GivenSampledPairsOnAFreeGridThenTheUnweightedHeuristicNeverExceedsTheFoundCost) {
+  // Admissibility: with heuristic_weight 1 and no time penalty, h = D is the cost of the best trajectory
+  // without limits or obstacles, so no real path (primitives + one-shot, within limits) costs less. With
+  // the default weight (Fast-Planner's 5) it is not admissible; the test records by how much.
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(14.0, 14.0, 4.0), Eigen::Vector3d(0.0, 0.0, 2.0), {});
+  KinodynamicSearchParams params;
+  params.heuristic_weight = 1.0;
+  params.occlusion_aware = false;
+  params.max_expansions = 20000;
+  KinodynamicSearch search = makeSearch(params);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> xy(-5.0, 5.0);
+  std::uniform_real_distribution<double> z(1.0, 3.0);
+  std::uniform_real_distribution<double> v(-2.0, 2.0);
+  double worst_ratio = 0.0;  // h / found cost
+  int compared = 0;
+  SearchPath path;
+  for (int trial = 0; trial < 60; ++trial) {
+    KinematicState start = at(xy(rng), xy(rng), z(rng));
+    KinematicState goal = at(xy(rng), xy(rng), z(rng));
+    start.v_W_mps = Eigen::Vector3d(v(rng), v(rng), 0.0);
+    goal.v_W_mps = Eigen::Vector3d(v(rng), v(rng), 0.0);
+    if (search.search(grid, start, goal, 0.0, nullptr, path) != SearchStatus::kReachedGoal) continue;
+    if (path.end_heuristic != 0.0) continue;  // ended within tolerance, not exactly at the goal
+    const double h = search.heuristic(start, goal);
+    EXPECT_LE(h, path.cost * (1.0 + 1e-9)) << "trial " << trial;
+    worst_ratio = std::max(worst_ratio, h / path.cost);
+    ++compared;
+  }
+  EXPECT_GE(compared, 40);
+  RecordProperty("worst_h_over_cost", std::to_string(worst_ratio));
+  RecordProperty("weighted_5_worst_h_over_cost", std::to_string(5.0 * worst_ratio));
+  std::printf("heuristic admissibility: %d pairs, max h/cost %.3f (weight 1); x5 with Fast-Planner's weight\n",
+              compared, worst_ratio);
+}
+
+TEST(KinodynamicSearch, GivenAnEnclosedStartThenItReportsNoPathWithoutHanging) {
+  // A closed box of walls around the start (inside: free; the walls reach past the window's height).
+  const std::vector<OccupiedBox> walls = {
+      {Eigen::Vector3d(-1.2, -1.2, -1.0), Eigen::Vector3d(-1.0, 1.2, 4.0)},
+      {Eigen::Vector3d(1.0, -1.2, -1.0), Eigen::Vector3d(1.2, 1.2, 4.0)},
+      {Eigen::Vector3d(-1.2, -1.2, -1.0), Eigen::Vector3d(1.2, -1.0, 4.0)},
+      {Eigen::Vector3d(-1.2, 1.0, -1.0), Eigen::Vector3d(1.2, 1.2, 4.0)},
+  };
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(8.0, 8.0, 3.0), Eigen::Vector3d(0.0, 0.0, 1.5), walls);
+  KinodynamicSearchParams params;
+  params.max_expansions = 1'000'000;
+  params.max_nodes = 200'000;
+  KinodynamicSearch search = makeSearch(params);
+  SearchPath path;
+  const PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(3.0, 3.0, 1.5); };
+  EXPECT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(3.0, 0.5, 1.5), 0.0, person, path), SearchStatus::kNoPath);
+  EXPECT_TRUE(path.segments.empty());
+  EXPECT_GT(path.expansions, 0);
+  EXPECT_EQ(toString(path.status), "no_path");
+}
+
+TEST(KinodynamicSearch, GivenASmallBudgetThenItReturnsTheBestPartialPathTowardsTheGoal) {
+  const OcclusionFigure figure;
+  KinodynamicSearchParams params;
+  params.max_expansions = 100;
+  params.one_shot_distance_m = 0.0;
+  KinodynamicSearch search = makeSearch(params);
+  SearchPath path;
+  ASSERT_EQ(search.search(figure.grid, figure.start, figure.goal, 0.0, figure.person, path), SearchStatus::kPartial);
+  EXPECT_EQ(path.expansions, 100);
+  ASSERT_FALSE(path.segments.empty()) << path.end_heuristic << " " << path.duration_s << " " << path.cost;
+  const KinematicState end = path.stateAt(path.duration_s);
+  const double d_start =
+      solveObvp(figure.start.p_W_m, figure.start.v_W_mps, figure.goal.p_W_m, figure.goal.v_W_mps, params.time_weight)
+          .cost;
+  EXPECT_NEAR(path.end_heuristic,
+              solveObvp(end.p_W_m, end.v_W_mps, figure.goal.p_W_m, figure.goal.v_W_mps, params.time_weight).cost, 1e-9);
+  EXPECT_LT(path.end_heuristic, d_start) << "the partial path ends closer (by D) to the goal than it starts";
+  EXPECT_EQ(checkPath(path, figure.grid).blocked_samples, 0);
+}
+
+TEST(KinodynamicSearch, GivenABlockedOrInvalidStartThenItSaysSo) {
+  const OcclusionFigure figure;
+  KinodynamicSearch search = makeSearch(KinodynamicSearchParams{});
+  SearchPath path;
+  EXPECT_EQ(search.search(figure.grid, at(3.0, 1.0, 1.5), figure.goal, 0.0, figure.person, path),
+            SearchStatus::kStartBlocked);
+  EXPECT_EQ(search.search(figure.grid, at(30.0, 1.0, 1.5), figure.goal, 0.0, figure.person, path),
+            SearchStatus::kStartBlocked);
+  EXPECT_EQ(search.search(figure.grid, at(std::nan(""), 0.0, 1.5), figure.goal, 0.0, figure.person, path),
+            SearchStatus::kInvalidInput);
+  EXPECT_TRUE(path.segments.empty());
+}
+
+TEST(KinodynamicSearch, GivenBadParamsThenCreateFails) {
+  KinodynamicSearchParams params;
+  params.max_velocity_mps = 0.0;
+  EXPECT_FALSE(KinodynamicSearch::create(params).has_value());
+  params = KinodynamicSearchParams{};
+  params.occlusion_penalty = -1.0;
+  EXPECT_FALSE(KinodynamicSearch::create(params).has_value());
+  params = KinodynamicSearchParams{};
+  params.acceleration_steps = 0;
+  EXPECT_FALSE(KinodynamicSearch::create(params).has_value());
+}
+
+TEST(TrackingGoal, GivenCurrentAndPredictedPersonStatesThenTheGoalIsTheMixHeldAtTheTrackingDistance) {
+  KinematicState now = at(4.0, 0.0, 0.9);
+  now.v_W_mps = Eigen::Vector3d(1.0, 0.0, 0.0);
+  KinematicState predicted = at(6.0, 0.0, 0.9);
+  predicted.v_W_mps = Eigen::Vector3d(1.0, 1.0, 0.2);
+  const KinematicState goal = makeTrackingGoal(now, predicted, Eigen::Vector3d(0.0, 0.0, 2.0), TrackingGoalParams{});
+  EXPECT_TRUE(goal.p_W_m.isApprox(Eigen::Vector3d(2.5, 0.0, 2.0))) << goal.p_W_m.transpose();
+  EXPECT_TRUE(goal.v_W_mps.isApprox(Eigen::Vector3d(1.0, 0.5, 0.0))) << goal.v_W_mps.transpose();
+  // The drone right above the person: the goal is behind the person's velocity.
+  const KinematicState behind =
+      makeTrackingGoal(now, now, Eigen::Vector3d(4.0, 0.0, 2.0), TrackingGoalParams{0.0, 2.0});
+  EXPECT_TRUE(behind.p_W_m.isApprox(Eigen::Vector3d(2.0, 0.0, 2.0))) << behind.p_W_m.transpose();
+}
+
+TEST(KinodynamicSearchParams, GivenAConfigSectionThenEveryKeyIsReadStrictly) {
+  const std::string text =
+      "search:\n  max_velocity_mps: 2.0\n  max_acceleration_mps2: 3.0\n  acceleration_steps: 2\n"
+      "  primitive_duration_s: 0.25\n  time_weight: 10.0\n  heuristic_weight: 5.0\n  time_penalty_per_s: 0.0\n"
+      "  occlusion_penalty: 100.0\n  occlusion_aware: false\n  position_resolution_m: 0.2\n"
+      "  velocity_resolution_mps: 1.0\n  goal_tolerance_m: 0.2\n  goal_velocity_tolerance_mps: 0.5\n"
+      "  one_shot_distance_m: 3.0\n  max_expansions: 2000\n  max_nodes: 20000\n";
+  auto root = rt::ConfigNode::fromString(text, "search.yaml");
+  ASSERT_TRUE(root.has_value());
+  const KinodynamicSearchParams params = parseKinodynamicSearchParams(root->child("search"));
+  EXPECT_EQ(params.acceleration_steps, 2);
+  EXPECT_FALSE(params.occlusion_aware);
+  EXPECT_EQ(params.max_nodes, 20000);
+
+  auto unknown = rt::ConfigNode::fromString(text + "  max_speed: 3.0\n", "search.yaml");
+  ASSERT_TRUE(unknown.has_value());
+  EXPECT_THROW(parseKinodynamicSearchParams(unknown->child("search")), rt::ConfigError);
+  auto missing = rt::ConfigNode::fromString("search:\n  max_velocity_mps: 2.0\n", "search.yaml");
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_THROW(parseKinodynamicSearchParams(missing->child("search")), rt::ConfigError);
+}
+
+}  // namespace
+}  // namespace aerotrack::planning
