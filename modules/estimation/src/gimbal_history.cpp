@@ -44,63 +44,28 @@ rt::Expected<GimbalAngleHistory> GimbalAngleHistory::create(const GimbalHistoryP
 GimbalAngleHistory::GimbalAngleHistory(const GimbalHistoryParams& params) : params_(params), ring_(params.capacity) {}
 
 bool GimbalAngleHistory::push(const hal::GimbalState& sample) {
-  if (!std::isfinite(sample.angle_rad) || (size_ > 0 && sample.stamp_ns <= at(size_ - 1).stamp_ns)) {
+  if (!std::isfinite(sample.angle_rad) || !ring_.accepts(sample.stamp_ns)) {
     ++rejected_;
     return false;
   }
-  std::size_t slot = 0;
-  if (size_ < ring_.size()) {
-    slot = (head_ + size_) % ring_.size();
-    ++size_;
-  } else {
-    slot = head_;
-    head_ = (head_ + 1) % ring_.size();
-  }
-  ring_[slot] = {sample.stamp_ns, sample.angle_rad};
+  ring_.push(sample.stamp_ns, sample.angle_rad);
   return true;
 }
 
 GimbalAngleLookup GimbalAngleHistory::lookup(rt::TimeNs t_ns) const {
+  // The statuses are the ring's, in the same order.
+  static_assert(
+      static_cast<int>(HistoryLookupStatus::kOk) == static_cast<int>(rt::BracketStatus::kOk) &&
+      static_cast<int>(HistoryLookupStatus::kEmpty) == static_cast<int>(rt::BracketStatus::kEmpty) &&
+      static_cast<int>(HistoryLookupStatus::kBeforeOldest) == static_cast<int>(rt::BracketStatus::kBeforeOldest) &&
+      static_cast<int>(HistoryLookupStatus::kAfterNewest) == static_cast<int>(rt::BracketStatus::kAfterNewest) &&
+      static_cast<int>(HistoryLookupStatus::kGapTooLarge) == static_cast<int>(rt::BracketStatus::kGapTooLarge));
+  const rt::Bracket b = ring_.bracket(t_ns, params_.max_gap_ns, params_.future_tolerance_ns);
   GimbalAngleLookup result;
-  if (size_ == 0) return result;
-  if (t_ns < at(0).stamp_ns) {
-    result.status = HistoryLookupStatus::kBeforeOldest;
-    return result;
-  }
-  const Sample& last = at(size_ - 1);
-  if (t_ns >= last.stamp_ns) {
-    if (t_ns - last.stamp_ns > params_.future_tolerance_ns) {
-      result.status = HistoryLookupStatus::kAfterNewest;
-      return result;
-    }
-    result.status = HistoryLookupStatus::kOk;
-    result.angle_rad = last.angle_rad;
-    return result;
-  }
-  std::size_t lo = 0;  // at(lo).stamp <= t < at(hi).stamp
-  std::size_t hi = size_ - 1;
-  while (hi - lo > 1) {
-    const std::size_t mid = lo + (hi - lo) / 2;
-    if (at(mid).stamp_ns <= t_ns) {
-      lo = mid;
-    } else {
-      hi = mid;
-    }
-  }
-  const Sample& a = at(lo);
-  const Sample& b = at(hi);
-  if (t_ns == a.stamp_ns) {
-    result.status = HistoryLookupStatus::kOk;
-    result.angle_rad = a.angle_rad;
-    return result;
-  }
-  if (b.stamp_ns - a.stamp_ns > params_.max_gap_ns) {
-    result.status = HistoryLookupStatus::kGapTooLarge;
-    return result;
-  }
-  const double alpha = static_cast<double>(t_ns - a.stamp_ns) / static_cast<double>(b.stamp_ns - a.stamp_ns);
-  result.status = HistoryLookupStatus::kOk;
-  result.angle_rad = a.angle_rad + alpha * (b.angle_rad - a.angle_rad);
+  result.status = static_cast<HistoryLookupStatus>(b.status);
+  if (b.status != rt::BracketStatus::kOk) return result;
+  const double a = ring_.at(b.lo);
+  result.angle_rad = b.alpha == 0.0 ? a : a + b.alpha * (ring_.at(b.hi) - a);
   return result;
 }
 

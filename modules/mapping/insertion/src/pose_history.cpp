@@ -48,74 +48,38 @@ PushResult PoseHistory::push(const hal::OdometrySample& sample) {
     ++rejected_non_finite_;
     return PushResult::kRejectedNonFinite;
   }
-  if (size_ > 0 && sample.stamp_ns <= newest().stamp_ns) {
+  if (!ring_.accepts(sample.stamp_ns)) {
     ++rejected_out_of_order_;
     return PushResult::kRejectedOutOfOrder;
   }
-  std::size_t slot = 0;
-  if (size_ < ring_.size()) {
-    slot = (head_ + size_) % ring_.size();
-    ++size_;
-  } else {  // Full: overwrite the oldest.
-    slot = head_;
-    head_ = (head_ + 1) % ring_.size();
-  }
-  ring_[slot] = sample;
-  ring_[slot].q_WB.coeffs() /= q_norm;
+  hal::OdometrySample normalised = sample;
+  normalised.q_WB.coeffs() /= q_norm;
+  ring_.push(sample.stamp_ns, normalised);
   ++accepted_;
   return PushResult::kAccepted;
 }
 
 PoseLookup PoseHistory::lookup(rt::TimeNs t_ns) const {
+  // The statuses are the ring's, in the same order.
+  static_assert(static_cast<int>(PoseLookupStatus::kOk) == static_cast<int>(rt::BracketStatus::kOk) &&
+                static_cast<int>(PoseLookupStatus::kEmpty) == static_cast<int>(rt::BracketStatus::kEmpty) &&
+                static_cast<int>(PoseLookupStatus::kBeforeOldest) ==
+                    static_cast<int>(rt::BracketStatus::kBeforeOldest) &&
+                static_cast<int>(PoseLookupStatus::kAfterNewest) == static_cast<int>(rt::BracketStatus::kAfterNewest) &&
+                static_cast<int>(PoseLookupStatus::kGapTooLarge) == static_cast<int>(rt::BracketStatus::kGapTooLarge));
+  const rt::Bracket b = ring_.bracket(t_ns, params_.max_gap_ns, params_.future_tolerance_ns);
   PoseLookup result;
-  if (size_ == 0) {
-    result.status = PoseLookupStatus::kEmpty;
-    return result;
-  }
-  if (t_ns < oldest().stamp_ns) {
-    result.status = PoseLookupStatus::kBeforeOldest;
-    return result;
-  }
-  const hal::OdometrySample& last = newest();
-  if (t_ns >= last.stamp_ns) {
-    // Equal: the newest sample itself. Later: a hold within the tolerance, else nothing.
-    if (t_ns - last.stamp_ns > params_.future_tolerance_ns) {
-      result.status = PoseLookupStatus::kAfterNewest;
-      return result;
-    }
-    result.status = PoseLookupStatus::kOk;
-    result.T_WB.linear() = last.q_WB.toRotationMatrix();
-    result.T_WB.translation() = last.p_WB_m;
-    return result;
-  }
-  // Here oldest <= t < newest and size_ >= 2: find the first sample with stamp > t (index hi in
-  // [1, size_ - 1]); the sample before it has stamp <= t.
-  std::size_t lo = 0;
-  std::size_t hi = size_ - 1;
-  while (hi - lo > 1) {
-    const std::size_t mid = lo + (hi - lo) / 2;
-    if (at(mid).stamp_ns <= t_ns) {
-      lo = mid;
-    } else {
-      hi = mid;
-    }
-  }
-  const hal::OdometrySample& a = at(lo);
-  const hal::OdometrySample& b = at(hi);
-  result.status = PoseLookupStatus::kOk;
-  if (t_ns == a.stamp_ns) {
+  result.status = static_cast<PoseLookupStatus>(b.status);
+  if (b.status != rt::BracketStatus::kOk) return result;
+  const hal::OdometrySample& a = at(b.lo);
+  if (b.alpha == 0.0) {  // a sample's own time, or a hold of the newest
     result.T_WB.linear() = a.q_WB.toRotationMatrix();
     result.T_WB.translation() = a.p_WB_m;
     return result;
   }
-  const rt::DurationNs gap_ns = b.stamp_ns - a.stamp_ns;
-  if (gap_ns > params_.max_gap_ns) {
-    result.status = PoseLookupStatus::kGapTooLarge;
-    return result;
-  }
-  const double alpha = static_cast<double>(t_ns - a.stamp_ns) / static_cast<double>(gap_ns);
-  result.T_WB.linear() = a.q_WB.slerp(alpha, b.q_WB).toRotationMatrix();
-  result.T_WB.translation() = a.p_WB_m + alpha * (b.p_WB_m - a.p_WB_m);
+  const hal::OdometrySample& c = at(b.hi);
+  result.T_WB.linear() = a.q_WB.slerp(b.alpha, c.q_WB).toRotationMatrix();
+  result.T_WB.translation() = a.p_WB_m + b.alpha * (c.p_WB_m - a.p_WB_m);
   return result;
 }
 

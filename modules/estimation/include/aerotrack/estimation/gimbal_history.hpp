@@ -15,6 +15,7 @@
 
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/stamped_ring.hpp"
 #include "aerotrack/rt/time.hpp"
 
 namespace aerotrack::estimation {
@@ -51,22 +52,15 @@ class GimbalAngleHistory {
   /// The angle at t_ns, linearly interpolated between the samples around it. O(log capacity).
   GimbalAngleLookup lookup(rt::TimeNs t_ns) const;
 
-  std::size_t size() const { return size_; }
-  bool empty() const { return size_ == 0; }
+  std::size_t size() const { return ring_.size(); }
+  bool empty() const { return ring_.empty(); }
   std::uint64_t rejectedCount() const { return rejected_; }
 
  private:
-  struct Sample {
-    rt::TimeNs stamp_ns = 0;
-    double angle_rad = 0.0;
-  };
   explicit GimbalAngleHistory(const GimbalHistoryParams& params);
-  const Sample& at(std::size_t i) const { return ring_[(head_ + i) % ring_.size()]; }
 
   GimbalHistoryParams params_;
-  std::vector<Sample> ring_;
-  std::size_t head_ = 0;
-  std::size_t size_ = 0;
+  rt::StampedRing<double> ring_;  ///< Unwrapped angles, radians.
   std::uint64_t rejected_ = 0;
 };
 

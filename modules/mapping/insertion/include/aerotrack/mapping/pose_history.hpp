@@ -15,6 +15,7 @@
 
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/stamped_ring.hpp"
 #include "aerotrack/rt/time.hpp"
 
 namespace aerotrack::mapping {
@@ -70,12 +71,12 @@ class PoseHistory {
   /// lookup(t_ns) as an optional: nothing unless status is kOk.
   std::optional<Eigen::Isometry3d> poseAt(rt::TimeNs t_ns) const;
 
-  std::size_t size() const { return size_; }
-  std::size_t capacity() const { return ring_.size(); }
-  bool empty() const { return size_ == 0; }
+  std::size_t size() const { return ring_.size(); }
+  std::size_t capacity() const { return params_.capacity; }
+  bool empty() const { return ring_.empty(); }
   /// The oldest / newest sample kept; precondition: !empty().
   const hal::OdometrySample& oldest() const { return at(0); }
-  const hal::OdometrySample& newest() const { return at(size_ - 1); }
+  const hal::OdometrySample& newest() const { return at(ring_.size() - 1); }
 
   std::uint64_t acceptedCount() const { return accepted_; }
   std::uint64_t rejectedOutOfOrderCount() const { return rejected_out_of_order_; }
@@ -85,12 +86,10 @@ class PoseHistory {
  private:
   explicit PoseHistory(const PoseHistoryParams& params);
   /// i-th sample in time order (0: oldest).
-  const hal::OdometrySample& at(std::size_t i) const { return ring_[(head_ + i) % ring_.size()]; }
+  const hal::OdometrySample& at(std::size_t i) const { return ring_.at(i); }
 
   PoseHistoryParams params_;
-  std::vector<hal::OdometrySample> ring_;
-  std::size_t head_ = 0;  ///< Index in ring_ of the oldest sample.
-  std::size_t size_ = 0;
+  rt::StampedRing<hal::OdometrySample> ring_;
   std::uint64_t accepted_ = 0;
   std::uint64_t rejected_out_of_order_ = 0;
   std::uint64_t rejected_non_finite_ = 0;
