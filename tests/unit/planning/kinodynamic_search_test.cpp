@@ -41,6 +41,12 @@ struct OcclusionFigure {
   KinematicState start = at(0.0, 0.0, 1.5);
   KinematicState goal = at(6.0, 0.0, 1.5);
   PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(4.5, 4.0, 1.5); };
+  // A detour round a 3 m obstacle takes more than the default budget (sized for 3-8 m in a forest).
+  static KinodynamicSearchParams params() {
+    KinodynamicSearchParams p;
+    p.max_expansions = 5000;
+    return p;
+  }
 };
 
 // Samples (every 10 ms) of the path from which the person cannot be seen.
@@ -65,7 +71,7 @@ double minY(const SearchPath& path) {
 
 TEST(KinodynamicSearch, GivenThePaperOcclusionFigureWhenOcclusionAwareThenItTakesTheVisibleLongerWay) {
   const OcclusionFigure figure;
-  KinodynamicSearch search = makeSearch(KinodynamicSearchParams{});
+  KinodynamicSearch search = makeSearch(OcclusionFigure::params());
   SearchPath path;
   ASSERT_EQ(search.search(figure.grid, figure.start, figure.goal, 0.0, figure.person, path),
             SearchStatus::kReachedGoal);
@@ -76,7 +82,7 @@ TEST(KinodynamicSearch, GivenThePaperOcclusionFigureWhenOcclusionAwareThenItTake
 
 TEST(KinodynamicSearch, GivenThePaperOcclusionFigureWhenBaselineThenItTakesTheShorterWay) {
   const OcclusionFigure figure;
-  KinodynamicSearchParams params;
+  KinodynamicSearchParams params = OcclusionFigure::params();
   params.occlusion_aware = false;
   KinodynamicSearch search = makeSearch(params);
   SearchPath path;

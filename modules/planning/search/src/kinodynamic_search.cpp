@@ -23,18 +23,22 @@ Eigen::Vector3d positionOf(const PathSegment& s, double t) {
   return s.p0_W_m + t * (s.v0_W_mps + t * (0.5 * s.a0_W_mps2 + (t / 6.0) * s.jerk_W_mps3));
 }
 
-// Sampling step along a path: half a grid cell, so that no cell is skipped by more than a corner.
-double sampleStepM(const mapping::LocalGrid& grid) {
-  return 0.5 * grid.params().resolution_m;
+// A path is checked as a polyline of chords, each traced through the grid by DDA (every cell it passes
+// through). A piece of duration dt whose acceleration stays below a strays from its chord by at most
+// a dt^2 / 8; the chords are made short enough to keep that below kChordDeviationM.
+constexpr double kChordDeviationM = 0.001;
+
+int chordCount(double max_acceleration_mps2, double duration_s) {
+  if (max_acceleration_mps2 <= 0.0) return 1;
+  const double max_dt_s = std::sqrt(8.0 * kChordDeviationM / max_acceleration_mps2);
+  return std::max(1, static_cast<int>(std::ceil(duration_s / max_dt_s)));
 }
 
 bool pointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p) {
   return grid.inWindow(p) && !grid.isOccupied(p);
 }
 
-// The chord between two samples at most half a cell apart: every cell it passes through (DDA) must be
-// unblocked and in the window. The curve strays from its chord by at most a dt^2 / 8 (about 0.1 mm at
-// 3 m/s^2 and 0.05 m / 3 m/s), so a corner it clips between samples is still caught.
+// Every cell the chord passes through (DDA) is unblocked and in the window.
 bool chordFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return pointFree(grid, b) && grid.segmentFree(a, b);
 }
@@ -161,9 +165,10 @@ KinodynamicSearch::KinodynamicSearch(const KinodynamicSearchParams& params) : pa
   while (capacity < 2 * nodes_.size()) capacity <<= 1;
   table_.assign(capacity, -1);
   table_stamp_.assign(capacity, 0);
-  // One open entry per child generated: at most max_expansions * inputs (capped; past the cap the open list
-  // may grow once, and keeps that capacity).
-  const std::size_t pushes = static_cast<std::size_t>(params.max_expansions) * inputs_.size() + 1;
+  // One open entry per child generated and one more per occluded node: at most max_expansions * inputs +
+  // max_nodes (capped; past the cap the open list may grow once, and keeps that capacity).
+  const std::size_t pushes =
+      static_cast<std::size_t>(params.max_expansions) * inputs_.size() + static_cast<std::size_t>(params.max_nodes);
   open_.reserve(std::min<std::size_t>(pushes, std::size_t{1} << 22));
   chain_.reserve(static_cast<std::size_t>(params.max_nodes));
 }
@@ -185,7 +190,11 @@ std::int64_t KinodynamicSearch::keyOf(const Eigen::Vector3d& p, const Eigen::Vec
 
 int* KinodynamicSearch::findSlot(std::int64_t key) {
   const std::size_t mask = table_.size() - 1;
-  std::size_t slot = static_cast<std::size_t>(static_cast<std::uint64_t>(key) * 0x9E3779B97F4A7C15ull >> 20) & mask;
+  std::uint64_t h = static_cast<std::uint64_t>(key);  // splitmix64's finaliser: every key bit reaches every bit
+  h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+  h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+  h ^= h >> 31;
+  std::size_t slot = static_cast<std::size_t>(h) & mask;
   while (true) {
     if (table_stamp_[slot] != stamp_) {
       table_stamp_[slot] = stamp_;
@@ -200,11 +209,11 @@ int* KinodynamicSearch::findSlot(std::int64_t key) {
 
 bool KinodynamicSearch::primitiveFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p,
                                       const Eigen::Vector3d& v, const Eigen::Vector3d& u, double duration_s) const {
-  const double length_bound_m = v.norm() * duration_s + 0.5 * u.norm() * duration_s * duration_s;
-  const int samples = std::max(1, static_cast<int>(std::ceil(length_bound_m / sampleStepM(grid))));
-  const double dt = duration_s / samples;
+  if (!pointFree(grid, p + duration_s * (v + 0.5 * duration_s * u))) return false;  // cheap early reject
+  const int chords = chordCount(u.norm(), duration_s);
+  const double dt = duration_s / chords;
   Eigen::Vector3d previous = p;
-  for (int i = 1; i <= samples; ++i) {
+  for (int i = 1; i <= chords; ++i) {
     const double t = i * dt;
     const Eigen::Vector3d next = p + t * (v + 0.5 * t * u);
     if (!chordFree(grid, previous, next)) return false;
@@ -235,12 +244,11 @@ bool KinodynamicSearch::oneShot(const mapping::LocalGrid& grid, const Node& from
       if (std::abs(v) > params_.max_velocity_mps + 1e-9) return false;
     }
   }
-  const double length_bound_m = (goal.p_W_m - from.p).norm() + 0.5 * t_end * (from.v.norm() + goal.v_W_mps.norm()) +
-                                t_end * t_end * cubic.a0_mps2.norm();
-  const int samples = std::max(1, static_cast<int>(std::ceil(length_bound_m / sampleStepM(grid))));
+  const double max_acceleration_mps2 = std::max(cubic.a0_mps2.norm(), (cubic.a0_mps2 + t_end * cubic.jerk_mps3).norm());
+  const int chords = chordCount(max_acceleration_mps2, t_end);
   Eigen::Vector3d previous = from.p;
-  for (int i = 1; i <= samples; ++i) {
-    const Eigen::Vector3d next = positionOf(shot, t_end * i / samples);
+  for (int i = 1; i <= chords; ++i) {
+    const Eigen::Vector3d next = positionOf(shot, t_end * i / chords);
     if (!chordFree(grid, previous, next)) return false;
     previous = next;
   }
@@ -303,13 +311,13 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
   const auto occluded = [&](const Eigen::Vector3d& p, double t) {
     return check_occlusion && !grid.lineOfSight(p, person_W_m(start_time_s + t));
   };
+  // P_occ is added lazily, when a node is first popped (the paper checks occlusion "in each expanding
+  // process"): an occluded node goes back into the open list with the penalty, so the line of sight is
+  // traced only for nodes that would otherwise be expanded.
   const auto evaluate = [&](Node& node) {
     const ObvpSolution obvp = solveObvp(node.p, node.v, goal.p_W_m, goal.v_W_mps, params_.time_weight);
     node.d = obvp.cost;
-    node.occluded = occluded(node.p, node.t);
-    const double h = params_.heuristic_weight * obvp.cost + params_.time_penalty_per_s * obvp.duration_s +
-                     (node.occluded ? params_.occlusion_penalty : 0.0);
-    node.f = node.g + h;
+    node.f = node.g + params_.heuristic_weight * obvp.cost + params_.time_penalty_per_s * obvp.duration_s;
   };
 
   if (++stamp_ == 0) {  // wrapped: invalidate every slot explicitly once
@@ -339,6 +347,16 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
     open_.pop_back();
     Node& current = nodes_[static_cast<std::size_t>(entry.node)];
     if (current.closed || entry.f > current.f) continue;  // stale entry
+    if (check_occlusion && !current.occlusion_checked) {
+      current.occlusion_checked = true;
+      current.occluded = occluded(current.p, current.t);
+      if (current.occluded) {
+        current.f += params_.occlusion_penalty;
+        open_.push_back({current.f, entry.node});
+        std::push_heap(open_.begin(), open_.end());
+        continue;
+      }
+    }
     if (path.expansions >= params_.max_expansions || pool_full) {
       writePath(best_partial, nullptr, 0.0, path);
       return finish(SearchStatus::kPartial);
@@ -385,7 +403,7 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
         *slot = index;
       }
       Node& child = nodes_[static_cast<std::size_t>(index)];
-      child = Node{p_next, v_next, u, g_next, 0.0, 0.0, t + tau, key, current_index, false, false};
+      child = Node{p_next, v_next, u, g_next, 0.0, 0.0, t + tau, key, current_index, false, false, false};
       evaluate(child);
       open_.push_back({child.f, index});
       std::push_heap(open_.begin(), open_.end());

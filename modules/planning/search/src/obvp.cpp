@@ -55,7 +55,7 @@ ObvpSolution solveObvp(const Eigen::Vector3d& p0_m, const Eigen::Vector3d& v0_mp
     lo = std::max(lo, 1.0 / reverse);
   }
   lo = std::min(lo, 0.5 * hi);
-  constexpr int kSamples = 64;
+  constexpr int kSamples = 32;
   const double ratio = std::pow(hi / lo, 1.0 / kSamples);
   ObvpSolution best{std::numeric_limits<double>::infinity(), 0.0};
   double t_prev = lo;
@@ -63,14 +63,23 @@ ObvpSolution solveObvp(const Eigen::Vector3d& p0_m, const Eigen::Vector3d& v0_mp
   for (int i = 1; i <= kSamples; ++i) {
     const double t = (i == kSamples) ? hi : t_prev * ratio;
     const double g = stationarity(k, rho, t);
-    if (g_prev < 0.0 && g >= 0.0) {  // a local minimum of J: bisect
+    if (g_prev < 0.0 && g >= 0.0) {  // a local minimum of J: safeguarded Newton on the bracket
       double a = t_prev;
       double b = t;
-      for (int it = 0; it < 60 && b - a > 1e-12 * b; ++it) {
-        const double m = 0.5 * (a + b);
-        (stationarity(k, rho, m) < 0.0 ? a : b) = m;
+      double root = 0.5 * (a + b);
+      for (int it = 0; it < 50 && b - a > 1e-12 * b; ++it) {
+        const double value = stationarity(k, rho, root);
+        if (value < 0.0) {
+          a = root;
+        } else {
+          b = root;
+        }
+        const double slope = 4.0 * rho * root * root * root - 2.0 * k.c * root - 2.0 * k.b;
+        const double newton = slope > 0.0 ? root - value / slope : 0.5 * (a + b);
+        const double next = (newton > a && newton < b) ? newton : 0.5 * (a + b);
+        if (std::abs(next - root) <= 1e-13 * root) break;
+        root = next;
       }
-      const double root = 0.5 * (a + b);
       const double cost = costAt(k, rho, root);
       if (cost < best.cost) best = {cost, root};
     }

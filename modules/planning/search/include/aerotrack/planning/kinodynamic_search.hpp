@@ -43,7 +43,7 @@ struct KinodynamicSearchParams {
   double goal_tolerance_m = 0.2;             ///< A node this close to the goal position ...
   double goal_velocity_tolerance_mps = 0.5;  ///< ... and velocity counts as reached.
   double one_shot_distance_m = 3.0;          ///< Try the analytic one-shot from nodes this close to the goal.
-  int max_expansions = 3000;                 ///< Budget: nodes expanded before the best partial path is returned.
+  int max_expansions = 300;                  ///< Budget: nodes expanded before the best partial path is returned.
   int max_nodes = 30000;                     ///< Node pool size (allocated once); the search also stops when full.
 };
 
@@ -97,8 +97,9 @@ struct SearchPath {
   double cost = 0.0;                  ///< g of the path (J_t of its pieces, P_occ not included).
   double duration_s = 0.0;            ///< Sum of the segment durations.
   int expansions = 0;                 ///< Nodes expanded.
-  int occluded_nodes = 0;             ///< Nodes along the path (primitive ends) that could not see the person.
-  double end_heuristic = 0.0;         ///< D(end, goal): 0 when the goal was reached by the one-shot.
+  int occluded_nodes = 0;  ///< Nodes along the path (primitive ends) found unable to see the person (occlusion-aware
+                           ///< mode only: nodes are checked when expanded, and the path's end may be unchecked).
+  double end_heuristic = 0.0;  ///< D(end, goal): 0 when the goal was reached by the one-shot.
 
   /// The path at time t_s from its start (clamped to [0, duration_s]). Empty path: zero state.
   KinematicState stateAt(double t_s) const;
@@ -141,6 +142,7 @@ class KinodynamicSearch {
     int parent = -1;
     bool closed = false;
     bool occluded = false;
+    bool occlusion_checked = false;
   };
   struct OpenEntry {
     double f;

@@ -6,7 +6,7 @@
 //   J(T) = 12 |d|^2 / T^3 - 12 d.(v0 + v1) / T^2 + 4 (|v0|^2 + v0.v1 + |v1|^2) / T + rho T,
 // and the best T is a positive root of dJ/dT * T^4 = rho T^4 - c T^2 - 2 b T - 3 a (a, b, c the three
 // numerators above). That quartic has at most three positive roots (Descartes); they are bracketed on a
-// geometric grid between root bounds and polished by bisection, and the smallest J among them is taken.
+// geometric grid between root bounds and polished by safeguarded Newton, and the smallest J among them is taken.
 // All functions are pure, allocation-free and thread-safe.
 #pragma once
 
@@ -26,7 +26,7 @@ double obvpCostForDuration(const Eigen::Vector3d& p0_m, const Eigen::Vector3d& v
 
 /// min over T > 0 of J(T), rho > 0. Identical states give {0, 0}. Relative error of the cost below 1e-9
 /// against a dense 1D search (tested), except in near-tangent cases where two stationary points lie
-/// within one bracketing step (64 geometric steps between the root bounds), where the result can be a
+/// within one bracketing step (32 geometric steps between the root bounds), where the result can be a
 /// local minimum slightly above the global one.
 ObvpSolution solveObvp(const Eigen::Vector3d& p0_m, const Eigen::Vector3d& v0_mps, const Eigen::Vector3d& p1_m,
                        const Eigen::Vector3d& v1_mps, double rho);
