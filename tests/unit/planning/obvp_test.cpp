@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 
@@ -73,6 +74,7 @@ TEST(Obvp, GivenRandomStatePairsWhenSolvedThenTheCostIsTheDenseMinimumOverT) {
     EXPECT_LE(solution.cost, reference * (1.0 + 1e-9)) << "trial " << trial;
   }
   RecordProperty("worst_relative_excess", std::to_string(worst_relative));
+  std::printf("OBVP vs dense search over T: worst relative excess %.3g over 300 pairs\n", worst_relative);
 }
 
 TEST(Obvp, GivenIdenticalStatesThenTheCostIsZero) {
