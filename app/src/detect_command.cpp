@@ -194,7 +194,9 @@ int detectCommand(const ParsedArgs& args) {
   } else {
     cv::VideoCapture video;
     try {
-      video.open(input);
+      // FFmpeg only: the other backends OpenCV would try on a bad file (GStreamer, image sequences,
+      // cameras) print to stderr and leak.
+      video.open(input, cv::CAP_FFMPEG);
     } catch (const cv::Exception&) {
     }
     if (!video.isOpened()) return fail(input + ": cannot open the video");
