@@ -346,7 +346,9 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
     const OpenEntry entry = open_.back();
     open_.pop_back();
     Node& current = nodes_[static_cast<std::size_t>(entry.node)];
-    if (current.closed || entry.f > current.f) continue;  // stale entry
+    // Stale: the node was closed, improved (pushed again with a lower f) or penalised (pushed again with a
+    // higher f); only the entry carrying its current f counts (the same double is stored in both).
+    if (current.closed || entry.f != current.f) continue;
     if (check_occlusion && !current.occlusion_checked) {
       current.occlusion_checked = true;
       current.occluded = occluded(current.p, current.t);
