@@ -239,6 +239,27 @@ TEST(KinodynamicSearch, GivenABlockedOrInvalidStartThenItSaysSo) {
   EXPECT_TRUE(path.segments.empty());
 }
 
+TEST(KinodynamicSearch, GivenAStartTimeThenThePersonIsAskedAtStartTimePlusTheNodeTime) {
+  const OcclusionFigure figure;
+  KinodynamicSearch search = makeSearch(OcclusionFigure::params());
+  double min_t_s = 1e9;
+  double max_t_s = -1e9;
+  const PersonPositionFn person = [&](double t_s) {
+    min_t_s = std::min(min_t_s, t_s);
+    max_t_s = std::max(max_t_s, t_s);
+    return figure.person(t_s);
+  };
+  SearchPath path;
+  ASSERT_EQ(search.search(figure.grid, figure.start, figure.goal, 100.0, person, path), SearchStatus::kReachedGoal);
+  EXPECT_EQ(min_t_s, 100.0) << "the start node is checked at the start time";
+  EXPECT_GT(max_t_s, 100.0);
+  EXPECT_LE(max_t_s, 100.0 + path.expansions * search.params().primitive_duration_s);
+
+  // The baseline never asks (an empty callable is fine there).
+  search.setOcclusionAware(false);
+  EXPECT_EQ(search.search(figure.grid, figure.start, figure.goal, 100.0, nullptr, path), SearchStatus::kReachedGoal);
+}
+
 TEST(KinodynamicSearch, GivenBadParamsThenCreateFails) {
   KinodynamicSearchParams params;
   params.max_velocity_mps = 0.0;
