@@ -6,8 +6,8 @@
 // otherwise; only the pinhole model uses it. --model auto (the default) fits both models on 80 %
 // of the data, keeps the one with the lower mean error on the other 20 %, and refits it on all.
 #include <cmath>
-#include <limits>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include <nlohmann/json.hpp>
