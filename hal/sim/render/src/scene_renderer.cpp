@@ -3,6 +3,8 @@
 // per pixel. See scene_renderer.hpp.
 #include "aerotrack/hal/sim/scene_renderer.hpp"
 
+#include "aerotrack/hal/sim/depth_camera.hpp"
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -59,53 +61,6 @@ void store(cv::Vec3b& px, const Colour& c) {
   px[0] = toByte(c[0]);
   px[1] = toByte(c[1]);
   px[2] = toByte(c[2]);
-}
-
-struct PixelRect {
-  int u0 = 0, u1 = -1, v0 = 0, v1 = -1;  // inclusive
-};
-
-/// Pixels whose centres can see the part of the box with camera z >= kNearM (its corners in front
-/// and its edges cut at the near plane, projected), one pixel of margin. False if none.
-bool projectBox(const Box& box, const Eigen::Matrix3d& R_CW, const Eigen::Vector3d& p_WC_m, const CameraIntrinsics& k,
-                PixelRect& rect) {
-  std::array<Eigen::Vector3d, 8> corner_C;
-  for (std::size_t i = 0; i < corner_C.size(); ++i) {
-    const Eigen::Vector3d corner_W((i & 1U) ? box.max_W_m.x() : box.min_W_m.x(),
-                                   (i & 2U) ? box.max_W_m.y() : box.min_W_m.y(),
-                                   (i & 4U) ? box.max_W_m.z() : box.min_W_m.z());
-    corner_C[i] = R_CW * (corner_W - p_WC_m);
-  }
-  double u_min = std::numeric_limits<double>::infinity(), v_min = u_min, u_max = -u_min, v_max = -u_min;
-  const auto add = [&](const Eigen::Vector3d& q_C) {
-    const double u = k.fx_px * q_C.x() / q_C.z() + k.cx_px;
-    const double v = k.fy_px * q_C.y() / q_C.z() + k.cy_px;
-    u_min = std::min(u_min, u);
-    u_max = std::max(u_max, u);
-    v_min = std::min(v_min, v);
-    v_max = std::max(v_max, v);
-  };
-  for (std::size_t i = 0; i < corner_C.size(); ++i) {
-    if (corner_C[i].z() >= kNearM) add(corner_C[i]);
-    for (const std::size_t bit : {1U, 2U, 4U}) {
-      const std::size_t j = i | bit;
-      if (j == i || (corner_C[i].z() >= kNearM) == (corner_C[j].z() >= kNearM)) continue;
-      const double s = (kNearM - corner_C[i].z()) / (corner_C[j].z() - corner_C[i].z());
-      Eigen::Vector3d cut_C = corner_C[i] + s * (corner_C[j] - corner_C[i]);
-      cut_C.z() = kNearM;
-      add(cut_C);
-    }
-  }
-  if (!(u_min <= u_max)) return false;
-  const auto range = [](double lo, double hi, int size, int& first, int& last) {
-    const double a = std::floor(lo - 0.5) - 1.0;
-    const double b = std::ceil(hi - 0.5) + 1.0;
-    if (b < 0.0 || a > size - 1.0) return false;
-    first = static_cast<int>(std::max(a, 0.0));
-    last = static_cast<int>(std::min(b, size - 1.0));
-    return true;
-  };
-  return range(u_min, u_max, k.width_px, rect.u0, rect.u1) && range(v_min, v_max, k.height_px, rect.v0, rect.v1);
 }
 
 /// Image right for an image "down" direction (u right, v down): down (0, 1) gives right (1, 0).
@@ -214,7 +169,7 @@ void SceneRenderer::rasterObstacles(const ObstacleWorld& world, const Eigen::Iso
     const Box aabb = is_box ? world.boxes()[id] : boundingBox(*cyl);
     if (distanceTo(aabb, o_W) > max_range) continue;
     PixelRect rect;
-    if (!projectBox(aabb, R_CW, o_W, k, rect)) continue;
+    if (!projectBoxToPixels(aabb, R_CW, o_W, k, kNearM, rect)) continue;
     // Cylinder seen from outside its footprint: the side by the 2D quadratic, then the caps.
     const double ox = cyl ? o_W.x() - cyl->center_W_m.x() : 0.0;
     const double oy = cyl ? o_W.y() - cyl->center_W_m.y() : 0.0;

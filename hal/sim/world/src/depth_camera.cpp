@@ -21,11 +21,6 @@ namespace {
 constexpr int kMaxSidePx = 8192;
 constexpr double kNoHit = std::numeric_limits<double>::infinity();
 
-/// Inclusive pixel ranges.
-struct PixelRect {
-  int u0, u1, v0, v1;
-};
-
 /// The camera's pixel rays: pixel (u, v) looks along (x, y, 1) in C through its centre
 /// (u + 0.5, v + 0.5), i.e. along R_WC * (x, y, 1) / |(x, y, 1)| in W.
 struct PixelRays {
@@ -37,53 +32,6 @@ struct PixelRays {
   }
   double norm(int u, int v) const { return dirC(u, v).norm(); }
 
-  /// Pixels whose rays can meet the part of box with camera-frame z >= near_m: the bounds of the
-  /// projected vertices of that convex part (box corners in front, box edges cut at z = near_m),
-  /// one pixel of margin for rounding. False if no pixel can.
-  bool project(const Box& box, double near_m, PixelRect& rect) const {
-    std::array<Eigen::Vector3d, 8> corner_C;
-    for (std::size_t i = 0; i < corner_C.size(); ++i) {
-      const Eigen::Vector3d corner_W((i & 1U) ? box.max_W_m.x() : box.min_W_m.x(),
-                                     (i & 2U) ? box.max_W_m.y() : box.min_W_m.y(),
-                                     (i & 4U) ? box.max_W_m.z() : box.min_W_m.z());
-      corner_C[i] = R_WC.transpose() * (corner_W - p_WC_m);
-    }
-    double u_min = kNoHit;
-    double u_max = -kNoHit;
-    double v_min = kNoHit;
-    double v_max = -kNoHit;
-    const auto add = [&](const Eigen::Vector3d& q_C) {
-      const double u = k.fx_px * q_C.x() / q_C.z() + k.cx_px;
-      const double v = k.fy_px * q_C.y() / q_C.z() + k.cy_px;
-      u_min = std::min(u_min, u);
-      u_max = std::max(u_max, u);
-      v_min = std::min(v_min, v);
-      v_max = std::max(v_max, v);
-    };
-    for (std::size_t i = 0; i < corner_C.size(); ++i) {
-      if (corner_C[i].z() >= near_m) add(corner_C[i]);
-      for (const std::size_t bit : {1U, 2U, 4U}) {  // The box edges from corner i.
-        const std::size_t j = i | bit;
-        if (j == i || (corner_C[i].z() >= near_m) == (corner_C[j].z() >= near_m)) continue;
-        const double s = (near_m - corner_C[i].z()) / (corner_C[j].z() - corner_C[i].z());
-        Eigen::Vector3d cut_C = corner_C[i] + s * (corner_C[j] - corner_C[i]);
-        cut_C.z() = near_m;
-        add(cut_C);
-      }
-    }
-    if (!(u_min <= u_max)) return false;  // Nothing in front.
-    // Pixel u's centre is at u + 0.5: it is in range if u_min <= u + 0.5 <= u_max.
-    const auto range = [](double lo, double hi, int size, int& first, int& last) {
-      const double a = std::floor(lo - 0.5) - 1.0;
-      const double b = std::ceil(hi - 0.5) + 1.0;
-      if (b < 0.0 || a > size - 1.0) return false;
-      first = static_cast<int>(std::max(a, 0.0));
-      last = static_cast<int>(std::min(b, size - 1.0));
-      return true;
-    };
-    return range(u_min, u_max, k.width_px, rect.u0, rect.u1) && range(v_min, v_max, k.height_px, rect.v0, rect.v1);
-  }
-
   Eigen::Matrix3d R_WC;
   Eigen::Vector3d p_WC_m;
   hal::CameraIntrinsics k;
@@ -94,6 +42,51 @@ double tanHalf(double fov_deg) {
 }
 
 }  // namespace
+
+bool projectBoxToPixels(const Box& box, const Eigen::Matrix3d& R_CW, const Eigen::Vector3d& p_WC_m,
+                        const hal::CameraIntrinsics& k, double near_m, PixelRect& rect) {
+  std::array<Eigen::Vector3d, 8> corner_C;
+  for (std::size_t i = 0; i < corner_C.size(); ++i) {
+    const Eigen::Vector3d corner_W((i & 1U) ? box.max_W_m.x() : box.min_W_m.x(),
+                                   (i & 2U) ? box.max_W_m.y() : box.min_W_m.y(),
+                                   (i & 4U) ? box.max_W_m.z() : box.min_W_m.z());
+    corner_C[i] = R_CW * (corner_W - p_WC_m);
+  }
+  double u_min = kNoHit;
+  double u_max = -kNoHit;
+  double v_min = kNoHit;
+  double v_max = -kNoHit;
+  const auto add = [&](const Eigen::Vector3d& q_C) {
+    const double u = k.fx_px * q_C.x() / q_C.z() + k.cx_px;
+    const double v = k.fy_px * q_C.y() / q_C.z() + k.cy_px;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  };
+  for (std::size_t i = 0; i < corner_C.size(); ++i) {
+    if (corner_C[i].z() >= near_m) add(corner_C[i]);
+    for (const std::size_t bit : {1U, 2U, 4U}) {  // The box edges from corner i.
+      const std::size_t j = i | bit;
+      if (j == i || (corner_C[i].z() >= near_m) == (corner_C[j].z() >= near_m)) continue;
+      const double s = (near_m - corner_C[i].z()) / (corner_C[j].z() - corner_C[i].z());
+      Eigen::Vector3d cut_C = corner_C[i] + s * (corner_C[j] - corner_C[i]);
+      cut_C.z() = near_m;
+      add(cut_C);
+    }
+  }
+  if (!(u_min <= u_max)) return false;  // Nothing in front.
+  // Pixel u's centre is at u + 0.5: it is in range if u_min <= u + 0.5 <= u_max.
+  const auto range = [](double lo, double hi, int size, int& first, int& last) {
+    const double a = std::floor(lo - 0.5) - 1.0;
+    const double b = std::ceil(hi - 0.5) + 1.0;
+    if (b < 0.0 || a > size - 1.0) return false;
+    first = static_cast<int>(std::max(a, 0.0));
+    last = static_cast<int>(std::min(b, size - 1.0));
+    return true;
+  };
+  return range(u_min, u_max, k.width_px, rect.u0, rect.u1) && range(v_min, v_max, k.height_px, rect.v0, rect.v1);
+}
 
 rt::Status DepthCameraParams::validate(const DepthCameraParams& params) {
   const auto fail = [](const std::string& what) { return rt::Status(rt::Error{"depth camera: " + what}); };
@@ -164,7 +157,9 @@ void renderDepth(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, cons
     if (gap_m > max_range_m * norm_max) return;
     PixelRect rect{0, params.width_px - 1, 0, params.height_px - 1};
     // Every hit is >= gap_m from the camera, so its depth is >= gap_m / norm_max: clip there.
-    if (gap_m > 0.0 && !rays.project(aabb, 0.5 * gap_m / norm_max, rect)) return;
+    if (gap_m > 0.0 &&
+        !projectBoxToPixels(aabb, rays.R_WC.transpose(), rays.p_WC_m, rays.k, 0.5 * gap_m / norm_max, rect))
+      return;
     for (int v = rect.v0; v <= rect.v1; ++v) {
       float* row = depth_m.ptr<float>(v);
       for (int u = rect.u0; u <= rect.u1; ++u) {

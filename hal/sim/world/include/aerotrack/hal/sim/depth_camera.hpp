@@ -43,6 +43,19 @@ struct DepthCameraParams {
 /// Precondition: validate(params) is ok. Allocation-free.
 hal::CameraIntrinsics depthIntrinsics(const DepthCameraParams& params);
 
+/// Inclusive pixel ranges [u0, u1] x [v0, v1].
+struct PixelRect {
+  int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
+};
+
+/// The pixels of a pinhole camera (pose: R_CW rotates world vectors into C, camera at p_WC_m; C has
+/// x right, y down, z forward) whose centres can see the part of the box with camera z >= near_m:
+/// the bounds of that convex part's projected vertices (corners in front, edges cut at z = near_m),
+/// one pixel of margin for rounding. False if no pixel can. Used by the depth camera and the
+/// image renderer to visit only the pixels an obstacle may cover. Pure, allocation-free.
+bool projectBoxToPixels(const Box& box, const Eigen::Matrix3d& R_CW, const Eigen::Vector3d& p_WC_m,
+                        const hal::CameraIntrinsics& k, double near_m, PixelRect& rect);
+
 /// Renders one depth image from camera pose T_WC (camera C in world W; C is the OpenCV camera
 /// frame: x right, y down, z forward). depth_m becomes CV_32FC1, height_px x width_px, and is
 /// (re)allocated only if its size or type differs (cv::Mat::create; a depth_m sharing its buffer
