@@ -1,0 +1,447 @@
+// Spatial-temporal trajectory optimisation: see trajectory_optimizer.hpp.
+#include "aerotrack/planning/trajectory_optimizer.hpp"
+
+#include <LBFGS.h>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace aerotrack::planning {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr int kMaxRestarts = 8;
+
+// l(x) = max(x, 0)^3 and its derivative.
+double penalty(double x) {
+  return x > 0.0 ? x * x * x : 0.0;
+}
+double penaltyDerivative(double x) {
+  return x > 0.0 ? 3.0 * x * x : 0.0;
+}
+
+// Adds rho l(|w|^2 - limit^2) to cost; returns dcost/dw.
+Eigen::Vector3d addNormPenalty(const Eigen::Vector3d& w, double limit, double rho, double& cost) {
+  const double x = w.squaredNorm() - limit * limit;
+  if (x <= 0.0) return Eigen::Vector3d::Zero();
+  cost += rho * penalty(x);
+  return rho * penaltyDerivative(x) * 2.0 * w;
+}
+
+// Weak Wolfe line search by bisection and expansion (Lewis and Overton, "Nonsmooth optimization via
+// quasi-Newton methods", Math. Prog. 2013), plugged into LBFGS++ as its LineSearch policy. Unlike
+// LBFGS++'s backtracking, it brackets the step: a trial point outside the barrier's domain (cost +inf)
+// or above the Armijo line shrinks the bracket from above, one that is too flat (curvature condition
+// unmet) from below, so it never oscillates between the two. The accepted step satisfies weak Wolfe,
+// which keeps s^T y > 0 for the L-BFGS update.
+template <typename Scalar>
+class LineSearchLewisOverton {
+ public:
+  using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+
+  template <typename Objective>
+  // NOLINTNEXTLINE(readability-identifier-naming): the name is LBFGS++'s interface
+  static void LineSearch(Objective& f, Scalar& fx, Vector& x, Vector& grad, Scalar& step, const Vector& drt,
+                         const Vector& xp, const LBFGSpp::LBFGSParam<Scalar>& param) {
+    const Scalar fx_init = fx;
+    const Scalar dg_init = grad.dot(drt);
+    if (!(dg_init < 0)) throw std::logic_error("not a descent direction");
+    Scalar lo = 0;
+    Scalar hi = std::numeric_limits<Scalar>::infinity();
+    for (int iter = 0; iter < param.max_linesearch; ++iter) {
+      x.noalias() = xp + step * drt;
+      fx = f(x, grad);
+      if (!(fx <= fx_init + param.ftol * step * dg_init)) {
+        hi = step;  // too long (or +inf / NaN)
+      } else if (grad.dot(drt) < param.wolfe * dg_init) {
+        lo = step;  // too short
+      } else {
+        return;
+      }
+      step = std::isinf(hi) ? 2 * step : (lo + hi) / 2;
+      if (step < param.min_step) break;
+    }
+    throw std::runtime_error("line search failed");
+  }
+};
+
+}  // namespace
+
+struct TrajectoryOptimizer::Solver {
+  LBFGSpp::LBFGSParam<double> param;
+  std::unique_ptr<LBFGSpp::LBFGSSolver<double, LineSearchLewisOverton>> lbfgs;
+  Eigen::VectorXd x;
+};
+
+std::string_view toString(OptimizerStatus status) {
+  switch (status) {
+    case OptimizerStatus::kConverged:
+      return "converged";
+    case OptimizerStatus::kMaxIterations:
+      return "max_iterations";
+    case OptimizerStatus::kLineSearch:
+      return "line_search";
+  }
+  return "unknown";
+}
+
+rt::Status validate(const TrajectoryOptimizerParams& p) {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  if (!positive(p.max_velocity_mps)) return rt::Error{"max_velocity_mps must be > 0"};
+  if (!positive(p.max_acceleration_mps2)) return rt::Error{"max_acceleration_mps2 must be > 0"};
+  if (!positive(p.max_jerk_mps3)) return rt::Error{"max_jerk_mps3 must be > 0"};
+  if (!positive(p.barrier_weight)) return rt::Error{"barrier_weight must be > 0"};
+  if (!non_negative(p.time_weight)) return rt::Error{"time_weight must be >= 0"};
+  if (!non_negative(p.waypoint_velocity_weight)) return rt::Error{"waypoint_velocity_weight must be >= 0"};
+  if (!non_negative(p.waypoint_acceleration_weight)) return rt::Error{"waypoint_acceleration_weight must be >= 0"};
+  if (!non_negative(p.corridor_weight)) return rt::Error{"corridor_weight must be >= 0"};
+  if (!non_negative(p.corridor_margin_m)) return rt::Error{"corridor_margin_m must be >= 0"};
+  if (!non_negative(p.sample_velocity_weight)) return rt::Error{"sample_velocity_weight must be >= 0"};
+  if (!non_negative(p.sample_acceleration_weight)) return rt::Error{"sample_acceleration_weight must be >= 0"};
+  if (!non_negative(p.sample_jerk_weight)) return rt::Error{"sample_jerk_weight must be >= 0"};
+  if (p.samples_per_piece < 1) return rt::Error{"samples_per_piece must be >= 1"};
+  if (p.max_iterations < 1) return rt::Error{"max_iterations must be >= 1"};
+  if (!positive(p.relative_cost_tolerance)) return rt::Error{"relative_cost_tolerance must be > 0"};
+  if (!positive(p.gradient_tolerance)) return rt::Error{"gradient_tolerance must be > 0"};
+  if (p.memory < 1) return rt::Error{"memory must be >= 1"};
+  if (p.max_pieces < 1) return rt::Error{"max_pieces must be >= 1"};
+  return rt::ok();
+}
+
+TrajectoryOptimizerParams parseTrajectoryOptimizerParams(const rt::ConfigNode& node) {
+  TrajectoryOptimizerParams p;
+  p.max_velocity_mps = node.getDouble("max_velocity_mps", 0.1, 30.0);
+  p.max_acceleration_mps2 = node.getDouble("max_acceleration_mps2", 0.1, 50.0);
+  p.max_jerk_mps3 = node.getDouble("max_jerk_mps3", 0.1, 1e4);
+  p.barrier_weight = node.getDouble("barrier_weight", 1e-9, 1e6);
+  p.time_weight = node.getDouble("time_weight", 0.0, 1e6);
+  p.waypoint_velocity_weight = node.getDouble("waypoint_velocity_weight", 0.0, 1e9);
+  p.waypoint_acceleration_weight = node.getDouble("waypoint_acceleration_weight", 0.0, 1e9);
+  p.corridor_weight = node.getDouble("corridor_weight", 0.0, 1e12);
+  p.corridor_margin_m = node.getDouble("corridor_margin_m", 0.0, 1.0);
+  p.sample_velocity_weight = node.getDouble("sample_velocity_weight", 0.0, 1e9);
+  p.sample_acceleration_weight = node.getDouble("sample_acceleration_weight", 0.0, 1e9);
+  p.sample_jerk_weight = node.getDouble("sample_jerk_weight", 0.0, 1e9);
+  p.samples_per_piece = node.getInt("samples_per_piece", 1, 256);
+  p.max_iterations = node.getInt("max_iterations", 1, 100000);
+  p.relative_cost_tolerance = node.getDouble("relative_cost_tolerance", 1e-12, 1.0);
+  p.gradient_tolerance = node.getDouble("gradient_tolerance", 1e-12, 1.0);
+  p.memory = node.getInt("memory", 1, 64);
+  p.max_pieces = node.getInt("max_pieces", 1, 100000);
+  return p;
+}
+
+double TrajectoryOptimizer::durationFromTau(double tau) {
+  // softplus, written to stay accurate for large |tau|
+  return tau > 0.0 ? tau + std::log1p(std::exp(-tau)) : std::log1p(std::exp(tau));
+}
+
+double TrajectoryOptimizer::tauFromDuration(double duration_s) {
+  // inverse softplus: ln(e^T - 1) = T + ln(1 - e^-T)
+  return duration_s + std::log(-std::expm1(-duration_s));
+}
+
+TrajectoryOptimizer::TrajectoryOptimizer(const TrajectoryOptimizerParams& params)
+    : params_(params), solver_(std::make_unique<Solver>()) {
+  solver_->param.m = params.memory;
+  solver_->param.epsilon = params.gradient_tolerance;
+  solver_->param.epsilon_rel = params.gradient_tolerance;
+  solver_->param.past = 3;
+  solver_->param.delta = params.relative_cost_tolerance;
+  solver_->param.max_iterations = params.max_iterations;
+  solver_->param.max_linesearch = 40;
+  solver_->param.linesearch = LBFGSpp::LBFGS_LINESEARCH_BACKTRACKING_WOLFE;
+  solver_->lbfgs = std::make_unique<LBFGSpp::LBFGSSolver<double, LineSearchLewisOverton>>(solver_->param);
+  const int m = params.max_pieces;
+  boxes_.reserve(static_cast<std::size_t>(m));
+  spline_.reset(StatePva::Zero(), StatePva::Zero(), m);
+  const int n = 4 * m - 3;
+  x0_.resize(n);
+  best_x_.resize(n);
+  scratch_grad_.resize(n);
+  solver_->x.resize(n);
+  q_.resize(3, m - 1);
+  t_.resize(m);
+  grad_q_.resize(3, m - 1);
+  grad_t_.resize(m);
+  grad_c_.resize(Eigen::Index{6} * m, 3);
+}
+
+TrajectoryOptimizer::TrajectoryOptimizer(TrajectoryOptimizer&&) noexcept = default;
+TrajectoryOptimizer& TrajectoryOptimizer::operator=(TrajectoryOptimizer&&) noexcept = default;
+TrajectoryOptimizer::~TrajectoryOptimizer() = default;
+
+rt::Expected<TrajectoryOptimizer> TrajectoryOptimizer::create(const TrajectoryOptimizerParams& params) {
+  if (const rt::Status s = validate(params); !s) return rt::Error{"trajectory optimizer: " + s.error().message};
+  return TrajectoryOptimizer(params);
+}
+
+rt::Status TrajectoryOptimizer::setProblem(const TrajectoryProblem& problem) {
+  const auto m = static_cast<Eigen::Index>(problem.boxes.size());
+  if (m < 1) return rt::Error{"trajectory optimizer: no corridor boxes"};
+  if (static_cast<int>(problem.initial_durations_s.size()) != m ||
+      static_cast<int>(problem.initial_waypoints_W_m.size()) != m - 1)
+    return rt::Error{"trajectory optimizer: " + std::to_string(m) + " boxes need " + std::to_string(m - 1) +
+                     " waypoints and " + std::to_string(m) + " durations"};
+  if (!problem.start.allFinite() || !problem.end.allFinite())
+    return rt::Error{"trajectory optimizer: non-finite boundary state"};
+  for (const double t : problem.initial_durations_s) {
+    if (!std::isfinite(t) || t <= 0.0) return rt::Error{"trajectory optimizer: a duration is not positive"};
+  }
+  for (Eigen::Index i = 0; i + 1 < m; ++i) {
+    const Eigen::Vector3d& q = problem.initial_waypoints_W_m[static_cast<std::size_t>(i)];
+    const CorridorBox& a = problem.boxes[static_cast<std::size_t>(i)];
+    const CorridorBox& b = problem.boxes[static_cast<std::size_t>(i) + 1];
+    const bool inside = q.allFinite() && (q.array() > a.lo_W_m.array()).all() && (q.array() < a.hi_W_m.array()).all() &&
+                        (q.array() > b.lo_W_m.array()).all() && (q.array() < b.hi_W_m.array()).all();
+    if (!inside)
+      return rt::Error{"trajectory optimizer: waypoint " + std::to_string(i) +
+                       " is not strictly inside the intersection of its two boxes"};
+  }
+  pieces_ = m;
+  start_ = problem.start;
+  end_ = problem.end;
+  boxes_.assign(problem.boxes.begin(), problem.boxes.end());
+  spline_.reset(start_, end_, static_cast<int>(m));
+  const Eigen::Index n = 4 * m - 3;
+  x0_.resize(n);
+  for (Eigen::Index i = 0; i + 1 < m; ++i)
+    x0_.segment<3>(3 * i) = problem.initial_waypoints_W_m[static_cast<std::size_t>(i)];
+  for (Eigen::Index i = 0; i < m; ++i)
+    x0_(3 * (m - 1) + i) = tauFromDuration(problem.initial_durations_s[static_cast<std::size_t>(i)]);
+  q_.resize(3, m - 1);
+  t_.resize(m);
+  grad_q_.resize(3, m - 1);
+  grad_t_.resize(m);
+  grad_c_.resize(6 * m, 3);
+  return rt::ok();
+}
+
+double TrajectoryOptimizer::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& gradient, std::uint32_t terms) {
+  const Eigen::Index m = pieces_;
+  ++evaluations_;
+  gradient.setZero(x.size());
+  for (Eigen::Index i = 0; i + 1 < m; ++i) q_.col(i) = x.segment<3>(3 * i);
+  for (Eigen::Index i = 0; i < m; ++i) t_(i) = durationFromTau(x(3 * (m - 1) + i));
+  if (!x.allFinite() || !spline_.generate(q_, t_)) return kInf;
+
+  double cost = 0.0;
+  grad_c_.setZero();
+  grad_t_.setZero();
+  grad_q_.setZero();
+  if ((terms & kJerkEnergy) != 0U) {
+    cost += spline_.jerkEnergy();
+    spline_.addJerkEnergyGradient(grad_c_, grad_t_);
+  }
+  if ((terms & kTime) != 0U) {
+    cost += params_.time_weight * t_.sum();
+    grad_t_.array() += params_.time_weight;
+  }
+  addSampleTerms(terms, cost);
+  // grad_q_ collects the direct waypoint terms after the chain rule has written the mapped ones.
+  spline_.propagateGradient(grad_c_, grad_t_, grad_q_);
+  addWaypointTerms(terms, cost);
+  if (!std::isfinite(cost)) return kInf;
+
+  for (Eigen::Index i = 0; i + 1 < m; ++i) gradient.segment<3>(3 * i) = grad_q_.col(i);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double tau = x(3 * (m - 1) + i);
+    const double dT_dtau = 1.0 / (1.0 + std::exp(-tau));  // softplus' = logistic
+    gradient(3 * (m - 1) + i) = grad_t_(i) * dT_dtau;
+  }
+  return cost;
+}
+
+void TrajectoryOptimizer::addWaypointTerms(std::uint32_t terms, double& cost) {
+  const Eigen::Index m = pieces_;
+  // Q(k), k = 0..M: the fixed start, the waypoints, the fixed end (the paper's q_{w_0} .. q_{w_M}).
+  auto point = [&](Eigen::Index k) -> Eigen::Vector3d {
+    if (k == 0) return start_.col(0);
+    if (k == m) return end_.col(0);
+    return q_.col(k - 1);
+  };
+  auto addPointGrad = [&](Eigen::Index k, const Eigen::Vector3d& g) {
+    if (k > 0 && k < m) grad_q_.col(k - 1) += g;
+  };
+  if ((terms & kBarrier) != 0U) {
+    const double kappa = params_.barrier_weight;
+    for (Eigen::Index i = 0; i + 1 < m; ++i) {
+      const Eigen::Vector3d q = q_.col(i);
+      for (Eigen::Index j = i; j <= i + 1; ++j) {
+        const CorridorBox& box = boxes_[static_cast<std::size_t>(j)];
+        const Eigen::Array3d to_hi = (box.hi_W_m - q).array();
+        const Eigen::Array3d to_lo = (q - box.lo_W_m).array();
+        if ((to_hi <= 0.0).any() || (to_lo <= 0.0).any()) {
+          cost = kInf;
+          return;
+        }
+        cost -= kappa * (to_hi.log().sum() + to_lo.log().sum());
+        // d/dq [-ln(hi - q) - ln(q - lo)] = 1/(hi - q) - 1/(q - lo)
+        grad_q_.col(i) += (kappa * (to_hi.inverse() - to_lo.inverse())).matrix();
+      }
+    }
+  }
+  for (Eigen::Index k = 1; k < m; ++k) {
+    const double t_in = t_(k - 1);  // piece into Q(k): the paper's T_i
+    const double t_out = t_(k);     // piece out of Q(k): T_{i+1}
+    const double sum = t_in + t_out;
+    if ((terms & kWaypointVelocity) != 0U && params_.waypoint_velocity_weight > 0.0) {
+      const Eigen::Vector3d u = point(k + 1) - point(k - 1);
+      const Eigen::Vector3d v = u / sum;
+      const Eigen::Vector3d g = addNormPenalty(v, params_.max_velocity_mps, params_.waypoint_velocity_weight, cost);
+      addPointGrad(k + 1, g / sum);
+      addPointGrad(k - 1, -g / sum);
+      const double dT = g.dot(-v / sum);
+      grad_t_(k - 1) += dT;
+      grad_t_(k) += dT;
+    }
+    if ((terms & kWaypointAcceleration) != 0U && params_.waypoint_acceleration_weight > 0.0) {
+      const Eigen::Vector3d d1 = point(k + 1) - point(k);
+      const Eigen::Vector3d d0 = point(k) - point(k - 1);
+      const double scale = 2.0 / sum;
+      const Eigen::Vector3d a = scale * (d1 / t_out - d0 / t_in);
+      const Eigen::Vector3d g =
+          addNormPenalty(a, params_.max_acceleration_mps2, params_.waypoint_acceleration_weight, cost);
+      addPointGrad(k + 1, g * (scale / t_out));
+      addPointGrad(k, g * (-scale / t_out - scale / t_in));
+      addPointGrad(k - 1, g * (scale / t_in));
+      grad_t_(k) += g.dot(-scale * d1 / (t_out * t_out) - a / sum);
+      grad_t_(k - 1) += g.dot(scale * d0 / (t_in * t_in) - a / sum);
+    }
+  }
+}
+
+void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
+  const bool corridor = (terms & kCorridorSamples) != 0U && params_.corridor_weight > 0.0;
+  const bool velocity = (terms & kVelocitySamples) != 0U && params_.sample_velocity_weight > 0.0;
+  const bool acceleration = (terms & kAccelerationSamples) != 0U && params_.sample_acceleration_weight > 0.0;
+  const bool jerk = (terms & kJerkSamples) != 0U && params_.sample_jerk_weight > 0.0;
+  if (!corridor && !velocity && !acceleration && !jerk) return;
+  const int k_samples = params_.samples_per_piece;
+  const double v_limit2 = params_.max_velocity_mps * params_.max_velocity_mps;
+  const double a_limit2 = params_.max_acceleration_mps2 * params_.max_acceleration_mps2;
+  const double j_limit2 = params_.max_jerk_mps3 * params_.max_jerk_mps3;
+  const RowMatrixX3d& coeffs = spline_.coefficients();
+  for (Eigen::Index i = 0; i < pieces_; ++i) {
+    // Coefficient rows c0..c5 of piece i (x, y, z each).
+    const Eigen::Vector3d c0 = coeffs.row(6 * i).transpose();
+    const Eigen::Vector3d c1 = coeffs.row(6 * i + 1).transpose();
+    const Eigen::Vector3d c2 = coeffs.row(6 * i + 2).transpose();
+    const Eigen::Vector3d c3 = coeffs.row(6 * i + 3).transpose();
+    const Eigen::Vector3d c4 = coeffs.row(6 * i + 4).transpose();
+    const Eigen::Vector3d c5 = coeffs.row(6 * i + 5).transpose();
+    const CorridorBox& box = boxes_[static_cast<std::size_t>(i)];
+    const Eigen::Array3d lo = box.lo_W_m.array() + params_.corridor_margin_m;
+    const Eigen::Array3d hi = box.hi_W_m.array() - params_.corridor_margin_m;
+    for (int j = 0; j <= k_samples; ++j) {
+      const double fraction = static_cast<double>(j) / k_samples;
+      const double t = fraction * t_(i);
+      // Horner's rule for p and its first three derivatives (the hot loop of the cost).
+      const Eigen::Vector3d p = ((((c5 * t + c4) * t + c3) * t + c2) * t + c1) * t + c0;
+      const Eigen::Vector3d v = (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1;
+      const Eigen::Vector3d a = ((20.0 * c5 * t + 12.0 * c4) * t + 6.0 * c3) * t + 2.0 * c2;
+      const Eigen::Vector3d jr = (60.0 * c5 * t + 24.0 * c4) * t + 6.0 * c3;
+      Eigen::Vector3d gp = Eigen::Vector3d::Zero();
+      Eigen::Vector3d gv = Eigen::Vector3d::Zero();
+      Eigen::Vector3d ga = Eigen::Vector3d::Zero();
+      Eigen::Vector3d gj = Eigen::Vector3d::Zero();
+      bool active = false;
+      if (corridor) {
+        for (int axis = 0; axis < 3; ++axis) {
+          const double above = p(axis) - hi(axis);
+          const double below = lo(axis) - p(axis);
+          if (above > 0.0) {
+            cost += params_.corridor_weight * penalty(above);
+            gp(axis) += params_.corridor_weight * penaltyDerivative(above);
+            active = true;
+          } else if (below > 0.0) {
+            cost += params_.corridor_weight * penalty(below);
+            gp(axis) -= params_.corridor_weight * penaltyDerivative(below);
+            active = true;
+          }
+        }
+      }
+      if (velocity && v.squaredNorm() > v_limit2) {
+        gv = addNormPenalty(v, params_.max_velocity_mps, params_.sample_velocity_weight, cost);
+        active = true;
+      }
+      if (acceleration && a.squaredNorm() > a_limit2) {
+        ga = addNormPenalty(a, params_.max_acceleration_mps2, params_.sample_acceleration_weight, cost);
+        active = true;
+      }
+      if (jerk && jr.squaredNorm() > j_limit2) {
+        gj = addNormPenalty(jr, params_.max_jerk_mps3, params_.sample_jerk_weight, cost);
+        active = true;
+      }
+      if (!active) continue;
+      const double t2 = t * t;
+      const double t3 = t2 * t;
+      const double t4 = t3 * t;
+      const Eigen::Matrix<double, 6, 1> b0{1.0, t, t2, t3, t4, t4 * t};
+      const Eigen::Matrix<double, 6, 1> b1{0.0, 1.0, 2.0 * t, 3.0 * t2, 4.0 * t3, 5.0 * t4};
+      const Eigen::Matrix<double, 6, 1> b2{0.0, 0.0, 2.0, 6.0 * t, 12.0 * t2, 20.0 * t3};
+      const Eigen::Matrix<double, 6, 1> b3{0.0, 0.0, 0.0, 6.0, 24.0 * t, 60.0 * t2};
+      grad_c_.middleRows<6>(6 * i) +=
+          b0 * gp.transpose() + b1 * gv.transpose() + b2 * ga.transpose() + b3 * gj.transpose();
+      // The sample sits at t = fraction * T_i, so it moves with T_i: d/dT_i = fraction * (g . derivative).
+      const Eigen::Vector3d snap = 24.0 * c4 + 120.0 * t * c5;
+      grad_t_(i) += fraction * (gp.dot(v) + gv.dot(a) + ga.dot(jr) + gj.dot(snap));
+    }
+  }
+}
+
+rt::Expected<OptimizerResult> TrajectoryOptimizer::optimize(const TrajectoryProblem& problem,
+                                                            PolynomialTrajectory& out) {
+  if (const rt::Status s = setProblem(problem); !s) return s.error();
+  OptimizerResult result;
+  evaluations_ = 0;
+  Eigen::VectorXd& x = solver_->x;
+  x = x0_;
+  best_x_ = x0_;
+  best_cost_ = kInf;
+  auto objective = [this](const Eigen::VectorXd& xv, Eigen::VectorXd& grad) {
+    const double f = evaluate(xv, grad, kAllTerms);
+    if (f < best_cost_) {
+      best_cost_ = f;
+      best_x_ = xv;
+    }
+    return f;
+  };
+  Eigen::VectorXd& scratch_grad = scratch_grad_;
+  result.initial_cost = evaluate(x0_, scratch_grad, kAllTerms);
+  if (!std::isfinite(result.initial_cost))
+    return rt::Error{"trajectory optimizer: the initial guess is outside the barrier's domain"};
+  // L-BFGS++ reports a failed line search (no decrease found along its direction) by throwing. That
+  // happens mostly on badly scaled starts (penalties of 1e12), so the solver restarts from the best point
+  // seen, with a fresh history and a step scaled to the new gradient, while restarts keep improving it.
+  double fx = 0.0;
+  int iterations_left = params_.max_iterations;
+  for (int attempt = 0; attempt < kMaxRestarts && iterations_left > 0; ++attempt) {
+    const double before = best_cost_;
+    solver_->param.max_iterations = iterations_left;
+    try {
+      const int used = solver_->lbfgs->minimize(objective, x, fx);
+      result.iterations += used;
+      result.status = used >= iterations_left ? OptimizerStatus::kMaxIterations : OptimizerStatus::kConverged;
+      break;
+    } catch (const std::exception&) {
+      result.status = OptimizerStatus::kLineSearch;
+      result.iterations += 1;
+      iterations_left -= 1;
+      if (!(best_cost_ < before * (1.0 - params_.relative_cost_tolerance))) break;
+      x = best_x_;
+    }
+  }
+  if (!std::isfinite(best_cost_)) best_x_ = x0_;
+  result.cost = evaluate(best_x_, scratch_grad, kAllTerms);
+  result.evaluations = evaluations_;
+  out.assign(spline_);
+  return result;
+}
+
+}  // namespace aerotrack::planning

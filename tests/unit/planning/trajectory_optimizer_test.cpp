@@ -1,0 +1,162 @@
+// TrajectoryOptimizer: every cost term's gradient (with respect to q and, through the softplus, T)
+// against central differences; the optimised trajectory on random corridors stays inside its boxes
+// and within the limits; bad problems are refused with a reason.
+#include "aerotrack/planning/trajectory_optimizer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "random_corridor.hpp"
+
+namespace aerotrack::planning {
+namespace {
+
+using test::randomCorridor;
+using test::RandomCorridor;
+
+// Central differences of evaluate(terms) at x, against its analytic gradient: every component within
+// 1e-6 relative (of the larger of the component and 1e-3 of the gradient's largest entry, so that
+// entries that are zero up to rounding are compared on the gradient's scale).
+void expectGradientMatches(TrajectoryOptimizer& opt, const Eigen::VectorXd& x, std::uint32_t terms, const char* name) {
+  Eigen::VectorXd grad;
+  const double f = opt.evaluate(x, grad, terms);
+  ASSERT_TRUE(std::isfinite(f)) << name;
+  const double scale = std::max(1e-9, grad.cwiseAbs().maxCoeff());
+  Eigen::VectorXd scratch;
+  int active = 0;
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    const double h = 1e-6 * std::max(1.0, std::abs(x(k)));
+    Eigen::VectorXd plus = x;
+    Eigen::VectorXd minus = x;
+    plus(k) += h;
+    minus(k) -= h;
+    const double fd = (opt.evaluate(plus, scratch, terms) - opt.evaluate(minus, scratch, terms)) / (2.0 * h);
+    EXPECT_NEAR(grad(k), fd, 1e-6 * std::max(std::abs(fd), 1e-3 * scale)) << name << " variable " << k;
+    if (std::abs(grad(k)) > 0.0) ++active;
+  }
+  EXPECT_GT(active, 0) << name << ": the term must be active at the test point";
+}
+
+TEST(TrajectoryOptimizer, EveryTermsGradientMatchesCentralDifferences) {
+  std::mt19937 rng(21);
+  const RandomCorridor c = randomCorridor(5, rng, 4.0);  // fast: the velocity and acceleration terms bite
+  TrajectoryOptimizerParams params;
+  params.max_velocity_mps = 2.0;
+  params.max_acceleration_mps2 = 2.0;
+  params.max_jerk_mps3 = 3.0;
+  params.corridor_margin_m = 0.5;  // samples near the walls count as outside
+  auto opt = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(opt.has_value());
+  ASSERT_TRUE(opt->setProblem(c.problem()).has_value());
+  Eigen::VectorXd x = opt->initialVariables();
+  std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) += jitter(rng);  // away from the initial guess's symmetries
+  const std::pair<std::uint32_t, const char*> terms[] = {
+      {kJerkEnergy, "J_S"},
+      {kBarrier, "J_F"},
+      {kTime, "rho_t"},
+      {kWaypointVelocity, "rho_v"},
+      {kWaypointAcceleration, "rho_a"},
+      {kCorridorSamples, "rho_c"},
+      {kVelocitySamples, "rho_vs"},
+      {kAccelerationSamples, "rho_as"},
+      {kJerkSamples, "rho_js"},
+      {kAllTerms, "all"},
+  };
+  for (const auto& [mask, name] : terms) expectGradientMatches(*opt, x, mask, name);
+}
+
+TEST(TrajectoryOptimizer, SoftplusRoundTrips) {
+  for (const double t : {1e-3, 0.1, 0.7, 1.0, 5.0, 40.0}) {
+    EXPECT_NEAR(TrajectoryOptimizer::durationFromTau(TrajectoryOptimizer::tauFromDuration(t)), t,
+                1e-12 * std::max(1.0, t));
+  }
+  EXPECT_GT(TrajectoryOptimizer::durationFromTau(-50.0), 0.0);
+}
+
+struct TrajectoryStats {
+  double max_outside_m = 0.0;  // largest distance of a sample outside its piece's box
+  double max_speed_mps = 0.0;
+  double max_acceleration_mps2 = 0.0;
+};
+
+TrajectoryStats inspect(const PolynomialTrajectory& traj, const std::vector<CorridorBox>& boxes) {
+  TrajectoryStats s;
+  double t0 = 0.0;
+  for (int i = 0; i < traj.pieces(); ++i) {
+    const double d = traj.pieceDurationS(i);
+    for (int k = 0; k <= 200; ++k) {
+      const double t = t0 + d * k / 200.0;
+      const trajectory_server::TrajectorySample x = traj.sample(t);
+      const CorridorBox& box = boxes[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d outside =
+          (box.lo_W_m - x.p_W_m).cwiseMax(x.p_W_m - box.hi_W_m).cwiseMax(Eigen::Vector3d::Zero());
+      s.max_outside_m = std::max(s.max_outside_m, outside.maxCoeff());
+      s.max_speed_mps = std::max(s.max_speed_mps, x.v_W_mps.norm());
+      s.max_acceleration_mps2 = std::max(s.max_acceleration_mps2, x.a_W_mps2.norm());
+    }
+    t0 += d;
+  }
+  return s;
+}
+
+TEST(TrajectoryOptimizer, StaysInsideRandomCorridorsWithinLimits) {
+  std::mt19937 rng(1234);
+  TrajectoryOptimizerParams params;
+  params.corridor_margin_m = 0.05;
+  auto opt = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(opt.has_value());
+  for (int trial = 0; trial < 40; ++trial) {
+    const RandomCorridor c = randomCorridor(2 + trial % 10, rng, 1.5);
+    PolynomialTrajectory traj;
+    const auto result = opt->optimize(c.problem(), traj);
+    ASSERT_TRUE(result.has_value()) << result.error().message;
+    EXPECT_LT(result->cost, result->initial_cost) << "trial " << trial;
+    const TrajectoryStats s = inspect(traj, c.boxes);
+    EXPECT_LE(s.max_outside_m, 0.0) << "trial " << trial;
+    EXPECT_LE(s.max_speed_mps, params.max_velocity_mps * 1.02) << "trial " << trial;
+    EXPECT_LE(s.max_acceleration_mps2, params.max_acceleration_mps2 * 1.02) << "trial " << trial;
+    // The boundary states are exactly the problem's.
+    EXPECT_LT((traj.sample(0.0).p_W_m - c.start.col(0)).norm(), 1e-9);
+    EXPECT_LT((traj.sample(0.0).v_W_mps - c.start.col(1)).norm(), 1e-9);
+    EXPECT_LT((traj.sample(traj.durationS()).p_W_m - c.end.col(0)).norm(), 1e-9);
+  }
+}
+
+TEST(TrajectoryOptimizer, RefusesBadProblems) {
+  std::mt19937 rng(5);
+  RandomCorridor c = randomCorridor(3, rng);
+  auto opt = TrajectoryOptimizer::create(TrajectoryOptimizerParams{});
+  ASSERT_TRUE(opt.has_value());
+  PolynomialTrajectory traj;
+  {
+    RandomCorridor bad = c;
+    bad.waypoints[0] = bad.boxes[0].hi_W_m + Eigen::Vector3d::Ones();
+    const auto r = opt->optimize(bad.problem(), traj);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_NE(r.error().message.find("waypoint 0"), std::string::npos);
+  }
+  {
+    RandomCorridor bad = c;
+    bad.durations[1] = -1.0;
+    EXPECT_FALSE(opt->optimize(bad.problem(), traj).has_value());
+  }
+  {
+    RandomCorridor bad = c;
+    bad.waypoints.pop_back();
+    EXPECT_FALSE(opt->optimize(bad.problem(), traj).has_value());
+  }
+  {
+    RandomCorridor bad = c;
+    bad.start(0, 0) = std::nan("");
+    EXPECT_FALSE(opt->optimize(bad.problem(), traj).has_value());
+  }
+  TrajectoryOptimizerParams params;
+  params.samples_per_piece = 0;
+  EXPECT_FALSE(TrajectoryOptimizer::create(params).has_value());
+}
+
+}  // namespace
+}  // namespace aerotrack::planning
