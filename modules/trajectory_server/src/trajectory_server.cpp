@@ -5,10 +5,27 @@
 
 namespace aerotrack::trajectory_server {
 
+void TrajectoryServer::setTrajectory(const TimedTrajectory& trajectory) {
+  if (!trajectory.trajectory || !current_.trajectory) {
+    current_ = trajectory;
+    pending_ = {};
+    return;
+  }
+  pending_ = trajectory;
+}
+
 std::optional<hal::Setpoint> TrajectoryServer::sample(rt::TimeNs now_ns) {
+  if (pending_.trajectory && now_ns >= pending_.start_ns) {
+    current_ = std::move(pending_);
+    pending_ = {};
+  }
   if (!current_.trajectory) return std::nullopt;
   const double t_s = rt::nsToSeconds(now_ns - current_.start_ns);
-  const TrajectorySample s = current_.trajectory->sample(t_s);
+  TrajectorySample s = current_.trajectory->sample(t_s);
+  if (t_s > current_.trajectory->durationS()) {  // finished: hold the end at rest
+    s.v_W_mps.setZero();
+    s.a_W_mps2.setZero();
+  }
   hal::Setpoint sp;
   sp.stamp_ns = now_ns;
   sp.p_W_m = s.p_W_m;

@@ -2,7 +2,9 @@
 // finite differences, yaw along the velocity.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 #include "aerotrack/trajectory_server/trajectory_server.hpp"
@@ -117,6 +119,61 @@ TEST(TrajectoryServer, GivenCircleThenYawRateIsSpeedOverRadius) {
   const auto sp = server.sample(rt::secondsToNs(3.0));
   EXPECT_NEAR(sp->yaw_rate_radps, 0.5, 1e-9);
   EXPECT_NEAR(std::remainder(sp->yaw_rad - (0.5 * 3.0 + M_PI / 2), 2 * M_PI), 0.0, 1e-9);
+}
+
+// A straight line at constant velocity from p0, to tell trajectories apart.
+class Line final : public Trajectory {
+ public:
+  Line(Eigen::Vector3d p0, Eigen::Vector3d v, double duration_s) : p0_(std::move(p0)), v_(std::move(v)), d_(duration_s) {}
+  double durationS() const override { return d_; }
+  TrajectorySample sample(double t_s) const override {
+    TrajectorySample s;
+    s.p_W_m = p0_ + v_ * std::clamp(t_s, 0.0, d_);
+    s.v_W_mps = v_;
+    return s;
+  }
+
+ private:
+  Eigen::Vector3d p0_, v_;
+  double d_;
+};
+
+TEST(TrajectoryServer, GivenNewTrajectoryThenCurrentIsFlownUntilItsStartTime) {
+  TrajectoryServer server(TrajectoryServerParams{});
+  const auto first = std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 10.0);
+  server.setTrajectory({first, 0});
+  // The replacement starts at 1.05 s from where the first will be then (1.05 m), going along y.
+  const auto second = std::make_shared<const Line>(Eigen::Vector3d(1.05, 0, 0), Eigen::Vector3d(0, 1, 0), 10.0);
+  server.setTrajectory({second, rt::secondsToNs(1.05)});
+  const auto before = server.sample(rt::secondsToNs(1.0));
+  ASSERT_TRUE(before);
+  EXPECT_NEAR(before->p_W_m.x(), 1.0, 1e-12);
+  EXPECT_NEAR(before->v_W_mps.x(), 1.0, 1e-12);
+  const auto at = server.sample(rt::secondsToNs(1.05));
+  ASSERT_TRUE(at);
+  EXPECT_NEAR((at->p_W_m - Eigen::Vector3d(1.05, 0, 0)).norm(), 0.0, 1e-12);  // continuous position
+  EXPECT_NEAR(at->v_W_mps.y(), 1.0, 1e-12);                                  // the new one is flown
+  EXPECT_EQ(server.current().trajectory, second);
+}
+
+TEST(TrajectoryServer, GivenTrajectoryWhoseStartHasPassedThenItTakesOverAtOnce) {
+  TrajectoryServer server(TrajectoryServerParams{});
+  server.setTrajectory({std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 10.0), 0});
+  const auto late = std::make_shared<const Line>(Eigen::Vector3d(0, 5, 0), Eigen::Vector3d::Zero(), 10.0);
+  server.setTrajectory({late, rt::secondsToNs(0.5)});
+  const auto s = server.sample(rt::secondsToNs(2.0));
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->p_W_m.y(), 5.0, 1e-12);
+}
+
+TEST(TrajectoryServer, GivenFinishedTrajectoryThenEndIsHeldAtRest) {
+  TrajectoryServer server(TrajectoryServerParams{});
+  server.setTrajectory({std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 2.0), 0});
+  const auto s = server.sample(rt::secondsToNs(3.0));
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->p_W_m.x(), 2.0, 1e-12);
+  EXPECT_EQ(s->v_W_mps.norm(), 0.0);
+  EXPECT_EQ(s->a_W_mps2.norm(), 0.0);
 }
 
 }  // namespace

@@ -2,6 +2,11 @@
 // trajectory at a fixed rate into full-state setpoints for the flight controller. The body's yaw
 // follows the direction of horizontal velocity, because the gimbal, not the body, looks at the
 // person (paper Sect. III-B); when nearly still, the last yaw is held. Pure: time comes in.
+// Replanning (issue 8): the planner starts each new trajectory from the state the current one will
+// have at the new one's start time, a little in the future; the server keeps flying the current one
+// until then and switches exactly at that time, so the setpoints stay continuous. After a
+// trajectory's end its last position is held at rest (velocity and acceleration zero): a planner that
+// stops publishing leaves the vehicle hovering, not drifting with a stale velocity feed-forward.
 #pragma once
 
 #include <optional>
@@ -21,16 +26,22 @@ class TrajectoryServer {
   explicit TrajectoryServer(const TrajectoryServerParams& params)
       : params_(params), held_yaw_rad_(params.initial_yaw_rad) {}
 
-  /// Replaces the trajectory being served (the planner's newest). An empty handle stops serving.
-  void setTrajectory(const TimedTrajectory& trajectory) { current_ = trajectory; }
+  /// Hands over the planner's newest trajectory. If one is being served, the new one takes over at its
+  /// start_ns (at once if that has passed); a newer hand-over replaces one still waiting. With nothing
+  /// served yet it is served at once. An empty handle stops serving (at once).
+  void setTrajectory(const TimedTrajectory& trajectory);
 
   /// Setpoint at now_ns, or nothing if no trajectory was given. Before its start the trajectory's
-  /// first state is served, after its end the last (a hold). Not thread-safe (one task).
+  /// first state is served, after its end the last position at rest (a hold). Not thread-safe (one task).
   std::optional<hal::Setpoint> sample(rt::TimeNs now_ns);
+
+  /// The trajectory being served (after any switch due by the last sample()).
+  const TimedTrajectory& current() const { return current_; }
 
  private:
   TrajectoryServerParams params_;
   TimedTrajectory current_;
+  TimedTrajectory pending_;  ///< Takes over at its start_ns.
   double held_yaw_rad_;
 };
 
