@@ -8,6 +8,7 @@
 #include "aerotrack/localization/localization_io.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/perception/detection_task.hpp"
+#include "planning_yaml.hpp"
 
 namespace aerotrack::app {
 namespace {
@@ -45,6 +46,11 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
   if (root.has("perception")) c.perception = perception::parseDetectorParams(root.child("perception"));
   if (root.has("estimation")) c.estimation = parseEstimation(root.child("estimation"), c.source);
+  if (root.has("planning")) {
+    const rt::ConfigNode planning_node = root.child("planning");
+    c.planning = planning::parseTrackingPlannerParams(planning_node);
+    if (const rt::Status s = planning::validate(*c.planning); !s) planning_node.fail("planning", s.error().message);
+  }
 
   if (root.has("realtime")) {
     const rt::ConfigNode rt_node = root.child("realtime");
@@ -182,6 +188,10 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "max_buffered_measurements" << YAML::Value << k.max_buffered_measurements;
     out << YAML::EndMap;
     out << YAML::EndMap;
+  }
+  if (c.planning) {
+    out << YAML::Key << "planning" << YAML::Value;
+    emitPlanningYaml(out, *c.planning);
   }
   out << YAML::Key << "realtime" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "realtime_priority" << YAML::Value << c.realtime.use_realtime_priority;

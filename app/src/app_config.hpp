@@ -13,6 +13,7 @@
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/mapping/mapper.hpp"
 #include "aerotrack/perception/detector.hpp"
+#include "aerotrack/planning/tracking_planner.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "aerotrack/rt/task.hpp"
@@ -44,6 +45,7 @@ struct AppConfig {
   /// `perception:` section; needed by the detection task. model_dir "default" is resolved by the app.
   std::optional<perception::DetectorParams> perception;
   std::optional<EstimationConfig> estimation;  ///< `estimation:` section; needed by the target task.
+  std::optional<planning::TrackingPlannerParams> planning;  ///< `planning:` section; needed by the planning task.
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };

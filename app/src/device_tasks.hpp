@@ -108,20 +108,24 @@ class SimWorldTask final : public rt::Task {
 };
 
 /// The simulator's truth-fed stand-in for planner and gimbal control (see baseline_follower.hpp):
-/// reads ground truth, commands the vehicle and the gimbal through their devices.
+/// reads ground truth, commands the vehicle and the gimbal through their devices. With
+/// command_vehicle false it points only the gimbal (task `truth_gimbal`: the planner flies, and the
+/// gimbal is aimed from the truth until gimbal control lands, issue 9).
 class BaselineFollowTask final : public rt::Task {
  public:
-  BaselineFollowTask(std::shared_ptr<hal::sim::Simulation> sim, hal::VehicleLink& vehicle, hal::Gimbal& gimbal)
+  BaselineFollowTask(std::shared_ptr<hal::sim::Simulation> sim, hal::VehicleLink& vehicle, hal::Gimbal& gimbal,
+                     bool command_vehicle = true)
       : sim_(std::move(sim)),
         follower_(hal::sim::BaselineFollowerParams{}, sim_->scenario().spec.drone.start_m,
                   sim_->scenario().spec.drone.start_yaw_rad),
         vehicle_(vehicle),
-        gimbal_(gimbal) {}
+        gimbal_(gimbal),
+        command_vehicle_(command_vehicle) {}
   void step(rt::TimeNs now_ns) override {
     const auto truth = sim_->truthOut().read();
     if (!truth) return;
     const hal::sim::FollowCommand command = follower_.update(*truth, now_ns);
-    vehicle_.send(command.setpoint);
+    if (command_vehicle_) vehicle_.send(command.setpoint);
     gimbal_.command(command.gimbal);
   }
 
@@ -130,6 +134,7 @@ class BaselineFollowTask final : public rt::Task {
   hal::sim::BaselineFollower follower_;
   hal::VehicleLink& vehicle_;
   hal::Gimbal& gimbal_;
+  bool command_vehicle_;
 };
 
 /// Simulator only: compares the target estimate with where the person really is, at every step

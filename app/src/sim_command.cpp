@@ -3,8 +3,8 @@
 // one closed-loop trial in the built-in simulator, on the lockstep executor (deterministic, as
 // fast as the CPU allows) or at 1x on threads with --realtime. Writes DIR/summary.json and
 // DIR/topdown.png. With --camera image the gimbal camera renders frames and the real detector
-// (the detection task) finds the person in them. Until the planner and gimbal controller land, the drone is flown by
-// the simulator's truth-fed baseline_follow stand-in (README, "Status").
+// (the detection task) finds the person in them. The planner (the planning task, issue 8) flies the drone from the
+// estimated person; until gimbal control lands (issue 9) the gimbal is aimed from the truth (task truth_gimbal).
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -111,7 +111,9 @@ int simCommand(const ParsedArgs& args) {
 
   RunInfo info;
   info.executor = realtime ? "realtime" : "lockstep";
-  info.controller = "baseline_follow (truth-fed stand-in until the planner lands)";
+  info.controller = (*system)->planningTask() != nullptr
+                        ? "planner (gimbal aimed from the truth until gimbal control lands, issue 9)"
+                        : "baseline_follow (truth-fed stand-in)";
   const rt::TimeNs end_ns = start_ns + rt::secondsToNs(trial->duration_s);
   const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info)
                                   : runLockstep(**system, sim_clock, end_ns, stop, info);
@@ -120,6 +122,7 @@ int simCommand(const ParsedArgs& args) {
   info.map = mapSummary((*system)->mappingTask(), info.timings);
   info.perception = perceptionSummary((*system)->detectionTask());
   info.estimation = estimationSummary((*system)->targetTask(), (*system)->targetCheckTask());
+  info.planning = planningSummary((*system)->planningTask());
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
   const nlohmann::json summary = simSummary(sim, info);
@@ -140,6 +143,14 @@ int simCommand(const ParsedArgs& args) {
       m.longestLossS());
   std::printf("  distance to the person: mean %.2f m, max %.2f m, final %.2f m; min clearance %.2f m, collisions %d\n",
               m.distanceMeanM(), m.distanceMaxM(), m.finalDistanceM(), m.minClearanceM(), m.collisions());
+  if (const planning::PlanningTask* planner = (*system)->planningTask()) {
+    const rt::TimingSnapshot cycle = planner->cycleStats().snapshot();
+    std::printf("  planning: %llu cycles, %llu planned, %llu stops; cycle %.2f ms median, %.2f ms p99\n",
+                static_cast<unsigned long long>(planner->cycles()),
+                static_cast<unsigned long long>(planner->count(planning::PlanStatus::kPlanned)),
+                static_cast<unsigned long long>(planner->count(planning::PlanStatus::kStopped)), cycle.p50_ms,
+                cycle.p99_ms);
+  }
   std::fputs(timingTable(info.timings).c_str(), stdout);
   std::printf("results: %s, %s\n", summary_path.c_str(), topdown_path.c_str());
   return info.interrupted ? 130 : 0;

@@ -51,6 +51,34 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   return out;
 }
 
+nlohmann::json planningSummary(const planning::PlanningTask* task) {
+  if (task == nullptr) return nullptr;
+  nlohmann::json outcomes = nlohmann::json::object();
+  for (int i = 0; i < planning::kPlanStatusCount; ++i) {
+    const auto status = static_cast<planning::PlanStatus>(i);
+    outcomes[std::string(planning::toString(status))] = task->count(status);
+  }
+  nlohmann::json search_failures = nlohmann::json::object();
+  for (const auto status : {planning::SearchStatus::kNoPath, planning::SearchStatus::kStartBlocked,
+                            planning::SearchStatus::kInvalidInput}) {
+    search_failures[std::string(planning::toString(status))] = task->searchFailures(status);
+  }
+  const rt::TimingSnapshot cycle = task->cycleStats().snapshot();
+  return {{"cycles", task->cycles()},
+          {"search_failures", search_failures},
+          {"outcomes", outcomes},
+          {"cycle_ms_p50", cycle.p50_ms},
+          {"cycle_ms_p99", cycle.p99_ms},
+          {"cycle_ms_max", cycle.max_ms},
+          {"cycle_ms_mean", cycle.mean_ms},
+          {"timed_cycles", cycle.runs},
+          {"search_partial", task->searchPartial()},
+          {"corridor_boxes_mean", task->meanCorridorBoxes()},
+          {"optimizer_max_iterations", task->optimizerMaxIterations()},
+          {"optimizer_line_search", task->optimizerLineSearch()},
+          {"trajectory_pool_growths", task->poolGrowths()}};
+}
+
 nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
   if (task == nullptr) return nullptr;
   const rt::TimingSnapshot detect = task->detectStats().snapshot();
@@ -95,6 +123,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"map", run.map},
       {"perception", run.perception},
       {"estimation", run.estimation},
+      {"planning", run.planning},
   };
   if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
   return out;

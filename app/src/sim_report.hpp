@@ -12,6 +12,7 @@
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/perception/detection_task.hpp"
+#include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "report.hpp"
 
@@ -28,11 +29,16 @@ struct RunInfo {
   nlohmann::json map;         ///< mapSummary()
   nlohmann::json perception;  ///< perceptionSummary()
   nlohmann::json estimation;  ///< estimationSummary()
+  nlohmann::json planning;    ///< planningSummary()
 };
 
 class TargetTruthCheckTask;
 /// The estimation section of summary.json (null if the run had no target task).
 nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check);
+
+/// The planning section of summary.json (null if the run had no planning task): cycles by outcome,
+/// the replanning cycle's time (prediction + search + corridor + optimisation + check) and counters.
+nlohmann::json planningSummary(const planning::PlanningTask* task);
 
 /// The perception section of summary.json (null if the run had no detection task).
 nlohmann::json perceptionSummary(const perception::DetectionTask* task);

@@ -8,8 +8,8 @@
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry", "gimbal_camera", "depth_camera",      "gimbal",         "mapping",
-          "detection", "target",   "target_check",  "trajectory_server", "baseline_follow"};
+  return {"sim_world", "odometry",     "gimbal_camera",     "depth_camera",    "gimbal",      "mapping", "detection",
+          "target",    "target_check", "trajectory_server", "baseline_follow", "truth_gimbal", "planning"};
 }
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
@@ -36,7 +36,8 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
 rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   const std::string where = config_.source + ": tasks[" + std::to_string(index) + "]";
   std::unique_ptr<rt::Task> task;
-  if (spec.name == "sim_world" || spec.name == "baseline_follow" || spec.name == "target_check") {
+  if (spec.name == "sim_world" || spec.name == "baseline_follow" || spec.name == "truth_gimbal" ||
+      spec.name == "target_check") {
     if (!devices_.simulation) return rt::Error{where + ": task '" + spec.name + "' needs a sim backend in hal"};
     if (spec.name == "sim_world") {
       task = std::make_unique<SimWorldTask>(devices_.simulation);
@@ -45,7 +46,9 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
       target_check_task_ = check.get();
       task = std::move(check);
     } else {
-      task = std::make_unique<BaselineFollowTask>(devices_.simulation, *devices_.vehicle_link, *devices_.gimbal);
+      const bool command_vehicle = spec.name == "baseline_follow";
+      task = std::make_unique<BaselineFollowTask>(devices_.simulation, *devices_.vehicle_link, *devices_.gimbal,
+                                                  command_vehicle);
     }
   } else if (spec.name == "odometry") {
     task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream,
@@ -84,6 +87,15 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     task = std::move(target_task);
   } else if (spec.name == "gimbal") {
     task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state, channels_.gimbal_stream);
+  } else if (spec.name == "planning") {
+    if (!config_.planning) return rt::Error{where + ": task 'planning' needs a planning: section"};
+    auto planner = planning::TrackingPlanner::create(*config_.planning);
+    if (!planner) return rt::Error{config_.source + ": " + planner.error().message};
+    const planning::PlanningChannels channels{channels_.odometry, channels_.target, channels_.local_grid,
+                                              channels_.octree, channels_.trajectories};
+    auto planning_task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, stats_clock_);
+    planning_task_ = planning_task.get();
+    task = std::move(planning_task);
   } else if (spec.name == "trajectory_server") {
     auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
         config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);

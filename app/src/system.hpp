@@ -11,6 +11,7 @@
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/perception/detection_task.hpp"
+#include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/doorbell.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
@@ -63,6 +64,9 @@ class System {
   /// The detection task, if the table has one (for its statistics).
   const perception::DetectionTask* detectionTask() const { return detection_task_; }
 
+  /// The planning task, if the table has one (for its statistics and the replan hand-over).
+  const planning::PlanningTask* planningTask() const { return planning_task_; }
+
   /// Names of the tasks this build knows, for messages and tests.
   static std::vector<std::string> knownTasks();
 
@@ -80,6 +84,7 @@ class System {
   const perception::DetectionTask* detection_task_ = nullptr;
   const estimation::TargetTask* target_task_ = nullptr;
   const TargetTruthCheckTask* target_check_task_ = nullptr;
+  const planning::PlanningTask* planning_task_ = nullptr;
   rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };
 

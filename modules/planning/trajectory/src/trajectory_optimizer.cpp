@@ -133,6 +133,7 @@ TrajectoryOptimizerParams parseTrajectoryOptimizerParams(const rt::ConfigNode& n
   p.gradient_tolerance = node.getDouble("gradient_tolerance", 1e-12, 1.0);
   p.memory = node.getInt("memory", 1, 64);
   p.max_pieces = node.getInt("max_pieces", 1, 100000);
+  node.finish();
   return p;
 }
 

@@ -1,0 +1,153 @@
+// One replanning cycle of the tracking planner (paper Sect. V; issue 8 item 4):
+//   0. take-off: a start below takeoff_below_m (on the ground, inside the floor's inflation margin)
+//      climbs straight up to flight_altitude_m;
+//   1. start state: where the current trajectory will be when the new one takes over, at
+//      now + planning_budget_s (position, velocity and acceleration, so the hand-over is smooth); from
+//      odometry instead when there is no current trajectory or the drone has strayed from it;
+//   2. prediction: the person's path, a Bezier QP over their recent estimates (Sect. V-A,
+//      modules/prediction); a constant-velocity extrapolation while the predictor has too few samples;
+//   3. goal and search: the tracking goal mixed from the person's current and predicted states, and the
+//      occlusion-aware kinodynamic search towards it (Sect. V-B, modules/planning/search);
+//   4. corridor: overlapping free boxes along the search path (Sect. V-C, modules/planning/corridor);
+//   5. optimisation: the minimum-jerk spline in the corridor (Sect. V-C, modules/planning/trajectory);
+//   6. final check: limits, inflated grid, FCL against the octree (trajectory_check.hpp).
+// A cycle that fails at any stage publishes nothing: the current trajectory continues (the trajectory
+// server holds its end at rest). If, in addition, the current trajectory's next stretch is no longer
+// clear in the newest grid, a stopping trajectory (a minimum-jerk brake to rest along the current
+// velocity) is issued instead. Pure: time, odometry, the estimate and the maps come in; no clock is read.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include <octomap/OcTree.h>
+
+#include "aerotrack/estimation/target_estimator.hpp"
+#include "aerotrack/hal/types.hpp"
+#include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/mapping/trajectory_checker.hpp"
+#include "aerotrack/planning/corridor.hpp"
+#include "aerotrack/planning/kinodynamic_search.hpp"
+#include "aerotrack/planning/polynomial_trajectory.hpp"
+#include "aerotrack/planning/trajectory_check.hpp"
+#include "aerotrack/planning/trajectory_optimizer.hpp"
+#include "aerotrack/prediction/target_predictor.hpp"
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/trajectory_server/trajectory.hpp"
+
+namespace aerotrack::planning {
+
+struct TrackingPlannerParams {
+  double planning_budget_s = 0.05;        ///< The new trajectory takes over at now + this; >= 0.
+  double path_sample_step_s = 0.02;       ///< The search path is cut into chords this long for the corridor; > 0.
+  double min_piece_duration_s = 0.05;     ///< Initial durations are at least this; > 0.
+  double replan_reset_distance_m = 1.0;   ///< Drone this far from the current trajectory: start from odometry; > 0.
+  double stop_check_horizon_s = 1.0;      ///< On a failed cycle, this much of the current trajectory must be clear.
+  double flight_altitude_m = 1.5;         ///< The goal's height (W z); > takeoff_below_m.
+  double takeoff_below_m = 0.5;           ///< A start lower than this climbs straight to flight_altitude_m first; >= 0.
+  TrackingGoalParams goal;
+  KinodynamicSearchParams search;
+  CorridorParams corridor;
+  TrajectoryOptimizerParams optimizer;
+  prediction::TargetPredictorParams prediction;
+  TrajectoryCheckParams check;
+  mapping::TrajectoryCheckerParams collision;
+};
+
+rt::Status validate(const TrackingPlannerParams& params);
+/// The `planning:` config section: the scalars above and the sub-sections goal, search, corridor,
+/// optimizer, prediction, check, collision; every key required. Throws rt::ConfigError naming the key.
+TrackingPlannerParams parseTrackingPlannerParams(const rt::ConfigNode& node);
+
+enum class PlanStatus : std::uint8_t {
+  kPlanned,          ///< A checked trajectory was produced.
+  kStopped,          ///< The cycle failed (any reason below) and the current trajectory was blocked: a stop.
+  kTakeOff,          ///< The start was below takeoff_below_m: a vertical climb to the flight altitude.
+  kAtGoal,           ///< The search's path is too short to fly (the drone is at the goal): nothing published.
+  kNoOdometry,       ///< No odometry yet.
+  kNoMap,            ///< No local grid yet.
+  kNoTarget,         ///< No live estimate of the person (never seen, or lost).
+  kSearchFailed,     ///< The search found no path (start blocked, no path, invalid input).
+  kCorridorFailed,   ///< The corridor could not be built along the path.
+  kOptimizerFailed,  ///< The optimiser refused the problem.
+  kCheckFailed,      ///< The optimised trajectory failed the final check.
+};
+inline constexpr int kPlanStatusCount = 11;
+std::string_view toString(PlanStatus status);
+
+/// What a cycle reads.
+struct PlanInputs {
+  rt::TimeNs now_ns = 0;
+  const hal::OdometrySample* odometry = nullptr;
+  const estimation::TargetEstimate* target = nullptr;
+  const mapping::LocalGrid* grid = nullptr;
+  const octomap::OcTree* octree = nullptr;                      ///< Null: no FCL check (grid check only).
+  const trajectory_server::TimedTrajectory* current = nullptr;  ///< What the server flies now; may be empty.
+};
+
+/// What a cycle did (counters for the statistics, and the trajectory written into `out`).
+struct PlanReport {
+  PlanStatus status = PlanStatus::kNoOdometry;
+  rt::TimeNs start_ns = 0;  ///< When the new trajectory takes over (kPlanned, kStopped).
+  SearchStatus search_status = SearchStatus::kNoPath;
+  int search_expansions = 0;
+  int corridor_boxes = 0;
+  OptimizerStatus optimizer_status = OptimizerStatus::kConverged;
+  int optimizer_iterations = 0;
+  CheckVerdict check = CheckVerdict::kOk;
+  bool predicted = false;  ///< The Bezier prediction was used (else constant velocity).
+};
+
+/// Not thread-safe (one planning thread). create() allocates all scratch memory; a warm cycle allocates
+/// only when the piece count changes (the L-BFGS history) or inside FCL.
+class TrackingPlanner {
+ public:
+  static rt::Expected<TrackingPlanner> create(const TrackingPlannerParams& params);
+
+  const TrackingPlannerParams& params() const { return params_; }
+  /// The baseline mode of the paper's comparison: no occlusion term in the search.
+  void setOcclusionAware(bool aware) { search_.setOcclusionAware(aware); }
+
+  /// Feeds the person's estimate to the predictor (call every cycle; repeats and lost estimates are ignored).
+  void observeTarget(const estimation::TargetEstimate& estimate);
+
+  /// One cycle. On kPlanned, kStopped and kTakeOff the trajectory to fly is in `out` (starting at
+  /// report.start_ns); on other statuses `out` may hold a rejected attempt and must not be flown.
+  PlanReport plan(const PlanInputs& inputs, PolynomialTrajectory& out);
+
+  /// The state a cycle starts from (exposed for tests): the current trajectory at start_ns, or the
+  /// odometry (acceleration zero) when there is none or the drone strayed from it.
+  StatePva startState(const PlanInputs& inputs, rt::TimeNs start_ns) const;
+  /// The search path cut into the polyline the corridor follows (exposed for tests).
+  const std::vector<Eigen::Vector3d>& polyline() const { return polyline_; }
+  const Corridor& corridor() const { return corridor_; }
+
+  /// A minimum-jerk move from `start` to rest at end_W_m, at half the optimiser's limits.
+  void makeMoveTrajectory(const StatePva& start, const Eigen::Vector3d& end_W_m, PolynomialTrajectory& out);
+  /// A minimum-jerk brake from `start` to rest, along the current velocity, within the acceleration limit.
+  void makeStopTrajectory(const StatePva& start, PolynomialTrajectory& out);
+
+ private:
+  TrackingPlanner(const TrackingPlannerParams& params, KinodynamicSearch search, CorridorBuilder corridor,
+                  TrajectoryOptimizer optimizer, prediction::TargetPredictor predictor,
+                  mapping::TrajectoryChecker checker);
+  bool currentBlocked(const PlanInputs& inputs) const;
+
+  TrackingPlannerParams params_;
+  KinodynamicSearch search_;
+  CorridorBuilder corridor_builder_;
+  TrajectoryOptimizer optimizer_;
+  prediction::TargetPredictor predictor_;
+  mapping::TrajectoryChecker checker_;
+  rt::TimeNs last_target_stamp_ns_ = -1;
+  SearchPath path_;
+  std::vector<Eigen::Vector3d> polyline_;
+  Corridor corridor_;
+  std::vector<double> durations_s_;
+  MinJerkSpline stop_spline_;
+};
+
+}  // namespace aerotrack::planning

@@ -1,0 +1,49 @@
+// The final check before a planned trajectory is used (issue 8 item 3; paper Sect. V-C: the
+// optimiser's penalties are soft, so its output is verified, not trusted). Sampled velocity,
+// acceleration and jerk within the limits (norms, with a tolerance), every sample clear in the inflated
+// local grid, and the FCL sphere check against the newest octree snapshot (mapping/collision). A
+// trajectory that starts inside the inflation margin (the drone was pushed close to something) is
+// allowed to leave it: only samples after the first clear one must be clear.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+
+#include <octomap/OcTree.h>
+
+#include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/mapping/trajectory_checker.hpp"
+#include "aerotrack/planning/polynomial_trajectory.hpp"
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/expected.hpp"
+
+namespace aerotrack::planning {
+
+struct TrajectoryCheckParams {
+  double max_velocity_mps = 3.0;       ///< Norm limit; > 0.
+  double max_acceleration_mps2 = 4.0;  ///< Norm limit; > 0.
+  double max_jerk_mps3 = 40.0;         ///< Norm limit; > 0.
+  double tolerance = 0.05;             ///< Relative excess allowed over each limit; in [0, 1].
+  double sample_step_s = 0.02;         ///< Time between limit and grid samples; > 0.
+  double horizon_s = 3.0;              ///< Only this much of the trajectory is checked (the rest is replanned); > 0.
+};
+
+rt::Status validate(const TrajectoryCheckParams& params);
+/// Every field by its name, all required; throws rt::ConfigError naming the key.
+TrajectoryCheckParams parseTrajectoryCheckParams(const rt::ConfigNode& node);
+
+enum class CheckVerdict : std::uint8_t { kOk, kVelocity, kAcceleration, kJerk, kGridBlocked, kCollision, kCheckerError };
+std::string_view toString(CheckVerdict verdict);
+
+struct CheckResult {
+  CheckVerdict verdict = CheckVerdict::kOk;
+  double t_s = 0.0;  ///< Time of the first failing sample (0 when ok).
+};
+
+/// Checks `trajectory` over [0, min(duration, horizon_s)]. `octree` may be null (no snapshot yet): the
+/// FCL check is then skipped and the grid check stands alone. Allocation-free except inside FCL.
+CheckResult checkTrajectory(const PolynomialTrajectory& trajectory, const TrajectoryCheckParams& params,
+                            const mapping::LocalGrid& grid, const mapping::TrajectoryChecker& checker,
+                            const octomap::OcTree* octree);
+
+}  // namespace aerotrack::planning

@@ -1,0 +1,80 @@
+// Planning task: see planning_task.hpp.
+#include "aerotrack/planning/planning_task.hpp"
+
+namespace aerotrack::planning {
+namespace {
+
+constexpr int kPoolSize = 6;  // the server holds one or two, the slot one, the planner fills one
+
+}  // namespace
+
+PlanningTask::PoolEntry PlanningTask::makeEntry(int max_pieces) {
+  auto trajectory = std::make_shared<PolynomialTrajectory>(max_pieces);
+  auto timed = std::make_shared<trajectory_server::TimedTrajectory>();
+  timed->trajectory = trajectory;
+  return {std::move(trajectory), std::move(timed)};
+}
+
+PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& channels, const rt::Clock& stats_clock)
+    : planner_(std::move(planner)), channels_(channels), stats_clock_(stats_clock) {
+  pool_.reserve(kPoolSize * 2);
+  for (int i = 0; i < kPoolSize; ++i) pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
+}
+
+PlanningTask::PoolEntry& PlanningTask::freeEntry() {
+  for (PoolEntry& entry : pool_) {
+    // Free when only the pool holds it: the entry's own two handles (the TimedTrajectory holds one).
+    if (entry.timed.use_count() == 1 && entry.trajectory.use_count() == 2) return entry;
+  }
+  ++pool_growths_;
+  pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
+  return pool_.back();
+}
+
+double PlanningTask::meanCorridorBoxes() const {
+  const std::uint64_t built = counts_[static_cast<std::size_t>(PlanStatus::kPlanned)] +
+                              counts_[static_cast<std::size_t>(PlanStatus::kOptimizerFailed)] +
+                              counts_[static_cast<std::size_t>(PlanStatus::kCheckFailed)];
+  return built > 0 ? static_cast<double>(corridor_boxes_sum_) / static_cast<double>(built) : 0.0;
+}
+
+void PlanningTask::step(rt::TimeNs now_ns) {
+  ++cycles_;
+  const std::optional<hal::OdometrySample> odometry = channels_.odometry.read();
+  const std::optional<estimation::TargetEstimate> target = channels_.target.read();
+  const auto grid = channels_.grid.read();
+  const auto octree = channels_.octree.read();
+  if (target) planner_.observeTarget(*target);
+
+  PlanInputs inputs;
+  inputs.now_ns = now_ns;
+  inputs.odometry = odometry ? &*odometry : nullptr;
+  inputs.target = target ? &*target : nullptr;
+  inputs.grid = grid.get();
+  inputs.octree = octree.get();
+  inputs.current = published_.trajectory ? &published_ : nullptr;
+
+  PoolEntry& entry = freeEntry();
+  const rt::TimeNs begin_ns = stats_clock_.now();
+  const PlanReport report = planner_.plan(inputs, *entry.trajectory);
+  const bool ran = report.status != PlanStatus::kNoOdometry && report.status != PlanStatus::kNoMap &&
+                   report.status != PlanStatus::kNoTarget && report.status != PlanStatus::kTakeOff;
+  if (ran) cycle_stats_.recordRun(stats_clock_.now() - begin_ns);
+
+  ++counts_[static_cast<std::size_t>(report.status)];
+  if (report.search_status == SearchStatus::kPartial) ++search_partial_;
+  if (report.status == PlanStatus::kSearchFailed) ++search_failures_[static_cast<std::size_t>(report.search_status)];
+  if (report.corridor_boxes > 0) corridor_boxes_sum_ += static_cast<std::uint64_t>(report.corridor_boxes);
+  if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kCheckFailed) {
+    if (report.optimizer_status == OptimizerStatus::kMaxIterations) ++optimizer_max_iterations_;
+    if (report.optimizer_status == OptimizerStatus::kLineSearch) ++optimizer_line_search_;
+  }
+  if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kStopped ||
+      report.status == PlanStatus::kTakeOff) {
+    entry.timed->start_ns = report.start_ns;
+    published_ = *entry.timed;
+    channels_.trajectories.write(entry.timed);
+  }
+}
+
+}  // namespace aerotrack::planning

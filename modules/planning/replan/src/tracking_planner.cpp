@@ -1,0 +1,265 @@
+// One replanning cycle: see tracking_planner.hpp.
+#include "aerotrack/planning/tracking_planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace aerotrack::planning {
+
+std::string_view toString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kPlanned:
+      return "planned";
+    case PlanStatus::kStopped:
+      return "stopped";
+    case PlanStatus::kTakeOff:
+      return "take_off";
+    case PlanStatus::kAtGoal:
+      return "at_goal";
+    case PlanStatus::kNoOdometry:
+      return "no_odometry";
+    case PlanStatus::kNoMap:
+      return "no_map";
+    case PlanStatus::kNoTarget:
+      return "no_target";
+    case PlanStatus::kSearchFailed:
+      return "search_failed";
+    case PlanStatus::kCorridorFailed:
+      return "corridor_failed";
+    case PlanStatus::kOptimizerFailed:
+      return "optimizer_failed";
+    case PlanStatus::kCheckFailed:
+      return "check_failed";
+  }
+  return "unknown";
+}
+
+rt::Expected<TrackingPlanner> TrackingPlanner::create(const TrackingPlannerParams& params) {
+  if (const rt::Status s = validate(params); !s) return rt::Error{"planning: " + s.error().message};
+  auto search = KinodynamicSearch::create(params.search);
+  if (!search) return rt::Error{"planning: search: " + search.error().message};
+  auto corridor = CorridorBuilder::create(params.corridor);
+  if (!corridor) return rt::Error{"planning: corridor: " + corridor.error().message};
+  TrajectoryOptimizerParams optimizer_params = params.optimizer;
+  optimizer_params.max_pieces = std::max(optimizer_params.max_pieces, params.corridor.max_boxes);
+  auto optimizer = TrajectoryOptimizer::create(optimizer_params);
+  if (!optimizer) return rt::Error{"planning: " + optimizer.error().message};
+  auto predictor = prediction::TargetPredictor::create(params.prediction);
+  if (!predictor) return rt::Error{"planning: prediction: " + predictor.error().message};
+  auto checker = mapping::TrajectoryChecker::create(params.collision);
+  if (!checker) return rt::Error{"planning: collision: " + checker.error().message};
+  return TrackingPlanner(params, std::move(search.value()), std::move(corridor.value()),
+                         std::move(optimizer.value()), std::move(predictor.value()), std::move(checker.value()));
+}
+
+TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, KinodynamicSearch search,
+                                 CorridorBuilder corridor, TrajectoryOptimizer optimizer,
+                                 prediction::TargetPredictor predictor, mapping::TrajectoryChecker checker)
+    : params_(params),
+      search_(std::move(search)),
+      corridor_builder_(std::move(corridor)),
+      optimizer_(std::move(optimizer)),
+      predictor_(std::move(predictor)),
+      checker_(std::move(checker)) {
+  // The longest search path: every expansion adds a primitive, plus the one-shot.
+  const double longest_s = params.search.primitive_duration_s * (params.search.max_expansions + 1) + 10.0;
+  polyline_.reserve(static_cast<std::size_t>(std::min(longest_s / params.path_sample_step_s, 1e5)) + 2);
+  const auto boxes = static_cast<std::size_t>(params.corridor.max_boxes);
+  corridor_.boxes.reserve(boxes);
+  corridor_.waypoints_W_m.reserve(boxes);
+  corridor_.waypoint_path_index.reserve(boxes);
+  durations_s_.reserve(boxes);
+  stop_spline_.reset(StatePva::Zero(), StatePva::Zero(), 1);
+}
+
+void TrackingPlanner::observeTarget(const estimation::TargetEstimate& estimate) {
+  if (!estimate.initialised || estimate.lost) {
+    if (estimate.initialised && estimate.lost) predictor_.reset();
+    return;
+  }
+  if (estimate.stamp_ns <= last_target_stamp_ns_) return;
+  last_target_stamp_ns_ = estimate.stamp_ns;
+  predictor_.add(estimate.stamp_ns, estimate.p_WT_m);
+}
+
+StatePva TrackingPlanner::startState(const PlanInputs& inputs, rt::TimeNs start_ns) const {
+  StatePva start = StatePva::Zero();
+  start.col(0) = inputs.odometry->p_WB_m;
+  start.col(1) = inputs.odometry->v_WB_mps;
+  if (inputs.current == nullptr || !inputs.current->trajectory) return start;
+  const trajectory_server::Trajectory& current = *inputs.current->trajectory;
+  // How far the drone is from where the trajectory wants it now: too far (a gust, a failed tracking
+  // controller, a trajectory from long ago) and continuing it would command a jump.
+  const double now_s = rt::nsToSeconds(inputs.now_ns - inputs.current->start_ns);
+  if ((current.sample(now_s).p_W_m - inputs.odometry->p_WB_m).norm() > params_.replan_reset_distance_m) return start;
+  const double t_s = rt::nsToSeconds(start_ns - inputs.current->start_ns);
+  const trajectory_server::TrajectorySample s = current.sample(t_s);
+  start.col(0) = s.p_W_m;
+  if (t_s <= current.durationS()) {  // after its end the server holds the end at rest
+    start.col(1) = s.v_W_mps;
+    start.col(2) = s.a_W_mps2;
+  }
+  return start;
+}
+
+bool TrackingPlanner::currentBlocked(const PlanInputs& inputs) const {
+  if (inputs.current == nullptr || !inputs.current->trajectory) return false;
+  const trajectory_server::Trajectory& current = *inputs.current->trajectory;
+  const double t0 = rt::nsToSeconds(inputs.now_ns - inputs.current->start_ns);
+  if (t0 >= current.durationS()) return false;  // already holding at rest
+  const double t1 = std::min(current.durationS(), t0 + params_.stop_check_horizon_s);
+  bool left_margin = false;
+  for (double t = t0; t <= t1; t += params_.check.sample_step_s) {
+    const bool blocked = inputs.grid->isOccupied(current.sample(t).p_W_m);
+    if (!blocked) left_margin = true;
+    if (blocked && left_margin) return true;
+  }
+  return false;
+}
+
+void TrackingPlanner::makeMoveTrajectory(const StatePva& start, const Eigen::Vector3d& end_W_m,
+                                         PolynomialTrajectory& out) {
+  // A minimum-jerk piece from rest to rest over distance d peaks at 1.875 d / T in speed and 5.77 d / T^2 in
+  // acceleration: T is the shortest that keeps both at half the optimiser's limits (a gentle manoeuvre).
+  const double distance_m = (end_W_m - start.col(0)).norm();
+  const double v_max = 0.5 * params_.optimizer.max_velocity_mps;
+  const double a_max = 0.5 * params_.optimizer.max_acceleration_mps2;
+  const double duration_s =
+      std::max({0.5, 1.875 * distance_m / v_max, std::sqrt(5.7735 * distance_m / a_max)});
+  StatePva end = StatePva::Zero();
+  end.col(0) = end_W_m;
+  stop_spline_.reset(start, end, 1);
+  Eigen::VectorXd duration(1);
+  duration(0) = duration_s;
+  const Eigen::Matrix3Xd no_waypoints(3, 0);
+  if (stop_spline_.generate(no_waypoints, duration)) out.assign(stop_spline_);
+}
+
+void TrackingPlanner::makeStopTrajectory(const StatePva& start, PolynomialTrajectory& out) {
+  // Constant deceleration a_max / 2 from speed v stops in 2 v / a_max seconds over v^2 / a_max metres;
+  // the minimum-jerk piece with that duration and end point stays within the limit (its peak deceleration
+  // is about 1.9 times the mean, and the mean is a_max / 2).
+  const double speed = start.col(1).norm();
+  const double duration_s = std::max(0.5, 2.0 * speed / params_.optimizer.max_acceleration_mps2);
+  StatePva end = StatePva::Zero();
+  end.col(0) = start.col(0) + start.col(1) * (duration_s / 2.0);
+  stop_spline_.reset(start, end, 1);
+  Eigen::VectorXd duration(1);
+  duration(0) = duration_s;
+  const Eigen::Matrix3Xd no_waypoints(3, 0);
+  if (stop_spline_.generate(no_waypoints, duration)) out.assign(stop_spline_);
+}
+
+PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory& out) {
+  PlanReport report;
+  if (inputs.odometry == nullptr) return report;
+  if (inputs.grid == nullptr) {
+    report.status = PlanStatus::kNoMap;
+    return report;
+  }
+  const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(params_.planning_budget_s);
+  report.start_ns = start_ns;
+  const StatePva start = startState(inputs, start_ns);
+
+  auto fail = [&](PlanStatus status) {
+    report.status = status;
+    if (currentBlocked(inputs)) {
+      makeStopTrajectory(start, out);
+      report.status = PlanStatus::kStopped;
+    }
+    return report;
+  };
+
+  // Take-off: on (or near) the ground the start lies in the floor's inflation margin, where no search can
+  // begin; climb straight up to the flight altitude first (the supervisor of issue 9 owns take-off and
+  // landing as modes; this keeps the planner usable on its own).
+  if (start(2, 0) < params_.takeoff_below_m) {
+    makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), params_.flight_altitude_m), out);
+    report.status = PlanStatus::kTakeOff;
+    return report;
+  }
+
+  const estimation::TargetEstimate* target = inputs.target;
+  if (target == nullptr || !target->initialised || target->lost) return fail(PlanStatus::kNoTarget);
+
+  // Prediction (Sect. V-A), or constant velocity until the predictor has enough estimates.
+  const auto prediction = predictor_.predict(inputs.now_ns);
+  report.predicted = prediction.has_value();
+  const double horizon_s = params_.prediction.horizon_s;
+  auto person_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
+    if (prediction) return prediction->position(std::min(t_ns, prediction->end_ns));
+    const double ahead_s = std::min(rt::nsToSeconds(t_ns - target->stamp_ns), horizon_s);
+    return target->p_WT_m + ahead_s * target->v_WT_mps;
+  };
+  auto person_velocity_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
+    if (prediction) return prediction->velocity(std::min(t_ns, prediction->end_ns));
+    return target->v_WT_mps;
+  };
+  KinematicState person_now;
+  person_now.p_W_m = person_at(start_ns);
+  person_now.v_W_mps = person_velocity_at(start_ns);
+  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(horizon_s);
+  KinematicState person_predicted;
+  person_predicted.p_W_m = person_at(predicted_ns);
+  person_predicted.v_W_mps = person_velocity_at(predicted_ns);
+  // The goal is held at the flight altitude (makeTrackingGoal keeps the height of the point it is given).
+  const Eigen::Vector3d p_drone_at_altitude(start(0, 0), start(1, 0), params_.flight_altitude_m);
+  const KinematicState goal = makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
+
+  // Search (Sect. V-B). Its inputs are per-axis limited: the optimised start may exceed them slightly.
+  KinematicState search_start;
+  search_start.p_W_m = start.col(0);
+  const double v_axis = params_.search.max_velocity_mps;
+  search_start.v_W_mps = start.col(1).cwiseMax(-v_axis).cwiseMin(v_axis);
+  const double start_time_s = rt::nsToSeconds(start_ns);
+  // One reference captured: small enough for std::function to keep inline (no allocation).
+  const PersonPositionFn person_fn = [&person_at](double t_s) { return person_at(rt::secondsToNs(t_s)); };
+  report.search_status = search_.search(*inputs.grid, search_start, goal, start_time_s, person_fn, path_);
+  report.search_expansions = path_.expansions;
+  if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
+    return fail(PlanStatus::kSearchFailed);
+  if (path_.duration_s <= params_.min_piece_duration_s) {
+    report.status = PlanStatus::kAtGoal;  // nothing to fly: the current trajectory (or its hold) stands
+    return report;
+  }
+
+  // Corridor (Sect. V-C): the path as chords of path_sample_step_s.
+  polyline_.clear();
+  const int steps = std::max(1, static_cast<int>(std::ceil(path_.duration_s / params_.path_sample_step_s)));
+  const double dt_s = path_.duration_s / steps;
+  for (int k = 0; k <= steps; ++k) polyline_.push_back(path_.stateAt(k * dt_s).p_W_m);
+  polyline_.front() = start.col(0);
+  if (!corridor_builder_.build(*inputs.grid, polyline_, corridor_)) return fail(PlanStatus::kCorridorFailed);
+  report.corridor_boxes = static_cast<int>(corridor_.boxes.size());
+
+  // Initial guess: the waypoints the corridor chose, timed as the search path passes them.
+  durations_s_.clear();
+  double previous_s = 0.0;
+  for (const int index : corridor_.waypoint_path_index) {
+    const double t_s = index * dt_s;
+    durations_s_.push_back(std::max(params_.min_piece_duration_s, t_s - previous_s));
+    previous_s = std::max(previous_s, t_s);
+  }
+  durations_s_.push_back(std::max(params_.min_piece_duration_s, path_.duration_s - previous_s));
+
+  StatePva end = StatePva::Zero();
+  const KinematicState path_end = path_.stateAt(path_.duration_s);
+  end.col(0) = path_end.p_W_m;
+  end.col(1) = path_end.v_W_mps;
+  if (end.col(1).norm() > params_.optimizer.max_velocity_mps)
+    end.col(1) *= params_.optimizer.max_velocity_mps / end.col(1).norm();
+  const TrajectoryProblem problem{start, end, corridor_.boxes, corridor_.waypoints_W_m, durations_s_};
+  const auto optimized = optimizer_.optimize(problem, out);
+  if (!optimized) return fail(PlanStatus::kOptimizerFailed);
+  report.optimizer_status = optimized->status;
+  report.optimizer_iterations = optimized->iterations;
+
+  // Final check (issue 8 item 3).
+  const CheckResult check = checkTrajectory(out, params_.check, *inputs.grid, checker_, inputs.octree);
+  report.check = check.verdict;
+  if (check.verdict != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
+  report.status = PlanStatus::kPlanned;
+  return report;
+}
+
+}  // namespace aerotrack::planning

@@ -1,0 +1,271 @@
+// The replanning cycle (TrackingPlanner) and its task (PlanningTask): the start state is the current
+// trajectory's state at the hand-over time; a plan around a wall is clear in the grid, within the limits
+// and starts exactly at the start state; a failed cycle publishes nothing and the old trajectory goes on;
+// a failed cycle whose old trajectory is blocked publishes a stop; on the ground it takes off first.
+#include "aerotrack/planning/tracking_planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "aerotrack/planning/planning_task.hpp"
+#include "aerotrack/rt/clock.hpp"
+#include "search_test_util.hpp"
+
+namespace aerotrack::planning {
+namespace {
+
+using test::makeBoxGrid;
+using test::OccupiedBox;
+
+TrackingPlannerParams defaultParams() {
+  TrackingPlannerParams p;
+  p.search.max_velocity_mps = 2.0;
+  p.search.max_acceleration_mps2 = 2.5;
+  p.optimizer.max_velocity_mps = 2.8;
+  p.optimizer.max_acceleration_mps2 = 3.5;
+  p.optimizer.corridor_margin_m = 0.05;
+  return p;
+}
+
+TrackingPlanner makePlanner(const TrackingPlannerParams& params = defaultParams()) {
+  auto planner = TrackingPlanner::create(params);
+  EXPECT_TRUE(planner.has_value()) << (planner ? "" : planner.error().message);
+  return std::move(planner).value();
+}
+
+hal::OdometrySample odometryAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns = 0) {
+  hal::OdometrySample o;
+  o.stamp_ns = stamp_ns;
+  o.p_WB_m = p;
+  return o;
+}
+
+estimation::TargetEstimate personAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns,
+                                    const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {
+  estimation::TargetEstimate e;
+  e.stamp_ns = stamp_ns;
+  e.initialised = true;
+  e.lost = false;
+  e.p_WT_m = p;
+  e.v_WT_mps = v;
+  e.last_accepted_ns = stamp_ns;
+  return e;
+}
+
+// A two-piece spline through (0,0,1.5) -> (2,1,1.5) -> (4,0,1.5), moving at the start.
+std::shared_ptr<PolynomialTrajectory> curvedTrajectory() {
+  MinJerkSpline spline;
+  StatePva start = StatePva::Zero();
+  StatePva end = StatePva::Zero();
+  start.col(0) = Eigen::Vector3d(0, 0, 1.5);
+  start.col(1) = Eigen::Vector3d(1, 0, 0);
+  end.col(0) = Eigen::Vector3d(4, 0, 1.5);
+  spline.reset(start, end, 2);
+  Eigen::Matrix3Xd q(3, 1);
+  q.col(0) = Eigen::Vector3d(2, 1, 1.5);
+  Eigen::VectorXd t(2);
+  t << 1.5, 1.5;
+  EXPECT_TRUE(spline.generate(q, t));
+  auto traj = std::make_shared<PolynomialTrajectory>();
+  traj->assign(spline);
+  return traj;
+}
+
+TEST(TrackingPlanner, StartStateIsTheCurrentTrajectoryAtTheHandOver) {
+  const TrackingPlanner planner = makePlanner();
+  const auto traj = curvedTrajectory();
+  const trajectory_server::TimedTrajectory current{traj, rt::secondsToNs(10.0)};
+  const rt::TimeNs now_ns = rt::secondsToNs(11.0);
+  const rt::TimeNs start_ns = now_ns + rt::secondsToNs(0.05);
+  // The drone is where the trajectory wants it (within the reset distance).
+  const hal::OdometrySample odometry = odometryAt(traj->sample(1.0).p_W_m + Eigen::Vector3d(0.1, 0, 0));
+  PlanInputs inputs;
+  inputs.now_ns = now_ns;
+  inputs.odometry = &odometry;
+  inputs.current = &current;
+  const StatePva s = planner.startState(inputs, start_ns);
+  const trajectory_server::TrajectorySample expected = traj->sample(1.05);
+  EXPECT_LT((s.col(0) - expected.p_W_m).norm(), 1e-12);
+  EXPECT_LT((s.col(1) - expected.v_W_mps).norm(), 1e-12);
+  EXPECT_LT((s.col(2) - expected.a_W_mps2).norm(), 1e-12);
+
+  // Strayed: odometry, at rest in acceleration.
+  const hal::OdometrySample far = odometryAt(traj->sample(1.0).p_W_m + Eigen::Vector3d(0, 2.0, 0));
+  inputs.odometry = &far;
+  const StatePva s_far = planner.startState(inputs, start_ns);
+  EXPECT_LT((s_far.col(0) - far.p_WB_m).norm(), 1e-12);
+  EXPECT_EQ(s_far.col(2).norm(), 0.0);
+
+  // After the current trajectory's end: its end, at rest (what the server holds).
+  const hal::OdometrySample at_end = odometryAt(traj->sample(3.0).p_W_m);
+  inputs.odometry = &at_end;
+  inputs.now_ns = rt::secondsToNs(20.0);
+  const StatePva s_end = planner.startState(inputs, inputs.now_ns + rt::secondsToNs(0.05));
+  EXPECT_LT((s_end.col(0) - traj->sample(3.0).p_W_m).norm(), 1e-12);
+  EXPECT_EQ(s_end.col(1).norm(), 0.0);
+}
+
+struct WallWorld {
+  mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
+                                        {{{2.5, -0.8, 0.0}, {3.0, 0.8, 3.0}},     // wall across the way
+                                         {{-10, -10, -0.2}, {10, 10, 0.0}}});  // ground
+};
+
+TEST(TrackingPlanner, PlansAroundAWallWithinLimitsFromTheStartState) {
+  TrackingPlannerParams params = defaultParams();
+  params.search.max_expansions = 5000;  // room to find the way round, not a partial path
+  params.search.max_nodes = 100000;
+  TrackingPlanner planner = makePlanner(params);
+  const WallWorld world;
+  const hal::OdometrySample odometry = odometryAt(Eigen::Vector3d(0, 0, 1.5));
+  PolynomialTrajectory out(24);
+  PlanReport report;
+  // Feed a standing person behind the wall for a while (the predictor needs min_samples estimates).
+  for (int k = 0; k <= 10; ++k) {
+    const rt::TimeNs now_ns = rt::secondsToNs(0.05 * k);
+    planner.observeTarget(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), now_ns));
+    const estimation::TargetEstimate target = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), now_ns);
+    PlanInputs inputs;
+    inputs.now_ns = now_ns;
+    inputs.odometry = &odometry;
+    inputs.target = &target;
+    inputs.grid = &world.grid;
+    report = planner.plan(inputs, out);
+  }
+  ASSERT_EQ(report.status, PlanStatus::kPlanned) << toString(report.status);
+  EXPECT_EQ(report.search_status, SearchStatus::kReachedGoal)
+      << toString(report.search_status) << " after " << report.search_expansions << " expansions";
+  EXPECT_TRUE(report.predicted);
+  EXPECT_GE(report.corridor_boxes, 2);
+  // Starts exactly at the start state (no current trajectory: the odometry, at rest).
+  EXPECT_LT((out.sample(0.0).p_W_m - odometry.p_WB_m).norm(), 1e-9);
+  EXPECT_LT(out.sample(0.0).v_W_mps.norm(), 1e-9);
+  // Dense check: clear of the inflated grid, within the check's limits, and past the wall at the end.
+  for (double t = 0.0; t <= out.durationS(); t += 0.005) {
+    const trajectory_server::TrajectorySample s = out.sample(t);
+    EXPECT_FALSE(world.grid.isOccupied(s.p_W_m)) << "t=" << t;
+    EXPECT_LE(s.v_W_mps.norm(), 3.0 * 1.05) << "t=" << t;
+    EXPECT_LE(s.a_W_mps2.norm(), 4.0 * 1.05) << "t=" << t;
+  }
+  EXPECT_GT(out.sample(out.durationS()).p_W_m.x(), 3.0);
+}
+
+TEST(TrackingPlanner, OnTheGroundItTakesOffFirst) {
+  TrackingPlanner planner = makePlanner();
+  const WallWorld world;
+  const hal::OdometrySample odometry = odometryAt(Eigen::Vector3d(0, 0, 0.05));
+  const estimation::TargetEstimate target = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0);
+  PlanInputs inputs;
+  inputs.odometry = &odometry;
+  inputs.target = &target;
+  inputs.grid = &world.grid;
+  PolynomialTrajectory out;
+  const PlanReport report = planner.plan(inputs, out);
+  ASSERT_EQ(report.status, PlanStatus::kTakeOff);
+  const trajectory_server::TrajectorySample end = out.sample(out.durationS());
+  EXPECT_NEAR(end.p_W_m.z(), planner.params().flight_altitude_m, 1e-9);
+  EXPECT_NEAR(end.p_W_m.x(), 0.0, 1e-9);
+  EXPECT_LT(end.v_W_mps.norm(), 1e-9);
+}
+
+// The task, on its channels.
+struct TaskRig {
+  rt::LatestSlot<hal::OdometrySample> odometry;
+  rt::LatestSlot<estimation::TargetEstimate> target;
+  rt::SharedSlot<mapping::LocalGrid> grid;
+  rt::SharedSlot<octomap::OcTree> octree;
+  rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
+  rt::ManualClock clock{0};
+  std::unique_ptr<PlanningTask> task;
+
+  explicit TaskRig(const TrackingPlannerParams& params = defaultParams()) {
+    task = std::make_unique<PlanningTask>(makePlanner(params),
+                                          PlanningChannels{odometry, target, grid, octree, trajectories}, clock);
+  }
+  void step(double t_s) { task->step(rt::secondsToNs(t_s)); }
+};
+
+TEST(PlanningTask, FailedCycleKeepsTheOldTrajectory) {
+  TaskRig rig;
+  const WallWorld world;
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
+  rig.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
+  for (int k = 0; k <= 6; ++k) {
+    rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.05 * k)));
+    rig.step(0.05 * k);
+  }
+  ASSERT_GE(rig.task->count(PlanStatus::kPlanned), 1U);
+  const std::uint64_t version = rig.trajectories.version();
+  const trajectory_server::TimedTrajectory before = rig.task->lastPublished();
+  ASSERT_TRUE(before.trajectory);
+
+  // The person is lost: nothing new is published, the old trajectory stands.
+  estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.35));
+  lost.lost = true;
+  rig.target.write(lost);
+  rig.step(0.35);
+  EXPECT_EQ(rig.task->count(PlanStatus::kNoTarget), 1U);
+  EXPECT_EQ(rig.trajectories.version(), version);
+  EXPECT_EQ(rig.task->lastPublished().trajectory, before.trajectory);
+}
+
+TEST(PlanningTask, FailedCheckKeepsTheOldTrajectory) {
+  // The final check's limits are far below what the optimiser flies: every plan fails the check.
+  TrackingPlannerParams params = defaultParams();
+  TaskRig rig(params);
+  const WallWorld world;
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
+  rig.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
+  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
+  rig.step(0.0);
+  ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
+  const auto first = rig.task->lastPublished().trajectory;
+
+  params.check.max_velocity_mps = 0.01;
+  TaskRig strict(params);
+  strict.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
+  strict.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
+  strict.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
+  strict.step(0.0);
+  EXPECT_EQ(strict.task->count(PlanStatus::kCheckFailed), 1U);
+  EXPECT_EQ(strict.trajectories.version(), 0U);  // nothing was published
+  EXPECT_FALSE(strict.task->lastPublished().trajectory);
+  EXPECT_TRUE(first);
+}
+
+TEST(PlanningTask, FailedCycleWithBlockedOldTrajectoryStops) {
+  TrackingPlannerParams params = defaultParams();
+  params.stop_check_horizon_s = 2.0;
+  TaskRig rig(params);
+  const WallWorld world;
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
+  rig.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
+  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
+  rig.step(0.0);
+  ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
+  const trajectory_server::TimedTrajectory first = rig.task->lastPublished();
+  // An obstacle appears across the old trajectory 1.7 s ahead, and in the same cycle the person is lost
+  // (the cycle fails): the old trajectory must not be flown into it.
+  const Eigen::Vector3d p = first.trajectory->sample(1.8).p_W_m;
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(
+      makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
+                  {{p - Eigen::Vector3d(0.1, 1.0, 1.0), p + Eigen::Vector3d(0.1, 1.0, 1.0)}})));
+  rig.odometry.write(odometryAt(first.trajectory->sample(0.1).p_W_m, rt::secondsToNs(0.1)));
+  estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.1));
+  lost.lost = true;
+  rig.target.write(lost);
+  rig.step(0.1);
+  ASSERT_EQ(rig.task->count(PlanStatus::kStopped), 1U)
+      << "no_target " << rig.task->count(PlanStatus::kNoTarget) << " duration " << first.trajectory->durationS()
+      << " p " << p.transpose();
+  const trajectory_server::TimedTrajectory stop = rig.task->lastPublished();
+  ASSERT_NE(stop.trajectory, first.trajectory);
+  // The stop starts where the old trajectory is at the hand-over and ends at rest.
+  const double handover_s = rt::nsToSeconds(stop.start_ns - first.start_ns);
+  EXPECT_LT((stop.trajectory->sample(0.0).p_W_m - first.trajectory->sample(handover_s).p_W_m).norm(), 1e-9);
+  EXPECT_LT(stop.trajectory->sample(stop.trajectory->durationS()).v_W_mps.norm(), 1e-9);
+}
+
+}  // namespace
+}  // namespace aerotrack::planning
