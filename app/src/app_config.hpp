@@ -44,7 +44,7 @@ struct AppConfig {
   std::optional<mapping::MapperParams> mapping;  ///< `mapping:` section; needed by the mapping task.
   /// `perception:` section; needed by the detection task. model_dir "default" is resolved by the app.
   std::optional<perception::DetectorParams> perception;
-  std::optional<EstimationConfig> estimation;  ///< `estimation:` section; needed by the target task.
+  std::optional<EstimationConfig> estimation;               ///< `estimation:` section; needed by the target task.
   std::optional<planning::TrackingPlannerParams> planning;  ///< `planning:` section; needed by the planning task.
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;

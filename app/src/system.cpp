@@ -8,7 +8,7 @@
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry",     "gimbal_camera",     "depth_camera",    "gimbal",      "mapping", "detection",
+  return {"sim_world", "odometry",     "gimbal_camera",     "depth_camera",    "gimbal",       "mapping", "detection",
           "target",    "target_check", "trajectory_server", "baseline_follow", "truth_gimbal", "planning"};
 }
 

@@ -33,6 +33,35 @@ void BM_CostAndGradient(benchmark::State& state) {
 }
 BENCHMARK(BM_CostAndGradient)->Arg(10)->Arg(100)->Unit(benchmark::kMicrosecond);
 
+// The same at the optimum (what most evaluations of a warm optimisation see: few penalties active).
+void BM_CostAndGradientAtOptimum(benchmark::State& state) {
+  std::mt19937 rng(42);
+  const int pieces = static_cast<int>(state.range(0));
+  const auto corridor = aerotrack::planning::test::randomCorridor(pieces, rng, 2.5);
+  TrajectoryOptimizerParams params;
+  params.max_pieces = pieces;
+  auto opt = TrajectoryOptimizer::create(params);
+  PolynomialTrajectory out(pieces);
+  if (!opt || !opt->optimize(corridor.problem(), out) || !opt->setProblem(corridor.problem())) {
+    state.SkipWithError("setup failed");
+    return;
+  }
+  // The optimum's variables: the waypoints and durations of the optimised spline.
+  Eigen::VectorXd x = opt->initialVariables();
+  for (int i = 0; i + 1 < pieces; ++i)
+    x.segment<3>(3 * i) = out.sample([&] {
+                               double t = 0.0;
+                               for (int k = 0; k <= i; ++k) t += out.pieceDurationS(k);
+                               return t;
+                             }())
+                              .p_W_m;
+  for (int i = 0; i < pieces; ++i)
+    x(3 * (pieces - 1) + i) = TrajectoryOptimizer::tauFromDuration(out.pieceDurationS(i));
+  Eigen::VectorXd grad(x.size());
+  for (auto _ : state) benchmark::DoNotOptimize(opt->evaluate(x, grad));
+}
+BENCHMARK(BM_CostAndGradientAtOptimum)->Arg(10)->Unit(benchmark::kMicrosecond);
+
 void BM_Optimize(benchmark::State& state) {
   const int pieces = static_cast<int>(state.range(0));
   std::mt19937 rng(7);

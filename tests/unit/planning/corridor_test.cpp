@@ -27,22 +27,8 @@
 #include "aerotrack/planning/kinodynamic_search.hpp"
 #include "search_test_util.hpp"
 
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_mallocs{0};
-}  // namespace
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kInterposed = false;
-#else
-constexpr bool kInterposed = true;
-extern "C" void* __libc_malloc(std::size_t size);  // NOLINT: glibc's own allocator
-
-extern "C" void* malloc(std::size_t size) {  // NOLINT: interposes the C library's malloc
-  if (g_counting.load(std::memory_order_relaxed)) g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(size);
-}
-#endif
+#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
+#include "../malloc_counter.hpp"
 
 namespace aerotrack::planning {
 namespace {
@@ -561,7 +547,7 @@ TEST(CorridorParams, GivenAConfigSectionThenEveryKeyIsReadStrictly) {
 }
 
 TEST(CorridorAllocation, GivenACreatedBuilderAndAWarmCorridorThenBuildNeverAllocates) {
-  if (!kInterposed) GTEST_SKIP() << "malloc belongs to the sanitizer";
+  if (!aerotrack::test::kMallocCounted) GTEST_SKIP() << "malloc belongs to the sanitizer";
   std::vector<OccupiedBox> pillars;
   for (int k = 1; k <= 6; ++k) {
     const Eigen::Vector3d c(k, (k % 2 == 0 ? 0.5 : -0.5), 0.0);
@@ -573,29 +559,29 @@ TEST(CorridorAllocation, GivenACreatedBuilderAndAWarmCorridorThenBuildNeverAlloc
   const std::vector<Eigen::Vector3d> straight = polyline({{0.0, -2.0, 1.0}, {6.0, -2.0, 2.0}});
   CorridorBuilder builder = makeBuilder();
   {  // the interposition works: a dynamic Eigen vector is counted
-    g_mallocs = 0;
-    g_counting = true;
+    aerotrack::test::g_mallocs = 0;
+    aerotrack::test::g_counting_mallocs = true;
     const Eigen::VectorXd v = Eigen::VectorXd::Ones(100);
-    g_counting = false;
+    aerotrack::test::g_counting_mallocs = false;
     EXPECT_EQ(v.sum(), 100.0);
-    EXPECT_GE(g_mallocs.load(), 1);
+    EXPECT_GE(aerotrack::test::g_mallocs.load(), 1);
   }
   Corridor corridor;
   ASSERT_TRUE(builder.build(grid, straight, corridor).has_value());  // warms the corridor's vectors
   std::size_t boxes = 0;
   bool ok = true;
-  g_mallocs = 0;
-  g_counting = true;
+  aerotrack::test::g_mallocs = 0;
+  aerotrack::test::g_counting_mallocs = true;
   ok = ok && builder.build(grid, slalom, corridor).has_value();  // more boxes than the warm-up
   boxes += corridor.boxes.size();
   ok = ok && builder.build(grid, straight, corridor).has_value();
   boxes += corridor.boxes.size();
   ok = ok && builder.build(grid, slalom, corridor).has_value();
   boxes += corridor.boxes.size();
-  g_counting = false;
+  aerotrack::test::g_counting_mallocs = false;
   EXPECT_TRUE(ok);
   EXPECT_GE(boxes, 13u);
-  EXPECT_EQ(g_mallocs.load(), 0);
+  EXPECT_EQ(aerotrack::test::g_mallocs.load(), 0);
 }
 
 }  // namespace

@@ -2,12 +2,14 @@
 // trajectory's state at the hand-over time; a plan around a wall is clear in the grid, within the limits
 // and starts exactly at the start state; a failed cycle publishes nothing and the old trajectory goes on;
 // a failed cycle whose old trajectory is blocked publishes a stop; on the ground it takes off first.
+#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "aerotrack/planning/tracking_planner.hpp"
 
 #include <gtest/gtest.h>
 
 #include <memory>
 
+#include "../malloc_counter.hpp"
 #include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/clock.hpp"
 #include "search_test_util.hpp"
@@ -108,7 +110,7 @@ TEST(TrackingPlanner, StartStateIsTheCurrentTrajectoryAtTheHandOver) {
 
 struct WallWorld {
   mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
-                                        {{{2.5, -0.8, 0.0}, {3.0, 0.8, 3.0}},     // wall across the way
+                                        {{{2.5, -0.8, 0.0}, {3.0, 0.8, 3.0}},  // wall across the way
                                          {{-10, -10, -0.2}, {10, 10, 0.0}}});  // ground
 };
 
@@ -167,6 +169,45 @@ TEST(TrackingPlanner, OnTheGroundItTakesOffFirst) {
   EXPECT_NEAR(end.p_W_m.z(), planner.params().flight_altitude_m, 1e-9);
   EXPECT_NEAR(end.p_W_m.x(), 0.0, 1e-9);
   EXPECT_LT(end.v_W_mps.norm(), 1e-9);
+}
+
+// DESIGN.md rule 4: once warm, a cycle allocates nothing of its own. The one exception is inside LBFGS++
+// 0.1: its history update, add_correction(x - xp, g - gp), binds two vector expressions to
+// Ref<const VectorXd> and so makes two temporaries per L-BFGS iteration (none on the last, which returns
+// first). The test pins the count to exactly that, so any other allocation fails it. (FCL is not run
+// here: no octree.)
+TEST(TrackingPlanner, WarmCycleAllocatesOnlyLbfgsTemporaries) {
+  if (!aerotrack::test::kMallocCounted) GTEST_SKIP() << "malloc belongs to the sanitizer";
+  TrackingPlanner planner = makePlanner();
+  const WallWorld world;
+  const hal::OdometrySample odometry = odometryAt(Eigen::Vector3d(0, 0, 1.5));
+  PolynomialTrajectory out(24);
+  auto cycle = [&](int k) {
+    const rt::TimeNs now_ns = rt::secondsToNs(0.05 * k);
+    const estimation::TargetEstimate target = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), now_ns);
+    planner.observeTarget(target);
+    PlanInputs inputs;
+    inputs.now_ns = now_ns;
+    inputs.odometry = &odometry;
+    inputs.target = &target;
+    inputs.grid = &world.grid;
+    return planner.plan(inputs, out);
+  };
+  for (int k = 0; k < 10; ++k) (void)cycle(k);  // warm: predictor full, piece count settled
+  int planned = 0;
+  long lbfgs_updates = 0;
+  long mallocs = 0;
+  {
+    const aerotrack::test::MallocCount count;
+    for (int k = 10; k < 20; ++k) {
+      const PlanReport report = cycle(k);
+      planned += report.status == PlanStatus::kPlanned ? 1 : 0;
+      if (report.optimizer_status != OptimizerStatus::kLineSearch) lbfgs_updates += report.optimizer_iterations - 1;
+    }
+    mallocs = count.count();
+  }
+  EXPECT_EQ(planned, 10);
+  EXPECT_EQ(mallocs, 2 * lbfgs_updates);
 }
 
 // The task, on its channels.

@@ -12,39 +12,16 @@
 #include "aerotrack/prediction/dense_qp.hpp"
 #include "aerotrack/prediction/target_predictor.hpp"
 
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_mallocs{0};
-}  // namespace
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kInterposed = false;
-#else
-constexpr bool kInterposed = true;
-extern "C" void* __libc_malloc(std::size_t size);  // NOLINT: glibc's own allocator
-
-extern "C" void* malloc(std::size_t size) {  // NOLINT: interposes the C library's malloc
-  if (g_counting.load(std::memory_order_relaxed)) g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(size);
-}
-#endif
+#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
+#include "../malloc_counter.hpp"
 
 namespace aerotrack::prediction {
 namespace {
 
-struct CountMallocs {
-  CountMallocs() {
-    g_mallocs = 0;
-    g_counting = true;
-  }
-  ~CountMallocs() { g_counting = false; }
-  CountMallocs(const CountMallocs&) = delete;
-  CountMallocs& operator=(const CountMallocs&) = delete;
-  long count() const { return g_mallocs.load(); }
-};
+using CountMallocs = aerotrack::test::MallocCount;
 
 TEST(PredictionAllocation, GivenTheInterposedMallocThenItCounts) {
-  if (!kInterposed) GTEST_SKIP() << "malloc belongs to the sanitizer";
+  if (!aerotrack::test::kMallocCounted) GTEST_SKIP() << "malloc belongs to the sanitizer";
   long counted = 0;
   {
     const CountMallocs counter;
@@ -56,7 +33,7 @@ TEST(PredictionAllocation, GivenTheInterposedMallocThenItCounts) {
 }
 
 TEST(PredictionAllocation, GivenACreatedPredictorThenAddAndPredictNeverAllocate) {
-  if (!kInterposed) GTEST_SKIP() << "malloc belongs to the sanitizer";
+  if (!aerotrack::test::kMallocCounted) GTEST_SKIP() << "malloc belongs to the sanitizer";
   TargetPredictorParams params;
   params.max_speed_mps = 1.0;  // active bounds: the QP's add/drop paths run too
   params.fit_z = true;

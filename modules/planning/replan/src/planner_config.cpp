@@ -6,7 +6,8 @@
 namespace aerotrack::planning {
 
 rt::Status validate(const TrackingPlannerParams& p) {
-  if (!(p.planning_budget_s >= 0.0 && p.planning_budget_s < 1.0)) return rt::Error{"planning_budget_s must be in [0, 1)"};
+  if (!(p.planning_budget_s >= 0.0 && p.planning_budget_s < 1.0))
+    return rt::Error{"planning_budget_s must be in [0, 1)"};
   if (!(p.path_sample_step_s > 0.0)) return rt::Error{"path_sample_step_s must be > 0"};
   if (!(p.min_piece_duration_s > 0.0)) return rt::Error{"min_piece_duration_s must be > 0"};
   if (!(p.replan_reset_distance_m > 0.0)) return rt::Error{"replan_reset_distance_m must be > 0"};

@@ -48,8 +48,8 @@ rt::Expected<TrackingPlanner> TrackingPlanner::create(const TrackingPlannerParam
   if (!predictor) return rt::Error{"planning: prediction: " + predictor.error().message};
   auto checker = mapping::TrajectoryChecker::create(params.collision);
   if (!checker) return rt::Error{"planning: collision: " + checker.error().message};
-  return TrackingPlanner(params, std::move(search.value()), std::move(corridor.value()),
-                         std::move(optimizer.value()), std::move(predictor.value()), std::move(checker.value()));
+  return TrackingPlanner(params, std::move(search.value()), std::move(corridor.value()), std::move(optimizer.value()),
+                         std::move(predictor.value()), std::move(checker.value()));
 }
 
 TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, KinodynamicSearch search,
@@ -124,8 +124,7 @@ void TrackingPlanner::makeMoveTrajectory(const StatePva& start, const Eigen::Vec
   const double distance_m = (end_W_m - start.col(0)).norm();
   const double v_max = 0.5 * params_.optimizer.max_velocity_mps;
   const double a_max = 0.5 * params_.optimizer.max_acceleration_mps2;
-  const double duration_s =
-      std::max({0.5, 1.875 * distance_m / v_max, std::sqrt(5.7735 * distance_m / a_max)});
+  const double duration_s = std::max({0.5, 1.875 * distance_m / v_max, std::sqrt(5.7735 * distance_m / a_max)});
   StatePva end = StatePva::Zero();
   end.col(0) = end_W_m;
   stop_spline_.reset(start, end, 1);

@@ -20,16 +20,21 @@ void BandedSystem::setZero() {
 }
 
 bool BandedSystem::factorize() {
+  // Raw row pointers: the inner loop is a contiguous axpy within the band (the hot path of every
+  // cost evaluation).
   for (int k = 0; k < n_; ++k) {
     const double pivot = (*this)(k, k);
     if (pivot == 0.0 || !std::isfinite(pivot)) return false;
     const int last_row = std::min(k + lower_, n_ - 1);
-    const int last_col = std::min(k + upper_, n_ - 1);
+    const int count = std::min(k + upper_, n_ - 1) - k;  // columns k+1 .. k+count
+    const double* row_k = &(*this)(k, k) + 1;
     for (int i = k + 1; i <= last_row; ++i) {
       double& l_ik = (*this)(i, k);
       if (l_ik == 0.0) continue;
       l_ik /= pivot;
-      for (int j = k + 1; j <= last_col; ++j) (*this)(i, j) -= l_ik * (*this)(k, j);
+      const double l = l_ik;
+      double* row_i = &l_ik + 1;
+      for (int c = 0; c < count; ++c) row_i[c] -= l * row_k[c];
     }
   }
   return true;

@@ -336,17 +336,22 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
     const Eigen::Vector3d c3 = coeffs.row(6 * i + 3).transpose();
     const Eigen::Vector3d c4 = coeffs.row(6 * i + 4).transpose();
     const Eigen::Vector3d c5 = coeffs.row(6 * i + 5).transpose();
+    // Scaled coefficients of the derivatives, once per piece.
+    const Eigen::Vector3d v2 = 2.0 * c2, v3 = 3.0 * c3, v4 = 4.0 * c4, v5 = 5.0 * c5;
+    const Eigen::Vector3d a3 = 6.0 * c3, a4 = 12.0 * c4, a5 = 20.0 * c5;
+    const Eigen::Vector3d j4 = 24.0 * c4, j5 = 60.0 * c5;
     const CorridorBox& box = boxes_[static_cast<std::size_t>(i)];
     const Eigen::Array3d lo = box.lo_W_m.array() + params_.corridor_margin_m;
     const Eigen::Array3d hi = box.hi_W_m.array() - params_.corridor_margin_m;
-    for (int j = 0; j <= k_samples; ++j) {
+    // Piece i's first sample is piece i-1's last (continuity): each junction is counted once.
+    for (int j = (i == 0 ? 0 : 1); j <= k_samples; ++j) {
       const double fraction = static_cast<double>(j) / k_samples;
       const double t = fraction * t_(i);
       // Horner's rule for p and its first three derivatives (the hot loop of the cost).
       const Eigen::Vector3d p = ((((c5 * t + c4) * t + c3) * t + c2) * t + c1) * t + c0;
-      const Eigen::Vector3d v = (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1;
-      const Eigen::Vector3d a = ((20.0 * c5 * t + 12.0 * c4) * t + 6.0 * c3) * t + 2.0 * c2;
-      const Eigen::Vector3d jr = (60.0 * c5 * t + 24.0 * c4) * t + 6.0 * c3;
+      const Eigen::Vector3d v = (((v5 * t + v4) * t + v3) * t + v2) * t + c1;
+      const Eigen::Vector3d a = ((a5 * t + a4) * t + a3) * t + v2;
+      const Eigen::Vector3d jr = (j5 * t + j4) * t + a3;
       Eigen::Vector3d gp = Eigen::Vector3d::Zero();
       Eigen::Vector3d gv = Eigen::Vector3d::Zero();
       Eigen::Vector3d ga = Eigen::Vector3d::Zero();
@@ -383,14 +388,17 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
       const double t2 = t * t;
       const double t3 = t2 * t;
       const double t4 = t3 * t;
-      const Eigen::Matrix<double, 6, 1> b0{1.0, t, t2, t3, t4, t4 * t};
-      const Eigen::Matrix<double, 6, 1> b1{0.0, 1.0, 2.0 * t, 3.0 * t2, 4.0 * t3, 5.0 * t4};
-      const Eigen::Matrix<double, 6, 1> b2{0.0, 0.0, 2.0, 6.0 * t, 12.0 * t2, 20.0 * t3};
-      const Eigen::Matrix<double, 6, 1> b3{0.0, 0.0, 0.0, 6.0, 24.0 * t, 60.0 * t2};
-      grad_c_.middleRows<6>(6 * i) +=
-          b0 * gp.transpose() + b1 * gv.transpose() + b2 * ga.transpose() + b3 * gj.transpose();
+      auto rows = grad_c_.middleRows<6>(6 * i);
+      // Only the active terms' outer products (usually one per sample).
+      if (!gp.isZero(0.0)) rows += Eigen::Matrix<double, 6, 1>{1.0, t, t2, t3, t4, t4 * t} * gp.transpose();
+      if (!gv.isZero(0.0))
+        rows += Eigen::Matrix<double, 6, 1>{0.0, 1.0, 2.0 * t, 3.0 * t2, 4.0 * t3, 5.0 * t4} * gv.transpose();
+      if (!ga.isZero(0.0))
+        rows += Eigen::Matrix<double, 6, 1>{0.0, 0.0, 2.0, 6.0 * t, 12.0 * t2, 20.0 * t3} * ga.transpose();
+      if (!gj.isZero(0.0))
+        rows += Eigen::Matrix<double, 6, 1>{0.0, 0.0, 0.0, 6.0, 24.0 * t, 60.0 * t2} * gj.transpose();
       // The sample sits at t = fraction * T_i, so it moves with T_i: d/dT_i = fraction * (g . derivative).
-      const Eigen::Vector3d snap = 24.0 * c4 + 120.0 * t * c5;
+      const Eigen::Vector3d snap = j4 + (2.0 * t) * j5;
       grad_t_(i) += fraction * (gp.dot(v) + gv.dot(a) + ga.dot(jr) + gj.dot(snap));
     }
   }

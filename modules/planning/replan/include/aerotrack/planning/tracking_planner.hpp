@@ -41,13 +41,13 @@
 namespace aerotrack::planning {
 
 struct TrackingPlannerParams {
-  double planning_budget_s = 0.05;        ///< The new trajectory takes over at now + this; >= 0.
-  double path_sample_step_s = 0.02;       ///< The search path is cut into chords this long for the corridor; > 0.
-  double min_piece_duration_s = 0.05;     ///< Initial durations are at least this; > 0.
-  double replan_reset_distance_m = 1.0;   ///< Drone this far from the current trajectory: start from odometry; > 0.
-  double stop_check_horizon_s = 1.0;      ///< On a failed cycle, this much of the current trajectory must be clear.
-  double flight_altitude_m = 1.5;         ///< The goal's height (W z); > takeoff_below_m.
-  double takeoff_below_m = 0.5;           ///< A start lower than this climbs straight to flight_altitude_m first; >= 0.
+  double planning_budget_s = 0.05;       ///< The new trajectory takes over at now + this; >= 0.
+  double path_sample_step_s = 0.02;      ///< The search path is cut into chords this long for the corridor; > 0.
+  double min_piece_duration_s = 0.05;    ///< Initial durations are at least this; > 0.
+  double replan_reset_distance_m = 1.0;  ///< Drone this far from the current trajectory: start from odometry; > 0.
+  double stop_check_horizon_s = 1.0;     ///< On a failed cycle, this much of the current trajectory must be clear.
+  double flight_altitude_m = 1.5;        ///< The goal's height (W z); > takeoff_below_m.
+  double takeoff_below_m = 0.5;          ///< A start lower than this climbs straight to flight_altitude_m first; >= 0.
   TrackingGoalParams goal;
   KinodynamicSearchParams search;
   CorridorParams corridor;

@@ -32,7 +32,15 @@ rt::Status validate(const TrajectoryCheckParams& params);
 /// Every field by its name, all required; throws rt::ConfigError naming the key.
 TrajectoryCheckParams parseTrajectoryCheckParams(const rt::ConfigNode& node);
 
-enum class CheckVerdict : std::uint8_t { kOk, kVelocity, kAcceleration, kJerk, kGridBlocked, kCollision, kCheckerError };
+enum class CheckVerdict : std::uint8_t {
+  kOk,
+  kVelocity,
+  kAcceleration,
+  kJerk,
+  kGridBlocked,
+  kCollision,
+  kCheckerError
+};
 std::string_view toString(CheckVerdict verdict);
 
 struct CheckResult {

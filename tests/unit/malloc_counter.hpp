@@ -1,0 +1,45 @@
+// Counting allocations in a test binary (the "no allocation once warm" claims of the modules). malloc is
+// interposed (Eigen allocates through malloc, not operator new) and counts calls while a MallocCount is
+// alive. Exactly one translation unit of a test binary defines AEROTRACK_DEFINE_MALLOC_COUNTER before
+// including this header; it holds the interposer. Under AddressSanitizer or ThreadSanitizer, which own
+// malloc, nothing is interposed and kMallocCounted is false: tests skip.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+
+namespace aerotrack::test {
+
+inline std::atomic<bool> g_counting_mallocs{false};
+inline std::atomic<long> g_mallocs{0};
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kMallocCounted = false;
+#else
+inline constexpr bool kMallocCounted = true;
+#endif
+
+/// Counts the mallocs made while it is alive (not thread-aware: keep other threads idle).
+class MallocCount {
+ public:
+  MallocCount() {
+    g_mallocs = 0;
+    g_counting_mallocs = true;
+  }
+  ~MallocCount() { g_counting_mallocs = false; }
+  MallocCount(const MallocCount&) = delete;
+  MallocCount& operator=(const MallocCount&) = delete;
+  long count() const { return g_mallocs.load(); }
+};
+
+}  // namespace aerotrack::test
+
+#if defined(AEROTRACK_DEFINE_MALLOC_COUNTER) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+extern "C" void* __libc_malloc(std::size_t size);  // NOLINT: glibc's own allocator
+
+extern "C" void* malloc(std::size_t size) {  // NOLINT: interposes the C library's malloc
+  if (aerotrack::test::g_counting_mallocs.load(std::memory_order_relaxed))
+    aerotrack::test::g_mallocs.fetch_add(1, std::memory_order_relaxed);
+  return __libc_malloc(size);
+}
+#endif
