@@ -17,7 +17,7 @@ PlanningTask::PoolEntry PlanningTask::makeEntry(int max_pieces) {
 
 PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& channels, const rt::Clock& stats_clock)
     : planner_(std::move(planner)), channels_(channels), stats_clock_(stats_clock) {
-  pool_.reserve(kPoolSize * 2);
+  pool_.reserve(std::size_t{2} * kPoolSize);
   for (int i = 0; i < kPoolSize; ++i) pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
 }
 

@@ -49,7 +49,7 @@ rt::Expected<TrackingPlanner> TrackingPlanner::create(const TrackingPlannerParam
   auto checker = mapping::TrajectoryChecker::create(params.collision);
   if (!checker) return rt::Error{"planning: collision: " + checker.error().message};
   return TrackingPlanner(params, std::move(search.value()), std::move(corridor.value()), std::move(optimizer.value()),
-                         std::move(predictor.value()), std::move(checker.value()));
+                         std::move(predictor.value()), checker.value());
 }
 
 TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, KinodynamicSearch search,
@@ -60,7 +60,7 @@ TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, Kinodynami
       corridor_builder_(std::move(corridor)),
       optimizer_(std::move(optimizer)),
       predictor_(std::move(predictor)),
-      checker_(std::move(checker)) {
+      checker_(checker) {
   // The longest search path: every expansion adds a primitive, plus the one-shot.
   const double longest_s = params.search.primitive_duration_s * (params.search.max_expansions + 1) + 10.0;
   polyline_.reserve(static_cast<std::size_t>(std::min(longest_s / params.path_sample_step_s, 1e5)) + 2);
