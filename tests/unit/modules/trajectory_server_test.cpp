@@ -124,7 +124,8 @@ TEST(TrajectoryServer, GivenCircleThenYawRateIsSpeedOverRadius) {
 // A straight line at constant velocity from p0, to tell trajectories apart.
 class Line final : public Trajectory {
  public:
-  Line(Eigen::Vector3d p0, Eigen::Vector3d v, double duration_s) : p0_(std::move(p0)), v_(std::move(v)), d_(duration_s) {}
+  Line(Eigen::Vector3d p0, Eigen::Vector3d v, double duration_s)
+      : p0_(std::move(p0)), v_(std::move(v)), d_(duration_s) {}
   double durationS() const override { return d_; }
   TrajectorySample sample(double t_s) const override {
     TrajectorySample s;
@@ -152,7 +153,7 @@ TEST(TrajectoryServer, GivenNewTrajectoryThenCurrentIsFlownUntilItsStartTime) {
   const auto at = server.sample(rt::secondsToNs(1.05));
   ASSERT_TRUE(at);
   EXPECT_NEAR((at->p_W_m - Eigen::Vector3d(1.05, 0, 0)).norm(), 0.0, 1e-12);  // continuous position
-  EXPECT_NEAR(at->v_W_mps.y(), 1.0, 1e-12);                                  // the new one is flown
+  EXPECT_NEAR(at->v_W_mps.y(), 1.0, 1e-12);                                   // the new one is flown
   EXPECT_EQ(server.current().trajectory, second);
 }
 
