@@ -281,7 +281,9 @@ void TrajectoryOptimizer::addWaypointTerms(std::uint32_t terms, double& cost) {
           cost = kInf;
           return;
         }
-        cost -= kappa * (to_hi.log().sum() + to_lo.log().sum());
+        // sum of six logs as the log of their product (one log instead of six; each factor is a
+        // distance of metres, so the product cannot overflow)
+        cost -= kappa * std::log(to_hi.prod() * to_lo.prod());
         // d/dq [-ln(hi - q) - ln(q - lo)] = 1/(hi - q) - 1/(q - lo)
         grad_q_.col(i) += (kappa * (to_hi.inverse() - to_lo.inverse())).matrix();
       }
