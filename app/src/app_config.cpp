@@ -46,6 +46,8 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
   if (root.has("perception")) c.perception = perception::parseDetectorParams(root.child("perception"));
   if (root.has("estimation")) c.estimation = parseEstimation(root.child("estimation"), c.source);
+  if (root.has("gimbal_control"))
+    c.gimbal_control = gimbal_control::parseGimbalControlParams(root.child("gimbal_control"));
   if (root.has("planning")) {
     const rt::ConfigNode planning_node = root.child("planning");
     c.planning = planning::parseTrackingPlannerParams(planning_node);
@@ -187,6 +189,19 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "replay_window_s" << YAML::Value << k.replay_window_s;
     out << YAML::Key << "max_buffered_measurements" << YAML::Value << k.max_buffered_measurements;
     out << YAML::EndMap;
+    out << YAML::EndMap;
+  }
+  if (c.gimbal_control) {
+    const gimbal_control::GimbalControlParams& g = *c.gimbal_control;
+    out << YAML::Key << "gimbal_control" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "kp_per_s" << YAML::Value << g.kp_per_s;
+    out << YAML::Key << "ki_per_s2" << YAML::Value << g.ki_per_s2;
+    out << YAML::Key << "integral_limit_rad_s" << YAML::Value << g.integral_limit_rad_s;
+    out << YAML::Key << "integral_zone_rad" << YAML::Value << g.integral_zone_rad;
+    out << YAML::Key << "max_rate_radps" << YAML::Value << g.max_rate_radps;
+    out << YAML::Key << "sweep_rate_radps" << YAML::Value << g.sweep_rate_radps;
+    out << YAML::Key << "feed_forward" << YAML::Value << g.feed_forward;
+    out << YAML::Key << "max_estimate_age_s" << YAML::Value << g.max_estimate_age_s;
     out << YAML::EndMap;
   }
   if (c.planning) {

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "aerotrack/estimation/target_task.hpp"
+#include "aerotrack/gimbal_control/gimbal_controller.hpp"
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/mapping/mapper.hpp"
 #include "aerotrack/perception/detector.hpp"
@@ -46,6 +47,8 @@ struct AppConfig {
   std::optional<perception::DetectorParams> perception;
   std::optional<EstimationConfig> estimation;               ///< `estimation:` section; needed by the target task.
   std::optional<planning::TrackingPlannerParams> planning;  ///< `planning:` section; needed by the planning task.
+  /// `gimbal_control:` section; needed by the gimbal_control task (which also needs estimation's extrinsics).
+  std::optional<gimbal_control::GimbalControlParams> gimbal_control;
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };

@@ -1,6 +1,7 @@
 // Wiring: see system.hpp.
 #include "system.hpp"
 
+#include "aerotrack/gimbal_control/gimbal_control_task.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "device_tasks.hpp"
 #include "paths.hpp"
@@ -8,8 +9,9 @@
 namespace aerotrack::app {
 
 std::vector<std::string> System::knownTasks() {
-  return {"sim_world", "odometry",     "gimbal_camera",     "depth_camera",    "gimbal",       "mapping", "detection",
-          "target",    "target_check", "trajectory_server", "baseline_follow", "truth_gimbal", "planning"};
+  return {"sim_world",       "odometry",     "gimbal_camera", "depth_camera",  "gimbal",
+          "mapping",         "detection",    "target",        "target_check",  "trajectory_server",
+          "baseline_follow", "truth_gimbal", "planning",      "gimbal_control"};
 }
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
@@ -87,6 +89,13 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     task = std::move(target_task);
   } else if (spec.name == "gimbal") {
     task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state, channels_.gimbal_stream);
+  } else if (spec.name == "gimbal_control") {
+    if (!config_.gimbal_control || !config_.estimation)
+      return rt::Error{where + ": task 'gimbal_control' needs gimbal_control: and estimation: sections"};
+    const gimbal_control::GimbalController controller(*config_.gimbal_control, config_.estimation->task.extrinsics);
+    task = std::make_unique<gimbal_control::GimbalControlTask>(controller, channels_.gimbal_state, channels_.odometry,
+                                                               channels_.target, channels_.gimbal_search_requested,
+                                                               *devices_.gimbal);
   } else if (spec.name == "planning") {
     if (!config_.planning) return rt::Error{where + ": task 'planning' needs a planning: section"};
     auto planner = planning::TrackingPlanner::create(*config_.planning);

@@ -4,6 +4,7 @@
 // and so is a simulated device without the task that steps the simulation.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,7 @@ struct Channels {
       256, rt::OverflowPolicy::kDropOldest};  ///< every sample, for the mapper
   rt::SharedSlot<mapping::LocalGrid> local_grid;
   rt::SharedSlot<octomap::OcTree> octree;
+  std::atomic<bool> gimbal_search_requested{false};  ///< the supervisor asks the gimbal to sweep
 };
 
 class System {
