@@ -1,0 +1,148 @@
+// The supervisor's transitions, one by one, and every failsafe.
+#include "aerotrack/supervisor/supervisor.hpp"
+
+#include <gtest/gtest.h>
+
+namespace aerotrack::supervisor {
+namespace {
+
+rt::TimeNs sec(double s) {
+  return rt::secondsToNs(s);
+}
+
+// Every stream healthy at t, at altitude, the person seen at `seen_s` (-1: never).
+SupervisorInputs healthy(double t, double seen_s = -1.0, double altitude_m = 1.5) {
+  SupervisorInputs in;
+  in.now_ns = sec(t);
+  in.odometry_stamp_ns = sec(t);
+  in.altitude_m = altitude_m;
+  in.depth_stamp_ns = sec(t);
+  in.camera_stamp_ns = sec(t);
+  in.person_live = seen_s >= 0.0;
+  in.person_accepted_ns = seen_s >= 0.0 ? sec(seen_s) : -1;
+  return in;
+}
+
+// A supervisor that took off and found the person at t = 3 s.
+Supervisor tracking(const SupervisorParams& params = SupervisorParams{}) {
+  Supervisor s(params, 0);
+  EXPECT_EQ(s.update(healthy(1.0, -1.0, 0.5)).mode, Mode::kTakeOff);
+  EXPECT_EQ(s.update(healthy(2.0, -1.0, 1.4)).mode, Mode::kSearch);
+  EXPECT_EQ(s.update(healthy(3.0, 3.0)).mode, Mode::kTrack);
+  return s;
+}
+
+TEST(Supervisor, TakeOffSearchTrack) {
+  Supervisor s(SupervisorParams{}, 0);
+  EXPECT_EQ(s.state().mode, Mode::kTakeOff);
+  EXPECT_EQ(s.update(healthy(1.0, 1.0, 0.3)).mode, Mode::kTakeOff);  // seen, but still climbing
+  EXPECT_EQ(s.update(healthy(2.0, -1.0, 1.3)).mode, Mode::kSearch);
+  EXPECT_EQ(s.state().reason, Reason::kAltitudeReached);
+  EXPECT_EQ(s.update(healthy(2.5)).mode, Mode::kSearch);  // no one yet
+  EXPECT_EQ(s.update(healthy(3.0, 3.0)).mode, Mode::kTrack);
+  EXPECT_EQ(s.state().reason, Reason::kPersonFound);
+  EXPECT_EQ(s.state().transitions, 2U);
+}
+
+TEST(Supervisor, LostForRelocateAfterThenRelocatesAndReturnsOnReacquisition) {
+  Supervisor s = tracking();
+  EXPECT_EQ(s.update(healthy(3.3, 3.0)).mode, Mode::kTrack);      // 0.3 s without a measurement: still tracking
+  EXPECT_EQ(s.update(healthy(3.45, 3.0)).mode, Mode::kRelocate);  // 0.45 s > 0.4 s
+  EXPECT_EQ(s.state().reason, Reason::kPersonLost);
+  EXPECT_EQ(s.update(healthy(4.0, 3.0)).mode, Mode::kRelocate);
+  EXPECT_EQ(s.update(healthy(5.0, 4.95)).mode, Mode::kTrack);  // a new measurement
+}
+
+TEST(Supervisor, RelocationTimesOutIntoHoldAndHoldEndsWhenFound) {
+  Supervisor s = tracking();
+  s.update(healthy(3.5, 3.0));
+  ASSERT_EQ(s.state().mode, Mode::kRelocate);
+  EXPECT_EQ(s.update(healthy(8.4, 3.0)).mode, Mode::kRelocate);
+  EXPECT_EQ(s.update(healthy(8.6, 3.0)).mode, Mode::kHold);  // 5.1 s relocating
+  EXPECT_EQ(s.state().reason, Reason::kPersonNotFound);
+  EXPECT_FALSE(isFailsafe(s.state().reason));
+  EXPECT_EQ(s.update(healthy(10.0, 9.9)).mode, Mode::kTrack);
+}
+
+TEST(Supervisor, HoldLandsAfterItsTimeoutWhenConfigured) {
+  SupervisorParams p;
+  p.hold_then_land_s = 10.0;
+  Supervisor s = tracking(p);
+  s.update(healthy(3.5, 3.0));
+  s.update(healthy(9.0, 3.0));
+  ASSERT_EQ(s.state().mode, Mode::kHold);
+  EXPECT_EQ(s.update(healthy(18.0, 3.0)).mode, Mode::kHold);
+  EXPECT_EQ(s.update(healthy(19.5, 3.0)).mode, Mode::kLand);
+  EXPECT_EQ(s.update(healthy(20.0, 19.9)).mode, Mode::kLand);  // landing is final
+}
+
+struct Fault {
+  const char* name;
+  void (*apply)(SupervisorInputs&);
+  Reason reason;
+};
+
+TEST(Supervisor, EveryFailsafeHoldsWithItsReasonAndLatches) {
+  const Fault faults[] = {
+      {"odometry freezes", [](SupervisorInputs& in) { in.odometry_stamp_ns = in.now_ns - sec(0.5); },
+       Reason::kStaleOdometry},
+      {"depth stops", [](SupervisorInputs& in) { in.depth_stamp_ns = in.now_ns - sec(1.5); }, Reason::kNoDepth},
+      {"camera frames stop", [](SupervisorInputs& in) { in.camera_stamp_ns = in.now_ns - sec(1.5); },
+       Reason::kNoCameraFrames},
+      {"planner fails", [](SupervisorInputs& in) { in.planner_failures_in_a_row = 20; }, Reason::kPlannerFailures},
+      {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
+  };
+  for (const Fault& fault : faults) {
+    Supervisor s = tracking();
+    SupervisorInputs in = healthy(3.1, 3.1);
+    fault.apply(in);
+    EXPECT_EQ(s.update(in).mode, Mode::kHold) << fault.name;
+    EXPECT_EQ(s.state().reason, fault.reason) << fault.name;
+    EXPECT_TRUE(isFailsafe(s.state().reason)) << fault.name;
+    // Latched: the streams recover, the person is there, it still holds.
+    SupervisorInputs recovered = healthy(4.0, 4.0);
+    recovered.deadline_overruns = 1000;  // cumulative counter stays where it was
+    EXPECT_EQ(s.update(recovered).mode, Mode::kHold) << fault.name;
+  }
+}
+
+TEST(Supervisor, OverrunsAreCountedPerWindow) {
+  Supervisor s = tracking();
+  SupervisorInputs in = healthy(3.1, 3.1);
+  std::uint64_t overruns = 0;
+  for (int k = 0; k < 100; ++k) {  // 10 overruns a second for 10 s: below 50 per window
+    in = healthy(3.1 + 0.1 * k, 3.1 + 0.1 * k);
+    overruns += 1;
+    in.deadline_overruns = overruns;
+    EXPECT_EQ(s.update(in).mode, Mode::kTrack) << k;
+  }
+}
+
+TEST(Supervisor, SilentStreamsAreToleratedDuringStartupGraceOnly) {
+  Supervisor s(SupervisorParams{}, 0);
+  SupervisorInputs in;
+  in.now_ns = sec(1.0);  // nothing received yet
+  EXPECT_EQ(s.update(in).mode, Mode::kTakeOff);
+  in.now_ns = sec(2.5);
+  EXPECT_EQ(s.update(in).mode, Mode::kHold);
+  EXPECT_EQ(s.state().reason, Reason::kStaleOdometry);
+}
+
+TEST(SupervisorParams, EveryKeyIsRequiredAndChecked) {
+  auto node = rt::ConfigNode::fromString(
+      "s:\n  takeoff_altitude_m: 1.5\n  takeoff_tolerance_m: 0.3\n  relocate_after_s: 0.4\n"
+      "  relocate_timeout_s: 5.0\n  hold_then_land_s: 0.0\n  odometry_timeout_s: 0.2\n  depth_timeout_s: 1.0\n"
+      "  camera_timeout_s: 1.0\n  max_planner_failures: 20\n  overrun_storm: 50\n  overrun_window_s: 1.0\n"
+      "  startup_grace_s: 2.0\n",
+      "s.yaml");
+  ASSERT_TRUE(node.has_value());
+  const SupervisorParams p = parseSupervisorParams(node->child("s"));
+  EXPECT_TRUE(validate(p).has_value());
+  EXPECT_EQ(p.relocate_after_s, 0.4);
+  auto missing = rt::ConfigNode::fromString("s:\n  takeoff_altitude_m: 1.5\n", "s.yaml");
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_THROW(parseSupervisorParams(missing->child("s")), rt::ConfigError);
+}
+
+}  // namespace
+}  // namespace aerotrack::supervisor
