@@ -48,6 +48,12 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   if (root.has("estimation")) c.estimation = parseEstimation(root.child("estimation"), c.source);
   if (root.has("gimbal_control"))
     c.gimbal_control = gimbal_control::parseGimbalControlParams(root.child("gimbal_control"));
+  if (root.has("supervisor")) {
+    const rt::ConfigNode supervisor_node = root.child("supervisor");
+    c.supervisor = supervisor::parseSupervisorParams(supervisor_node);
+    if (const rt::Status s = supervisor::validate(*c.supervisor); !s)
+      supervisor_node.fail("supervisor", s.error().message);
+  }
   if (root.has("planning")) {
     const rt::ConfigNode planning_node = root.child("planning");
     c.planning = planning::parseTrackingPlannerParams(planning_node);
@@ -202,6 +208,23 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "sweep_rate_radps" << YAML::Value << g.sweep_rate_radps;
     out << YAML::Key << "feed_forward" << YAML::Value << g.feed_forward;
     out << YAML::Key << "max_estimate_age_s" << YAML::Value << g.max_estimate_age_s;
+    out << YAML::EndMap;
+  }
+  if (c.supervisor) {
+    const supervisor::SupervisorParams& v = *c.supervisor;
+    out << YAML::Key << "supervisor" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "takeoff_altitude_m" << YAML::Value << v.takeoff_altitude_m;
+    out << YAML::Key << "takeoff_tolerance_m" << YAML::Value << v.takeoff_tolerance_m;
+    out << YAML::Key << "relocate_after_s" << YAML::Value << v.relocate_after_s;
+    out << YAML::Key << "relocate_timeout_s" << YAML::Value << v.relocate_timeout_s;
+    out << YAML::Key << "hold_then_land_s" << YAML::Value << v.hold_then_land_s;
+    out << YAML::Key << "odometry_timeout_s" << YAML::Value << v.odometry_timeout_s;
+    out << YAML::Key << "depth_timeout_s" << YAML::Value << v.depth_timeout_s;
+    out << YAML::Key << "camera_timeout_s" << YAML::Value << v.camera_timeout_s;
+    out << YAML::Key << "max_planner_failures" << YAML::Value << v.max_planner_failures;
+    out << YAML::Key << "overrun_storm" << YAML::Value << v.overrun_storm;
+    out << YAML::Key << "overrun_window_s" << YAML::Value << v.overrun_window_s;
+    out << YAML::Key << "startup_grace_s" << YAML::Value << v.startup_grace_s;
     out << YAML::EndMap;
   }
   if (c.planning) {

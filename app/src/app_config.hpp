@@ -18,6 +18,7 @@
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "aerotrack/rt/task.hpp"
+#include "aerotrack/supervisor/supervisor.hpp"
 #include "aerotrack/trajectory_server/trajectory_server.hpp"
 
 namespace aerotrack::app {
@@ -49,6 +50,7 @@ struct AppConfig {
   std::optional<planning::TrackingPlannerParams> planning;  ///< `planning:` section; needed by the planning task.
   /// `gimbal_control:` section; needed by the gimbal_control task (which also needs estimation's extrinsics).
   std::optional<gimbal_control::GimbalControlParams> gimbal_control;
+  std::optional<supervisor::SupervisorParams> supervisor;  ///< `supervisor:` section; needed by the supervisor task.
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };

@@ -48,17 +48,24 @@ class OdometryTask final : public rt::Task {
 class GimbalCameraTask final : public rt::Task {
  public:
   GimbalCameraTask(hal::GimbalCamera& device, rt::SpscQueue<hal::DetectionFrame>& detections,
-                   rt::SharedSlot<hal::ImageFrame>& images)
-      : device_(device), detections_(detections), images_(images) {}
+                   rt::SharedSlot<hal::ImageFrame>& images, std::atomic<rt::TimeNs>& newest_frame_ns)
+      : device_(device), detections_(detections), images_(images), newest_frame_ns_(newest_frame_ns) {}
   void step(rt::TimeNs now_ns) override {
-    if (auto image = device_.grab(now_ns)) images_.write(std::move(image));
-    while (const auto frame = device_.grabDetections(now_ns)) detections_.try_push(*frame);
+    if (auto image = device_.grab(now_ns)) {
+      newest_frame_ns_.store(image->stamp_ns, std::memory_order_relaxed);
+      images_.write(std::move(image));
+    }
+    while (const auto frame = device_.grabDetections(now_ns)) {
+      newest_frame_ns_.store(frame->stamp_ns, std::memory_order_relaxed);
+      detections_.try_push(*frame);
+    }
   }
 
  private:
   hal::GimbalCamera& device_;
   rt::SpscQueue<hal::DetectionFrame>& detections_;
   rt::SharedSlot<hal::ImageFrame>& images_;
+  std::atomic<rt::TimeNs>& newest_frame_ns_;  ///< camera health, for the supervisor
 };
 
 /// Publishes each new depth frame on the depth channel.

@@ -17,6 +17,7 @@ std::vector<std::string> System::knownTasks() {
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
                                                     rt::TimeNs start_ns) {
   std::unique_ptr<System> system(new System(config));
+  system->start_ns_ = start_ns;
   hal::sim::SimulationOptions sim_options;
   sim_options.physics_step_s = config.sim.physics_step_s;
   sim_options.render_depth = config.sim.render_depth;
@@ -56,7 +57,8 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream,
                                           channels_.odometry_target_stream);
   } else if (spec.name == "gimbal_camera") {
-    task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections, channels_.images);
+    task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections, channels_.images,
+                                              channels_.newest_camera_frame_ns);
   } else if (spec.name == "depth_camera") {
     task = std::make_unique<DepthCameraTask>(*devices_.depth_camera, channels_.depth);
   } else if (spec.name == "mapping") {
@@ -96,12 +98,30 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     task = std::make_unique<gimbal_control::GimbalControlTask>(controller, channels_.gimbal_state, channels_.odometry,
                                                                channels_.target, channels_.gimbal_search_requested,
                                                                *devices_.gimbal);
+  } else if (spec.name == "supervisor") {
+    if (!config_.supervisor) return rt::Error{where + ": task 'supervisor' needs a supervisor: section"};
+    const supervisor::SupervisorChannels channels{channels_.odometry,
+                                                  channels_.depth,
+                                                  channels_.newest_camera_frame_ns,
+                                                  channels_.target,
+                                                  channels_.planner_failures_in_a_row,
+                                                  channels_.supervisor,
+                                                  channels_.gimbal_search_requested};
+    auto supervisor_task = std::make_unique<supervisor::SupervisorTask>(*config_.supervisor, start_ns_, channels,
+                                                                        /*sweep_when_searching=*/true);
+    supervisor_task_ = supervisor_task.get();
+    task = std::move(supervisor_task);
   } else if (spec.name == "planning") {
     if (!config_.planning) return rt::Error{where + ": task 'planning' needs a planning: section"};
     auto planner = planning::TrackingPlanner::create(*config_.planning);
     if (!planner) return rt::Error{config_.source + ": " + planner.error().message};
-    const planning::PlanningChannels channels{channels_.odometry, channels_.target, channels_.local_grid,
-                                              channels_.octree, channels_.trajectories};
+    const planning::PlanningChannels channels{channels_.odometry,
+                                              channels_.target,
+                                              channels_.local_grid,
+                                              channels_.octree,
+                                              channels_.trajectories,
+                                              &channels_.supervisor,
+                                              &channels_.planner_failures_in_a_row};
     auto planning_task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, stats_clock_);
     planning_task_ = planning_task.get();
     task = std::move(planning_task);

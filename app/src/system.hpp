@@ -18,6 +18,7 @@
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
 #include "aerotrack/rt/task.hpp"
+#include "aerotrack/supervisor/supervisor_task.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 #include "app_config.hpp"
 
@@ -43,7 +44,10 @@ struct Channels {
       256, rt::OverflowPolicy::kDropOldest};  ///< every sample, for the mapper
   rt::SharedSlot<mapping::LocalGrid> local_grid;
   rt::SharedSlot<octomap::OcTree> octree;
-  std::atomic<bool> gimbal_search_requested{false};  ///< the supervisor asks the gimbal to sweep
+  std::atomic<bool> gimbal_search_requested{false};        ///< the supervisor asks the gimbal to sweep
+  std::atomic<rt::TimeNs> newest_camera_frame_ns{-1};      ///< capture time of the newest gimbal-camera frame
+  rt::LatestSlot<supervisor::SupervisorState> supervisor;  ///< the supervisor's mode
+  std::atomic<int> planner_failures_in_a_row{0};           ///< written by the planning task
 };
 
 class System {
@@ -66,6 +70,8 @@ class System {
   /// The detection task, if the table has one (for its statistics).
   const perception::DetectionTask* detectionTask() const { return detection_task_; }
 
+  /// The supervisor task, if the table has one.
+  const supervisor::SupervisorTask* supervisorTask() const { return supervisor_task_; }
   /// The planning task, if the table has one (for its statistics and the replan hand-over).
   const planning::PlanningTask* planningTask() const { return planning_task_; }
 
@@ -87,6 +93,8 @@ class System {
   const estimation::TargetTask* target_task_ = nullptr;
   const TargetTruthCheckTask* target_check_task_ = nullptr;
   const planning::PlanningTask* planning_task_ = nullptr;
+  const supervisor::SupervisorTask* supervisor_task_ = nullptr;
+  rt::TimeNs start_ns_ = 0;         ///< The executor clock's time at start.
   rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };
 

@@ -33,9 +33,37 @@ PlanningTask::PoolEntry& PlanningTask::freeEntry() {
 
 double PlanningTask::meanCorridorBoxes() const {
   const std::uint64_t built = counts_[static_cast<std::size_t>(PlanStatus::kPlanned)] +
+                              counts_[static_cast<std::size_t>(PlanStatus::kRelocating)] +
                               counts_[static_cast<std::size_t>(PlanStatus::kOptimizerFailed)] +
                               counts_[static_cast<std::size_t>(PlanStatus::kCheckFailed)];
   return built > 0 ? static_cast<double>(corridor_boxes_sum_) / static_cast<double>(built) : 0.0;
+}
+
+void PlanningTask::publish(PoolEntry& entry, rt::TimeNs start_ns) {
+  entry.timed->start_ns = start_ns;
+  published_ = *entry.timed;
+  channels_.trajectories.write(entry.timed);
+}
+
+// Hold and land act once, on entering the mode; search publishes nothing. True when the cycle is done.
+bool PlanningTask::handleMode(supervisor::Mode mode, const PlanInputs& inputs) {
+  using supervisor::Mode;
+  const bool entered = mode != last_mode_;
+  last_mode_ = mode;
+  if (mode != Mode::kHold && mode != Mode::kLand && mode != Mode::kSearch) return false;
+  if (!entered || mode == Mode::kSearch || inputs.odometry == nullptr) return true;
+  const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(planner_.params().planning_budget_s);
+  const StatePva start = planner_.startState(inputs, start_ns);
+  PoolEntry& entry = freeEntry();
+  if (mode == Mode::kHold) {
+    planner_.makeStopTrajectory(start, *entry.trajectory);
+    ++holds_;
+  } else {
+    planner_.makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), 0.0), *entry.trajectory);
+    ++landings_;
+  }
+  publish(entry, start_ns);
+  return true;
 }
 
 void PlanningTask::step(rt::TimeNs now_ns) {
@@ -53,6 +81,12 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   inputs.grid = grid.get();
   inputs.octree = octree.get();
   inputs.current = published_.trajectory ? &published_ : nullptr;
+  if (channels_.supervisor != nullptr) {
+    if (const auto state = channels_.supervisor->read()) {
+      if (handleMode(state->mode, inputs)) return;
+      inputs.relocate = state->mode == supervisor::Mode::kRelocate;
+    }
+  }
 
   PoolEntry& entry = freeEntry();
   const rt::TimeNs begin_ns = stats_clock_.now();
@@ -65,16 +99,20 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   if (report.search_status == SearchStatus::kPartial) ++search_partial_;
   if (report.status == PlanStatus::kSearchFailed) ++search_failures_[static_cast<std::size_t>(report.search_status)];
   if (report.corridor_boxes > 0) corridor_boxes_sum_ += static_cast<std::uint64_t>(report.corridor_boxes);
-  if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kCheckFailed) {
+  if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
+      report.status == PlanStatus::kCheckFailed) {
     if (report.optimizer_status == OptimizerStatus::kMaxIterations) ++optimizer_max_iterations_;
     if (report.optimizer_status == OptimizerStatus::kLineSearch) ++optimizer_line_search_;
   }
-  if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kStopped ||
-      report.status == PlanStatus::kTakeOff) {
-    entry.timed->start_ns = report.start_ns;
-    published_ = *entry.timed;
-    channels_.trajectories.write(entry.timed);
-  }
+  const bool flies = report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
+                     report.status == PlanStatus::kStopped || report.status == PlanStatus::kTakeOff;
+  if (flies) publish(entry, report.start_ns);
+  const bool failed = report.status == PlanStatus::kStopped || report.status == PlanStatus::kSearchFailed ||
+                      report.status == PlanStatus::kCorridorFailed || report.status == PlanStatus::kOptimizerFailed ||
+                      report.status == PlanStatus::kCheckFailed;
+  failures_in_a_row_ = failed ? failures_in_a_row_ + 1 : 0;
+  if (channels_.failures_in_a_row != nullptr)
+    channels_.failures_in_a_row->store(failures_in_a_row_, std::memory_order_relaxed);
 }
 
 }  // namespace aerotrack::planning

@@ -16,6 +16,8 @@ std::string_view toString(PlanStatus status) {
       return "take_off";
     case PlanStatus::kAtGoal:
       return "at_goal";
+    case PlanStatus::kRelocating:
+      return "relocating";
     case PlanStatus::kNoOdometry:
       return "no_odometry";
     case PlanStatus::kNoMap:
@@ -179,19 +181,33 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   }
 
   const estimation::TargetEstimate* target = inputs.target;
-  if (target == nullptr || !target->initialised || target->lost) return fail(PlanStatus::kNoTarget);
-
-  // Prediction (Sect. V-A), or constant velocity until the predictor has enough estimates.
-  const auto prediction = predictor_.predict(inputs.now_ns);
-  report.predicted = prediction.has_value();
+  const bool live = target != nullptr && target->initialised && !target->lost;
+  const prediction::TargetPrediction* path_prediction = nullptr;
+  if (live) {
+    // Prediction (Sect. V-A), or constant velocity until the predictor has enough estimates.
+    if (auto predicted = predictor_.predict(inputs.now_ns)) {
+      last_prediction_ = *predicted;
+      path_prediction = &*last_prediction_;
+    }
+  } else if (inputs.relocate && last_prediction_) {
+    path_prediction = &*last_prediction_;  // relocation: the last predicted path
+  } else {
+    return fail(PlanStatus::kNoTarget);
+  }
+  report.predicted = path_prediction != nullptr;
   const double horizon_s = params_.prediction.horizon_s;
+  // Past its end a prediction is continued at its end velocity (a Bezier extrapolated would diverge).
   auto person_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
-    if (prediction) return prediction->position(std::min(t_ns, prediction->end_ns));
+    if (path_prediction != nullptr) {
+      const rt::TimeNs end_ns = path_prediction->end_ns;
+      if (t_ns <= end_ns) return path_prediction->position(t_ns);
+      return path_prediction->position(end_ns) + rt::nsToSeconds(t_ns - end_ns) * path_prediction->velocity(end_ns);
+    }
     const double ahead_s = std::min(rt::nsToSeconds(t_ns - target->stamp_ns), horizon_s);
     return target->p_WT_m + ahead_s * target->v_WT_mps;
   };
   auto person_velocity_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
-    if (prediction) return prediction->velocity(std::min(t_ns, prediction->end_ns));
+    if (path_prediction != nullptr) return path_prediction->velocity(std::min(t_ns, path_prediction->end_ns));
     return target->v_WT_mps;
   };
   KinematicState person_now;
@@ -257,7 +273,7 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   const CheckResult check = checkTrajectory(out, params_.check, *inputs.grid, checker_, inputs.octree);
   report.check = check.verdict;
   if (check.verdict != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
-  report.status = PlanStatus::kPlanned;
+  report.status = live ? PlanStatus::kPlanned : PlanStatus::kRelocating;
   return report;
 }
 

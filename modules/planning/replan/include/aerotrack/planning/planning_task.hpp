@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/rt/timing_stats.hpp"
+#include "aerotrack/supervisor/supervisor.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 
 namespace aerotrack::planning {
@@ -33,6 +35,12 @@ struct PlanningChannels {
   const rt::SharedSlot<mapping::LocalGrid>& grid;
   const rt::SharedSlot<octomap::OcTree>& octree;
   rt::SharedSlot<trajectory_server::TimedTrajectory>& trajectories;
+  /// The supervisor's mode (optional: without it the task always tracks). In search it publishes
+  /// nothing (the drone hovers while the gimbal sweeps), in relocate it plans along the last prediction,
+  /// in hold it brakes once and then publishes nothing, in land it descends once.
+  const rt::LatestSlot<supervisor::SupervisorState>* supervisor = nullptr;
+  /// Where it counts its failed cycles in a row, for the supervisor (optional).
+  std::atomic<int>* failures_in_a_row = nullptr;
 };
 
 class PlanningTask final : public rt::Task {
@@ -53,6 +61,9 @@ class PlanningTask final : public rt::Task {
   std::uint64_t optimizerMaxIterations() const { return optimizer_max_iterations_; }
   std::uint64_t optimizerLineSearch() const { return optimizer_line_search_; }
   double meanCorridorBoxes() const;
+  /// Brakes published on entering hold, and descents on entering land.
+  std::uint64_t holds() const { return holds_; }
+  std::uint64_t landings() const { return landings_; }
   /// Trajectory objects allocated after start (0 while the pool suffices).
   std::uint64_t poolGrowths() const { return pool_growths_; }
   /// The last trajectory published, empty before the first.
@@ -79,6 +90,12 @@ class PlanningTask final : public rt::Task {
   std::uint64_t optimizer_line_search_ = 0;
   std::uint64_t corridor_boxes_sum_ = 0;
   std::uint64_t pool_growths_ = 0;
+  std::uint64_t holds_ = 0;
+  std::uint64_t landings_ = 0;
+  int failures_in_a_row_ = 0;
+  supervisor::Mode last_mode_ = supervisor::Mode::kTakeOff;
+  void publish(PoolEntry& entry, rt::TimeNs start_ns);
+  bool handleMode(supervisor::Mode mode, const PlanInputs& inputs);
   rt::TimingStats cycle_stats_;
 };
 

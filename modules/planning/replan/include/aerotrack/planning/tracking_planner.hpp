@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -67,6 +68,7 @@ enum class PlanStatus : std::uint8_t {
   kStopped,          ///< The cycle failed (any reason below) and the current trajectory was blocked: a stop.
   kTakeOff,          ///< The start was below takeoff_below_m: a vertical climb to the flight altitude.
   kAtGoal,           ///< The search's path is too short to fly (the drone is at the goal): nothing published.
+  kRelocating,       ///< As kPlanned, towards the person's last predicted path (relocation).
   kNoOdometry,       ///< No odometry yet.
   kNoMap,            ///< No local grid yet.
   kNoTarget,         ///< No live estimate of the person (never seen, or lost).
@@ -75,7 +77,7 @@ enum class PlanStatus : std::uint8_t {
   kOptimizerFailed,  ///< The optimiser refused the problem.
   kCheckFailed,      ///< The optimised trajectory failed the final check.
 };
-inline constexpr int kPlanStatusCount = 11;
+inline constexpr int kPlanStatusCount = 12;
 std::string_view toString(PlanStatus status);
 
 /// What a cycle reads.
@@ -86,6 +88,9 @@ struct PlanInputs {
   const mapping::LocalGrid* grid = nullptr;
   const octomap::OcTree* octree = nullptr;                      ///< Null: no FCL check (grid check only).
   const trajectory_server::TimedTrajectory* current = nullptr;  ///< What the server flies now; may be empty.
+  /// Relocation (the supervisor's relocate mode, the paper's target-relocating strategy): with no live
+  /// estimate, fly along the last predicted path (continued at its end velocity) instead of failing.
+  bool relocate = false;
 };
 
 /// What a cycle did (counters for the statistics, and the trajectory written into `out`).
@@ -148,6 +153,7 @@ class TrackingPlanner {
   Corridor corridor_;
   std::vector<double> durations_s_;
   MinJerkSpline stop_spline_;
+  std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
 };
 
 }  // namespace aerotrack::planning
