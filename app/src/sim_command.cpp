@@ -123,6 +123,11 @@ int simCommand(const ParsedArgs& args) {
   info.perception = perceptionSummary((*system)->detectionTask());
   info.estimation = estimationSummary((*system)->targetTask(), (*system)->targetCheckTask());
   info.planning = planningSummary((*system)->planningTask());
+  double supervisor_step_s = 0.0;
+  for (const rt::TaskSpec& spec : config->tasks) {
+    if (spec.name == "supervisor" && spec.periodic()) supervisor_step_s = 1.0 / spec.rate_hz;
+  }
+  info.supervisor = supervisorSummary((*system)->supervisorTask(), start_ns, supervisor_step_s);
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
   const nlohmann::json summary = simSummary(sim, info);
@@ -143,6 +148,11 @@ int simCommand(const ParsedArgs& args) {
       m.longestLossS());
   std::printf("  distance to the person: mean %.2f m, max %.2f m, final %.2f m; min clearance %.2f m, collisions %d\n",
               m.distanceMeanM(), m.distanceMaxM(), m.finalDistanceM(), m.minClearanceM(), m.collisions());
+  if (const supervisor::SupervisorTask* sup = (*system)->supervisorTask()) {
+    std::printf("  supervisor: %zu transitions, ends in %s (%s)\n", sup->transitionCount(),
+                std::string(supervisor::toString(sup->state().mode)).c_str(),
+                std::string(supervisor::toString(sup->state().reason)).c_str());
+  }
   if (const planning::PlanningTask* planner = (*system)->planningTask()) {
     const rt::TimingSnapshot cycle = planner->cycleStats().snapshot();
     std::printf("  planning: %llu cycles, %llu planned, %llu stops; cycle %.2f ms median, %.2f ms p99\n",

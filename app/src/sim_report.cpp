@@ -79,6 +79,26 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
           {"trajectory_pool_growths", task->poolGrowths()}};
 }
 
+nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::TimeNs start_ns, double step_s) {
+  if (task == nullptr) return nullptr;
+  nlohmann::json transitions = nlohmann::json::array();
+  for (std::size_t i = 0; i < task->transitionCount(); ++i) {
+    const supervisor::SupervisorTask::Transition& t = task->transitions()[i];
+    transitions.push_back({{"t_s", rt::nsToSeconds(t.at_ns - start_ns)},
+                           {"mode", std::string(supervisor::toString(t.mode))},
+                           {"reason", std::string(supervisor::toString(t.reason))}});
+  }
+  nlohmann::json seconds = nlohmann::json::object();
+  for (const auto mode : {supervisor::Mode::kTakeOff, supervisor::Mode::kSearch, supervisor::Mode::kTrack,
+                          supervisor::Mode::kRelocate, supervisor::Mode::kHold, supervisor::Mode::kLand}) {
+    seconds[std::string(supervisor::toString(mode))] = static_cast<double>(task->stepsIn(mode)) * step_s;
+  }
+  return {{"mode", std::string(supervisor::toString(task->state().mode))},
+          {"reason", std::string(supervisor::toString(task->state().reason))},
+          {"transitions", transitions},
+          {"seconds_in", seconds}};
+}
+
 nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
   if (task == nullptr) return nullptr;
   const rt::TimingSnapshot detect = task->detectStats().snapshot();
@@ -124,6 +144,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"perception", run.perception},
       {"estimation", run.estimation},
       {"planning", run.planning},
+      {"supervisor", run.supervisor},
   };
   if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
   return out;

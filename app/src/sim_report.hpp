@@ -14,6 +14,7 @@
 #include "aerotrack/perception/detection_task.hpp"
 #include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/supervisor/supervisor_task.hpp"
 #include "report.hpp"
 
 namespace aerotrack::app {
@@ -30,6 +31,7 @@ struct RunInfo {
   nlohmann::json perception;  ///< perceptionSummary()
   nlohmann::json estimation;  ///< estimationSummary()
   nlohmann::json planning;    ///< planningSummary()
+  nlohmann::json supervisor;  ///< supervisorSummary()
 };
 
 class TargetTruthCheckTask;
@@ -39,6 +41,10 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
 /// The planning section of summary.json (null if the run had no planning task): cycles by outcome,
 /// the replanning cycle's time (prediction + search + corridor + optimisation + check) and counters.
 nlohmann::json planningSummary(const planning::PlanningTask* task);
+
+/// The supervisor section of summary.json (null without a supervisor task): the final mode and reason,
+/// every transition (time since start, mode, reason) and the seconds spent in each mode.
+nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::TimeNs start_ns, double step_s);
 
 /// The perception section of summary.json (null if the run had no detection task).
 nlohmann::json perceptionSummary(const perception::DetectionTask* task);

@@ -21,6 +21,7 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
   hal::sim::SimulationOptions sim_options;
   sim_options.physics_step_s = config.sim.physics_step_s;
   sim_options.render_depth = config.sim.render_depth;
+  sim_options.faults = config.sim.faults;
   auto devices = hal::makeDevices(config.hal, scenario, sim_options, start_ns);
   if (!devices) return rt::Error{config.source + ": " + devices.error().message};
   system->devices_ = std::move(devices.value());

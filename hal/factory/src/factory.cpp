@@ -40,6 +40,20 @@ SimConfig parseSimConfig(const rt::ConfigNode& node) {
   c.seed = node.getUint64("seed");
   c.physics_step_s = node.getDouble("physics_step_s", 1e-4, 0.01);
   c.render_depth = node.getBool("render_depth");
+  if (node.has("faults")) {
+    const rt::ConfigNode faults = node.child("faults");
+    const auto window = [&faults](const char* key, sim::FaultWindow& out) {
+      if (!faults.has(key)) return;
+      const std::vector<double> w = faults.getDoubleList(key, 2, 0.0, 1e6);
+      if (w[1] <= w[0]) faults.fail(key, "end must be after begin");
+      out = {w[0], w[1]};
+    };
+    window("camera_stop_s", c.faults.camera_stop);
+    window("person_occluded_s", c.faults.person_occluded);
+    window("odometry_freeze_s", c.faults.odometry_freeze);
+    window("depth_stop_s", c.faults.depth_stop);
+    faults.finish();
+  }
   node.finish();
   return c;
 }
@@ -50,6 +64,20 @@ void emitYaml(YAML::Emitter& out, const SimConfig& c) {
   out << YAML::Key << "seed" << YAML::Value << c.seed;
   out << YAML::Key << "physics_step_s" << YAML::Value << c.physics_step_s;
   out << YAML::Key << "render_depth" << YAML::Value << c.render_depth;
+  const std::pair<const char*, const sim::FaultWindow*> windows[] = {{"camera_stop_s", &c.faults.camera_stop},
+                                                                     {"person_occluded_s", &c.faults.person_occluded},
+                                                                     {"odometry_freeze_s", &c.faults.odometry_freeze},
+                                                                     {"depth_stop_s", &c.faults.depth_stop}};
+  bool any = false;
+  for (const auto& [key, w] : windows) any = any || w->begin_s >= 0.0;
+  if (any) {
+    out << YAML::Key << "faults" << YAML::Value << YAML::BeginMap;
+    for (const auto& [key, w] : windows) {
+      if (w->begin_s >= 0.0)
+        out << YAML::Key << key << YAML::Value << YAML::Flow << std::vector<double>{w->begin_s, w->end_s};
+    }
+    out << YAML::EndMap;
+  }
   out << YAML::EndMap;
 }
 

@@ -10,6 +10,33 @@ DeviceHealth simulated(const char* what, TimeNs last_ns) {
 
 }  // namespace
 
+std::optional<OdometrySample> SimOdometry::read(TimeNs now_ns) {
+  const auto sample = sim_->odometryOut().read();
+  if (!sim_->options().faults.odometry_freeze.active(sim_->secondsSinceStart(now_ns))) {
+    frozen_.reset();
+    return sample;
+  }
+  if (!frozen_) frozen_ = sample;  // the last sample before the freeze, repeated with its old stamp
+  return frozen_;
+}
+
+std::optional<DetectionFrame> SimGimbalCamera::grabDetections(TimeNs now_ns) {
+  auto frame = sim_->detectionsOut().try_pop();
+  if (!frame) return frame;
+  const SimFaults& faults = sim_->options().faults;
+  const double t_s = sim_->secondsSinceStart(now_ns);
+  if (faults.camera_stop.active(t_s)) {
+    while (sim_->detectionsOut().try_pop()) {
+    }
+    return std::nullopt;
+  }
+  if (faults.person_occluded.active(t_s)) {
+    frame->person_count = 0;
+    frame->target_index = -1;
+  }
+  return frame;
+}
+
 DeviceHealth SimOdometry::health(TimeNs) const {
   const auto last = sim_->odometryOut().read();
   return simulated("simulated odometry (truth + noise, delayed)", last ? last->stamp_ns : 0);
@@ -40,17 +67,21 @@ std::shared_ptr<ImageFrame> SimGimbalCamera::freeFrame() {
   return slot;
 }
 
-ImageFrameHandle SimGimbalCamera::grab(TimeNs) {
+ImageFrameHandle SimGimbalCamera::grab(TimeNs now_ns) {
   const SceneRenderer* renderer = sim_->renderer();
   if (renderer == nullptr) return {};
   std::optional<CameraExposure> newest;
   while (auto exposure = sim_->exposuresOut().try_pop()) newest = std::move(exposure);
   if (!newest) return {};
+  const SimFaults& faults = sim_->options().faults;
+  const double t_s = sim_->secondsSinceStart(now_ns);
+  if (faults.camera_stop.active(t_s)) return {};
+  const bool occluded = faults.person_occluded.active(t_s);
   std::shared_ptr<ImageFrame> frame = freeFrame();
   frame->stamp_ns = newest->stamp_ns;
   frame->sequence = newest->sequence;
   frame->intrinsics = renderer->params().intrinsics;
-  renderer->render(sim_->obstacles(), newest->T_WC, &newest->person, frame->bgr, scratch_);
+  renderer->render(sim_->obstacles(), newest->T_WC, occluded ? nullptr : &newest->person, frame->bgr, scratch_);
   last_stamp_ns_ = newest->stamp_ns;
   return frame;
 }
@@ -60,10 +91,11 @@ DeviceHealth SimDepthCamera::health(TimeNs) const {
   return simulated("simulated depth camera", last ? last->stamp_ns : 0);
 }
 
-DepthFrameHandle SimDepthCamera::grab(TimeNs) {
+DepthFrameHandle SimDepthCamera::grab(TimeNs now_ns) {
   const std::uint64_t version = sim_->depthOut().version();
   if (version == version_) return {};
   version_ = version;
+  if (sim_->options().faults.depth_stop.active(sim_->secondsSinceStart(now_ns))) return {};
   return sim_->depthOut().read();
 }
 

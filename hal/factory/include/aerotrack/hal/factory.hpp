@@ -33,6 +33,9 @@ struct SimConfig {
   std::uint64_t seed = 1;
   double physics_step_s = 0.002;
   bool render_depth = true;
+  /// Optional `faults:` map: camera_stop_s, person_occluded_s, odometry_freeze_s, depth_stop_s, each
+  /// [begin, end] seconds of simulated time (each optional). For tests of the failsafes.
+  sim::SimFaults faults;
 };
 
 /// Reads the `hal:` map (throws rt::ConfigError naming the key; use inside rt::parseConfig).

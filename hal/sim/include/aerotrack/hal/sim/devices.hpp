@@ -15,10 +15,11 @@ class SimOdometry final : public Odometry {
   explicit SimOdometry(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
-  std::optional<OdometrySample> read(TimeNs) override { return sim_->odometryOut().read(); }
+  std::optional<OdometrySample> read(TimeNs now_ns) override;
 
  private:
   std::shared_ptr<Simulation> sim_;
+  std::optional<OdometrySample> frozen_;  ///< odometry_freeze fault: the sample repeated
 };
 
 class SimVehicleLink final : public VehicleLink {
@@ -59,7 +60,7 @@ class SimGimbalCamera final : public GimbalCamera {
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
   ImageFrameHandle grab(TimeNs now_ns) override;
-  std::optional<DetectionFrame> grabDetections(TimeNs) override { return sim_->detectionsOut().try_pop(); }
+  std::optional<DetectionFrame> grabDetections(TimeNs now_ns) override;
 
  private:
   std::shared_ptr<ImageFrame> freeFrame();

@@ -37,7 +37,24 @@ namespace aerotrack::hal::sim {
 
 using rt::DurationNs;
 
+/// A window of simulated time [begin_s, end_s) (seconds since the simulation's start) in which a fault
+/// is injected; begin_s < 0: never.
+struct FaultWindow {
+  double begin_s = -1.0;
+  double end_s = -1.0;
+  bool active(double t_s) const { return begin_s >= 0.0 && t_s >= begin_s && t_s < end_s; }
+};
+
+/// Faults the sim devices inject (issue 9: the supervisor's failsafes and relocation are tested with them).
+struct SimFaults {
+  FaultWindow camera_stop;      ///< The gimbal camera delivers no frames.
+  FaultWindow person_occluded;  ///< Frames arrive, but the person is in none (a forced occlusion).
+  FaultWindow odometry_freeze;  ///< Odometry repeats the last sample from before the window.
+  FaultWindow depth_stop;       ///< The depth camera delivers no frames.
+};
+
 struct SimulationOptions {
+  SimFaults faults;               ///< Injected device faults (none by default).
   double physics_step_s = 0.002;  ///< Controller and dynamics step (500 Hz, like a flight controller's attitude loop).
   bool render_depth = true;       ///< Off: no depth frames (tests and runs that need no mapping).
   double metrics_rate_hz = 50.0;
@@ -112,6 +129,9 @@ class Simulation {
   const WalkingPerson& person() const { return person_; }
   double personStartS() const { return scenario_.spec.person_start_delay_s; }
   TimeNs startNs() const { return start_ns_; }
+  const SimulationOptions& options() const { return options_; }
+  /// Seconds since the simulation's start at now_ns (for the fault windows).
+  double secondsSinceStart(TimeNs now_ns) const { return rt::nsToSeconds(now_ns - start_ns_); }
   /// Camera pose for a body pose and gimbal angle (OpenCV axes: z along the gimbal's x).
   Eigen::Isometry3d cameraPose(const QuadrotorState& drone, double gimbal_angle_rad) const;
   /// The person's state at sim time t_ns (standing at the start before their delay).
