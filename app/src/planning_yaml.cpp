@@ -22,6 +22,7 @@ void emitPlanningYaml(YAML::Emitter& out, const planning::TrackingPlannerParams&
   key(out, "stop_check_horizon_s", p.stop_check_horizon_s);
   key(out, "flight_altitude_m", p.flight_altitude_m);
   key(out, "takeoff_below_m", p.takeoff_below_m);
+  key(out, "min_person_distance_m", p.min_person_distance_m);
   out << YAML::Key << "goal" << YAML::Value << YAML::BeginMap;
   key(out, "predicted_weight", p.goal.predicted_weight);
   key(out, "tracking_distance_m", p.goal.tracking_distance_m);

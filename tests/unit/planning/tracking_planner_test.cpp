@@ -153,6 +153,27 @@ TEST(TrackingPlanner, PlansAroundAWallWithinLimitsFromTheStartState) {
   EXPECT_GT(out.sample(out.durationS()).p_W_m.x(), 3.0);
 }
 
+TEST(TrackingPlanner, RefusesATrajectoryThatComesTooCloseToThePerson) {
+  const WallWorld world;
+  const hal::OdometrySample odometry = odometryAt(Eigen::Vector3d(0, -3, 1.5));
+  const estimation::TargetEstimate target = personAt(Eigen::Vector3d(6.0, -3.0, 1.0), 0);
+  PlanInputs inputs;
+  inputs.odometry = &odometry;
+  inputs.target = &target;
+  inputs.grid = &world.grid;
+  PolynomialTrajectory out;
+  {  // the goal is held 2.5 m away: fine with the default 1 m
+    TrackingPlanner planner = makePlanner();
+    EXPECT_EQ(planner.plan(inputs, out).status, PlanStatus::kPlanned);
+  }
+  TrackingPlannerParams params = defaultParams();
+  params.min_person_distance_m = 4.0;  // closer than the tracking distance: every approach is refused
+  TrackingPlanner planner = makePlanner(params);
+  const PlanReport report = planner.plan(inputs, out);
+  EXPECT_EQ(report.status, PlanStatus::kCheckFailed);
+  EXPECT_EQ(report.check, CheckVerdict::kTooCloseToPerson);
+}
+
 TEST(TrackingPlanner, OnTheGroundItTakesOffFirst) {
   TrackingPlanner planner = makePlanner();
   const WallWorld world;

@@ -269,8 +269,22 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   report.optimizer_status = optimized->status;
   report.optimizer_iterations = optimized->iterations;
 
-  // Final check (issue 8 item 3).
-  const CheckResult check = checkTrajectory(out, params_.check, *inputs.grid, checker_, inputs.octree);
+  // Final check (issue 8 item 3), then the distance to the person along the way.
+  CheckResult check = checkTrajectory(out, params_.check, *inputs.grid, checker_, inputs.octree);
+  if (check.verdict == CheckVerdict::kOk && params_.min_person_distance_m > 0.0) {
+    auto distance_at = [&](double t_s) {
+      const Eigen::Vector3d d = out.sample(t_s).p_W_m - person_at(start_ns + rt::secondsToNs(t_s));
+      return d.head<2>().norm();
+    };
+    const double limit_m = std::min(params_.min_person_distance_m, distance_at(0.0)) - 1e-6;
+    const double end_s = std::min(out.durationS(), params_.check.horizon_s);
+    for (double t = 0.0; t <= end_s; t += params_.check.sample_step_s) {
+      if (distance_at(t) < limit_m) {
+        check = {CheckVerdict::kTooCloseToPerson, t};
+        break;
+      }
+    }
+  }
   report.check = check.verdict;
   if (check.verdict != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
   report.status = live ? PlanStatus::kPlanned : PlanStatus::kRelocating;

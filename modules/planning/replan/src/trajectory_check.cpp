@@ -22,6 +22,8 @@ std::string_view toString(CheckVerdict verdict) {
       return "collision";
     case CheckVerdict::kCheckerError:
       return "checker_error";
+    case CheckVerdict::kTooCloseToPerson:
+      return "too_close_to_person";
   }
   return "unknown";
 }

@@ -10,7 +10,8 @@
 //      occlusion-aware kinodynamic search towards it (Sect. V-B, modules/planning/search);
 //   4. corridor: overlapping free boxes along the search path (Sect. V-C, modules/planning/corridor);
 //   5. optimisation: the minimum-jerk spline in the corridor (Sect. V-C, modules/planning/trajectory);
-//   6. final check: limits, inflated grid, FCL against the octree (trajectory_check.hpp).
+//   6. final check: limits, inflated grid, FCL against the octree (trajectory_check.hpp), and the minimum
+//      distance to the person's predicted path (never fly into them).
 // A cycle that fails at any stage publishes nothing: the current trajectory continues (the trajectory
 // server holds its end at rest). If, in addition, the current trajectory's next stretch is no longer
 // clear in the newest grid, a stopping trajectory (a minimum-jerk brake to rest along the current
@@ -49,6 +50,9 @@ struct TrackingPlannerParams {
   double stop_check_horizon_s = 1.0;     ///< On a failed cycle, this much of the current trajectory must be clear.
   double flight_altitude_m = 1.5;        ///< The goal's height (W z); > takeoff_below_m.
   double takeoff_below_m = 0.5;          ///< A start lower than this climbs straight to flight_altitude_m first; >= 0.
+  /// Never fly into the person: a trajectory that comes horizontally closer to their predicted path than
+  /// this (or than it starts, if it starts closer) is refused by the final check; >= 0.
+  double min_person_distance_m = 1.0;
   TrackingGoalParams goal;
   KinodynamicSearchParams search;
   CorridorParams corridor;

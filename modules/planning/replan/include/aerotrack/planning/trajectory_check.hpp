@@ -39,7 +39,8 @@ enum class CheckVerdict : std::uint8_t {
   kJerk,
   kGridBlocked,
   kCollision,
-  kCheckerError
+  kCheckerError,
+  kTooCloseToPerson,  ///< Checked by the planner (it knows the person's predicted path).
 };
 std::string_view toString(CheckVerdict verdict);
 
