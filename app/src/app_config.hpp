@@ -39,6 +39,9 @@ struct EstimationConfig {
 
 struct AppConfig {
   std::string source;  ///< The file it was read from.
+  /// The paper's comparison (not in YAML; `sim --mode`): false, this system; true, Fast-Tracker 1.0 --
+  /// camera fixed to the body (the drone yaws to face the person), no occlusion term, no camera sweep.
+  bool baseline_mode = false;
   VehicleConfig vehicle;
   hal::HalConfig hal;
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.

@@ -32,7 +32,7 @@ int fail(const std::string& message) {
 pid_t launchTrial(const std::string& self, const ParsedArgs& args, std::int64_t seed, const std::string& dir) {
   std::vector<std::string> argv{
       self, "sim", "--scenario", args.values.at("scenario"), "--seed", std::to_string(seed), "--out", dir};
-  for (const char* passthrough : {"speed", "camera", "config"})
+  for (const char* passthrough : {"speed", "camera", "config", "mode"})
     if (args.values.count(passthrough) != 0) {
       argv.push_back(std::string("--") + passthrough);
       argv.push_back(args.values.at(passthrough));
@@ -57,8 +57,9 @@ pid_t launchTrial(const std::string& self, const ParsedArgs& args, std::int64_t 
 }  // namespace
 
 int benchCommand(const ParsedArgs& args) {
-  if (args.has("mode"))
-    return std::fprintf(stderr, "aerotrack bench: --mode is not available yet: planner modes arrive with issue 9\n"), 2;
+  const std::string mode = args.valueOr("mode", "proposed");
+  if (mode != "proposed" && mode != "baseline")
+    return fail("--mode: expected proposed or baseline, got '" + mode + "'");
   const auto trials = parseInt("trials", args.values.at("trials"), 1, 100000);
   if (!trials) return fail(trials.error().message);
   const auto jobs = parseInt(

@@ -70,8 +70,9 @@ rt::Status runRealtime(System& system, const rt::MonotonicClock& clock, rt::Time
 }  // namespace
 
 int simCommand(const ParsedArgs& args) {
-  if (args.has("mode"))
-    return std::fprintf(stderr, "aerotrack sim: --mode is not available yet: planner modes arrive with issue 9\n"), 2;
+  const std::string mode = args.valueOr("mode", "proposed");
+  if (mode != "proposed" && mode != "baseline")
+    return fail("--mode: expected proposed or baseline, got '" + mode + "'");
   const auto seed = parseInt("seed", args.valueOr("seed", "1"), 0, INT64_MAX);
   if (!seed) return fail(seed.error().message);
   std::optional<double> speed;
@@ -83,6 +84,7 @@ int simCommand(const ParsedArgs& args) {
   auto config = loadAppConfig(args.valueOr("config", configDir() + "/sim.yaml"));
   if (!config) return fail(config.error().message);
   if (!config->hal.usesSim()) return fail(config->source + ": hal: no device uses the sim backend");
+  config->baseline_mode = mode == "baseline";
   const std::string scenario_name = args.values.at("scenario");
   auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
   if (!trial) return fail(trial.error().message);
@@ -111,9 +113,9 @@ int simCommand(const ParsedArgs& args) {
 
   RunInfo info;
   info.executor = realtime ? "realtime" : "lockstep";
-  info.controller = (*system)->planningTask() != nullptr
-                        ? "planner (gimbal aimed from the truth until gimbal control lands, issue 9)"
-                        : "baseline_follow (truth-fed stand-in)";
+  info.controller = (*system)->planningTask() == nullptr ? "baseline_follow (truth-fed stand-in)"
+                    : config->baseline_mode ? "baseline (Fast-Tracker 1.0: fixed camera, no occlusion term)"
+                                            : "proposed";
   const rt::TimeNs end_ns = start_ns + rt::secondsToNs(trial->duration_s);
   const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info)
                                   : runLockstep(**system, sim_clock, end_ns, stop, info);

@@ -96,9 +96,11 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     if (!config_.gimbal_control || !config_.estimation)
       return rt::Error{where + ": task 'gimbal_control' needs gimbal_control: and estimation: sections"};
     const gimbal_control::GimbalController controller(*config_.gimbal_control, config_.estimation->task.extrinsics);
-    task = std::make_unique<gimbal_control::GimbalControlTask>(controller, channels_.gimbal_state, channels_.odometry,
-                                                               channels_.target, channels_.gimbal_search_requested,
-                                                               *devices_.gimbal);
+    auto gimbal_task = std::make_unique<gimbal_control::GimbalControlTask>(
+        controller, channels_.gimbal_state, channels_.odometry, channels_.target, channels_.gimbal_search_requested,
+        *devices_.gimbal);
+    gimbal_task->fixCamera(config_.baseline_mode);
+    task = std::move(gimbal_task);
   } else if (spec.name == "supervisor") {
     if (!config_.supervisor) return rt::Error{where + ": task 'supervisor' needs a supervisor: section"};
     const supervisor::SupervisorChannels channels{channels_.odometry,
@@ -108,8 +110,9 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                                   channels_.planner_failures_in_a_row,
                                                   channels_.supervisor,
                                                   channels_.gimbal_search_requested};
-    auto supervisor_task = std::make_unique<supervisor::SupervisorTask>(*config_.supervisor, start_ns_, channels,
-                                                                        /*sweep_when_searching=*/true);
+    auto supervisor_task =
+        std::make_unique<supervisor::SupervisorTask>(*config_.supervisor, start_ns_, channels,
+                                                     /*sweep_when_searching=*/!config_.baseline_mode);
     supervisor_task_ = supervisor_task.get();
     task = std::move(supervisor_task);
   } else if (spec.name == "planning") {
@@ -123,12 +126,22 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                               channels_.trajectories,
                                               &channels_.supervisor,
                                               &channels_.planner_failures_in_a_row};
+    if (config_.baseline_mode) planner->setOcclusionAware(false);
     auto planning_task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, stats_clock_);
     planning_task_ = planning_task.get();
     task = std::move(planning_task);
   } else if (spec.name == "trajectory_server") {
     auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
         config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);
+    if (config_.baseline_mode) {
+      // The fixed camera looks where the body looks: face the person's estimate, carried to now.
+      const rt::LatestSlot<estimation::TargetEstimate>& target = channels_.target;
+      server->faceTowards([&target](rt::TimeNs now_ns) -> std::optional<Eigen::Vector3d> {
+        const auto estimate = target.read();
+        if (!estimate || !estimate->initialised || estimate->lost) return std::nullopt;
+        return Eigen::Vector3d(estimate->p_WT_m + rt::nsToSeconds(now_ns - estimate->stamp_ns) * estimate->v_WT_mps);
+      });
+    }
     task = std::move(server);
   } else {
     std::string known;

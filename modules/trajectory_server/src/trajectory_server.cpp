@@ -44,3 +44,19 @@ std::optional<hal::Setpoint> TrajectoryServer::sample(rt::TimeNs now_ns) {
 }
 
 }  // namespace aerotrack::trajectory_server
+
+namespace aerotrack::trajectory_server {
+
+std::optional<hal::Setpoint> TrajectoryServer::sampleFacing(rt::TimeNs now_ns, const Eigen::Vector3d& face_W_m) {
+  std::optional<hal::Setpoint> sp = sample(now_ns);
+  if (!sp) return sp;
+  const Eigen::Vector2d d = (face_W_m - sp->p_W_m).head<2>();
+  if (d.norm() > 0.3) {  // closer than that the bearing is noise: keep the last yaw
+    held_yaw_rad_ = std::atan2(d.y(), d.x());
+  }
+  sp->yaw_rad = held_yaw_rad_;
+  sp->yaw_rate_radps = 0.0;
+  return sp;
+}
+
+}  // namespace aerotrack::trajectory_server

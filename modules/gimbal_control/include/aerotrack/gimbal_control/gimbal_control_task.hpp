@@ -24,7 +24,18 @@ class GimbalControlTask final : public rt::Task {
         search_requested_(search_requested),
         gimbal_(gimbal) {}
 
+  /// Baseline mode (Fast-Tracker 1.0): the camera is fixed to the body; the gimbal is held at 0.
+  void fixCamera(bool fixed) { fixed_ = fixed; }
+
   void step(rt::TimeNs now_ns) override {
+    if (fixed_) {
+      hal::GimbalCommand hold;
+      hold.stamp_ns = now_ns;
+      hold.mode = hal::GimbalCommand::Mode::kAngle;
+      hold.angle_rad = 0.0;
+      gimbal_.command(hold);
+      return;
+    }
     const auto state = gimbal_state_.read();
     const auto odometry = odometry_.read();
     const auto target = target_.read();
@@ -50,6 +61,7 @@ class GimbalControlTask final : public rt::Task {
   const rt::LatestSlot<estimation::TargetEstimate>& target_;
   const std::atomic<bool>& search_requested_;
   hal::Gimbal& gimbal_;
+  bool fixed_ = false;
   std::uint64_t track_steps_ = 0;
   std::uint64_t search_steps_ = 0;
 };

@@ -34,6 +34,9 @@ class TrajectoryServer {
   /// Setpoint at now_ns, or nothing if no trajectory was given. Before its start the trajectory's
   /// first state is served, after its end the last position at rest (a hold). Not thread-safe (one task).
   std::optional<hal::Setpoint> sample(rt::TimeNs now_ns);
+  /// Same, but the body's yaw faces face_W_m (horizontally) instead of following the velocity: the
+  /// baseline's fixed camera (Fast-Tracker 1.0), which turns the whole drone to the person. Yaw rate 0.
+  std::optional<hal::Setpoint> sampleFacing(rt::TimeNs now_ns, const Eigen::Vector3d& face_W_m);
 
   /// The trajectory being served (after any switch due by the last sample()).
   const TimedTrajectory& current() const { return current_; }

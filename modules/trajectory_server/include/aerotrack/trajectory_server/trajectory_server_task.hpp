@@ -3,6 +3,9 @@
 // forward, recorder). Periodic (default 100 Hz in the task table).
 #pragma once
 
+#include <functional>
+#include <optional>
+
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
@@ -18,13 +21,24 @@ class TrajectoryServerTask final : public rt::Task {
       : server_(params), trajectories_(trajectories), vehicle_(vehicle), setpoints_(setpoints) {}
 
   TrajectoryServer& server() { return server_; }
+  /// Where the body must face at a time, or nothing to follow the velocity (set once, before start).
+  using FaceFn = std::function<std::optional<Eigen::Vector3d>(rt::TimeNs)>;
+  /// Baseline mode: the body yaws to face the point `face` gives (the person's estimate).
+  void faceTowards(FaceFn face) { face_ = std::move(face); }
 
   void step(rt::TimeNs now_ns) override {
     if (trajectories_.version() != trajectory_version_) {
       trajectory_version_ = trajectories_.version();
       if (const auto handle = trajectories_.read()) server_.setTrajectory(*handle);
     }
-    if (const auto setpoint = server_.sample(now_ns)) {
+    std::optional<hal::Setpoint> setpoint;
+    if (face_) {
+      const std::optional<Eigen::Vector3d> face = face_(now_ns);
+      setpoint = face ? server_.sampleFacing(now_ns, *face) : server_.sample(now_ns);
+    } else {
+      setpoint = server_.sample(now_ns);
+    }
+    if (setpoint) {
       vehicle_.send(*setpoint);
       setpoints_.write(*setpoint);
     }
@@ -36,6 +50,7 @@ class TrajectoryServerTask final : public rt::Task {
   std::uint64_t trajectory_version_ = 0;
   hal::VehicleLink& vehicle_;
   rt::LatestSlot<hal::Setpoint>& setpoints_;
+  FaceFn face_;
 };
 
 }  // namespace aerotrack::trajectory_server
