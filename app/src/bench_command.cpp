@@ -100,7 +100,8 @@ int benchCommand(const ParsedArgs& args) {
 
   nlohmann::json per_trial = nlohmann::json::array();
   int successes = 0, failed_runs = 0, collisions = 0;
-  double visible_sum = 0.0, distance_sum = 0.0, rtf_sum = 0.0;
+  double visible_sum = 0.0, distance_sum = 0.0, rtf_sum = 0.0, plan_p50_sum = 0.0, plan_p99_max = 0.0;
+  int planned_trials = 0;
   std::printf("%6s %8s %8s %10s %9s %9s %9s  %s\n", "seed", "success", "visible", "long_loss", "dist_m", "clear_m",
               "rt_x", "failure");
   for (const auto& [seed, code] : exit_status) {
@@ -122,6 +123,11 @@ int benchCommand(const ParsedArgs& args) {
     visible_sum += s.value("visible_ratio", 0.0);
     distance_sum += s.value("distance_mean_m", 0.0);
     rtf_sum += s.value("realtime_factor", 0.0);
+    if (s.contains("planning") && s["planning"].is_object()) {
+      ++planned_trials;
+      plan_p50_sum += s["planning"].value("cycle_ms_p50", 0.0);
+      plan_p99_max = std::max(plan_p99_max, s["planning"].value("cycle_ms_p99", 0.0));
+    }
     std::printf("%6lld %8s %7.0f%% %9.1fs %9.2f %9.2f %9.0f  %s\n", static_cast<long long>(seed), ok ? "yes" : "NO",
                 100.0 * s.value("visible_ratio", 0.0), s.value("longest_loss_s", 0.0), s.value("distance_mean_m", 0.0),
                 s["min_clearance_m"].is_number() ? s["min_clearance_m"].get<double>() : std::nan(""),
@@ -141,6 +147,9 @@ int benchCommand(const ParsedArgs& args) {
       {"visible_ratio_mean", visible_sum / n},
       {"distance_mean_m", distance_sum / n},
       {"realtime_factor_mean", rtf_sum / n},
+      {"mode", args.valueOr("mode", "proposed")},
+      {"planning_cycle_ms_p50_mean", planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0},
+      {"planning_cycle_ms_p99_max", plan_p99_max},
       {"summaries", per_trial},
   };
   std::ofstream file(out_dir + "/bench.json");
@@ -150,6 +159,11 @@ int benchCommand(const ParsedArgs& args) {
   std::printf("%s: %d/%lld successful (%.0f%%), %d collisions, person visible %.0f%% on average; %s/bench.json\n",
               args.values.at("scenario").c_str(), successes, static_cast<long long>(*trials),
               100.0 * successes / static_cast<double>(*trials), collisions, 100.0 * visible_sum / n, out_dir.c_str());
+  // One row of the paper's Table I, in markdown (scripts/table1.sh collects them).
+  std::printf("| %s | %s | %s | %d/%lld | %.1f %% | %.2f m | %.2f / %.2f ms | %d |\n",
+              scenario_tag.c_str(), args.has("speed") ? (args.values.at("speed") + " m/s").c_str() : "scenario's",
+              args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials), 100.0 * visible_sum / n,
+              distance_sum / n, planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0, plan_p99_max, collisions);
   if (stop.load()) return 130;
   return failed_runs == 0 ? 0 : 1;
 }
