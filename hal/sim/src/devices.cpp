@@ -11,7 +11,7 @@ DeviceHealth simulated(const char* what, TimeNs last_ns) {
 }  // namespace
 
 std::optional<OdometrySample> SimOdometry::read(TimeNs now_ns) {
-  const auto sample = sim_->odometryOut().read();
+  auto sample = sim_->odometryOut().read();
   if (!sim_->options().faults.odometry_freeze.active(sim_->secondsSinceStart(now_ns))) {
     frozen_.reset();
     return sample;

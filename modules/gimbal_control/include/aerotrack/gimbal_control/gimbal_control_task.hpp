@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <utility>
 
 #include "aerotrack/gimbal_control/gimbal_controller.hpp"
 #include "aerotrack/hal/devices.hpp"
@@ -17,7 +18,7 @@ class GimbalControlTask final : public rt::Task {
                     const rt::LatestSlot<hal::OdometrySample>& odometry,
                     const rt::LatestSlot<estimation::TargetEstimate>& target, const std::atomic<bool>& search_requested,
                     hal::Gimbal& gimbal)
-      : controller_(controller),
+      : controller_(std::move(controller)),
         gimbal_state_(gimbal_state),
         odometry_(odometry),
         target_(target),
