@@ -72,6 +72,7 @@ TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, Kinodynami
   corridor_.waypoint_path_index.reserve(boxes);
   durations_s_.reserve(boxes);
   stop_spline_.reset(StatePva::Zero(), StatePva::Zero(), 1);
+  one_duration_.resize(1);
 }
 
 void TrackingPlanner::observeTarget(const estimation::TargetEstimate& estimate) {
@@ -127,13 +128,17 @@ void TrackingPlanner::makeMoveTrajectory(const StatePva& start, const Eigen::Vec
   const double v_max = 0.5 * params_.optimizer.max_velocity_mps;
   const double a_max = 0.5 * params_.optimizer.max_acceleration_mps2;
   const double duration_s = std::max({0.5, 1.875 * distance_m / v_max, std::sqrt(5.7735 * distance_m / a_max)});
+  onePieceToRest(start, end_W_m, duration_s, out);
+}
+
+void TrackingPlanner::onePieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s,
+                                     PolynomialTrajectory& out) {
   StatePva end = StatePva::Zero();
   end.col(0) = end_W_m;
   stop_spline_.reset(start, end, 1);
-  Eigen::VectorXd duration(1);
-  duration(0) = duration_s;
+  one_duration_(0) = duration_s;
   const Eigen::Matrix3Xd no_waypoints(3, 0);
-  if (stop_spline_.generate(no_waypoints, duration)) out.assign(stop_spline_);
+  if (stop_spline_.generate(no_waypoints, one_duration_)) out.assign(stop_spline_);
 }
 
 void TrackingPlanner::makeStopTrajectory(const StatePva& start, PolynomialTrajectory& out) {
@@ -142,13 +147,7 @@ void TrackingPlanner::makeStopTrajectory(const StatePva& start, PolynomialTrajec
   // is about 1.9 times the mean, and the mean is a_max / 2).
   const double speed = start.col(1).norm();
   const double duration_s = std::max(0.5, 2.0 * speed / params_.optimizer.max_acceleration_mps2);
-  StatePva end = StatePva::Zero();
-  end.col(0) = start.col(0) + start.col(1) * (duration_s / 2.0);
-  stop_spline_.reset(start, end, 1);
-  Eigen::VectorXd duration(1);
-  duration(0) = duration_s;
-  const Eigen::Matrix3Xd no_waypoints(3, 0);
-  if (stop_spline_.generate(no_waypoints, duration)) out.assign(stop_spline_);
+  onePieceToRest(start, start.col(0) + start.col(1) * (duration_s / 2.0), duration_s, out);
 }
 
 PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory& out) {

@@ -156,7 +156,11 @@ class TrackingPlanner {
   std::vector<Eigen::Vector3d> polyline_;
   Corridor corridor_;
   std::vector<double> durations_s_;
+  /// One minimum-jerk piece from `start` to rest at end_W_m in duration_s (the stop, take-off and land moves).
+  void onePieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s,
+                      PolynomialTrajectory& out);
   MinJerkSpline stop_spline_;
+  Eigen::VectorXd one_duration_;
   std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
 };
 
