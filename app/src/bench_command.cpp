@@ -160,10 +160,11 @@ int benchCommand(const ParsedArgs& args) {
               args.values.at("scenario").c_str(), successes, static_cast<long long>(*trials),
               100.0 * successes / static_cast<double>(*trials), collisions, 100.0 * visible_sum / n, out_dir.c_str());
   // One row of the paper's Table I, in markdown (scripts/table1.sh collects them).
-  std::printf("| %s | %s | %s | %d/%lld | %.1f %% | %.2f m | %.2f / %.2f ms | %d |\n",
-              scenario_tag.c_str(), args.has("speed") ? (args.values.at("speed") + " m/s").c_str() : "scenario's",
-              args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials), 100.0 * visible_sum / n,
-              distance_sum / n, planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0, plan_p99_max, collisions);
+  std::printf("| %s | %s | %s | %d/%lld | %.1f %% | %.2f m | %.2f / %.2f ms | %d |\n", scenario_tag.c_str(),
+              args.has("speed") ? (args.values.at("speed") + " m/s").c_str() : "scenario's",
+              args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials),
+              100.0 * visible_sum / n, distance_sum / n, planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0,
+              plan_p99_max, collisions);
   if (stop.load()) return 130;
   return failed_runs == 0 ? 0 : 1;
 }

@@ -129,6 +129,7 @@ int simCommand(const ParsedArgs& args) {
   for (const rt::TaskSpec& spec : config->tasks) {
     if (spec.name == "supervisor" && spec.periodic()) supervisor_step_s = 1.0 / spec.rate_hz;
   }
+  info.latency = latencySummary((*system)->trajectoryServerTask());
   info.supervisor = supervisorSummary((*system)->supervisorTask(), start_ns, supervisor_step_s);
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
@@ -154,6 +155,11 @@ int simCommand(const ParsedArgs& args) {
     std::printf("  supervisor: %zu transitions, ends in %s (%s)\n", sup->transitionCount(),
                 std::string(supervisor::toString(sup->state().mode)).c_str(),
                 std::string(supervisor::toString(sup->state().reason)).c_str());
+  }
+  if (info.latency.is_object() && info.latency["samples"].get<std::uint64_t>() > 0) {
+    std::printf("  end-to-end latency, image capture to first setpoint: %.0f ms median, %.0f ms p99\n",
+                info.latency["capture_to_setpoint_ms_p50"].get<double>(),
+                info.latency["capture_to_setpoint_ms_p99"].get<double>());
   }
   if (const planning::PlanningTask* planner = (*system)->planningTask()) {
     const rt::TimingSnapshot cycle = planner->cycleStats().snapshot();

@@ -51,6 +51,15 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   return out;
 }
 
+nlohmann::json latencySummary(const trajectory_server::TrajectoryServerTask* task) {
+  if (task == nullptr) return nullptr;
+  const rt::LatencyHistogram& h = task->server().captureToSetpoint();
+  return {{"samples", h.count()},
+          {"capture_to_setpoint_ms_p50", h.quantileNs(0.5) * 1e-6},
+          {"capture_to_setpoint_ms_p99", h.quantileNs(0.99) * 1e-6},
+          {"capture_to_setpoint_ms_max", h.maxNs() * 1e-6}};
+}
+
 nlohmann::json planningSummary(const planning::PlanningTask* task) {
   if (task == nullptr) return nullptr;
   nlohmann::json outcomes = nlohmann::json::object();
@@ -145,6 +154,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"estimation", run.estimation},
       {"planning", run.planning},
       {"supervisor", run.supervisor},
+      {"latency", run.latency},
   };
   if (!run.trace_hash.empty()) out["trace_hash"] = run.trace_hash;
   return out;

@@ -15,6 +15,7 @@
 #include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/supervisor/supervisor_task.hpp"
+#include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "report.hpp"
 
 namespace aerotrack::app {
@@ -32,7 +33,12 @@ struct RunInfo {
   nlohmann::json estimation;  ///< estimationSummary()
   nlohmann::json planning;    ///< planningSummary()
   nlohmann::json supervisor;  ///< supervisorSummary()
+  nlohmann::json latency;     ///< latencySummary()
 };
+
+/// End-to-end latency, image capture to the first setpoint of the trajectory planned from it (null
+/// without a trajectory server task). Simulated time in lockstep; wall time on threads.
+nlohmann::json latencySummary(const trajectory_server::TrajectoryServerTask* task);
 
 class TargetTruthCheckTask;
 /// The estimation section of summary.json (null if the run had no target task).

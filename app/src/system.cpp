@@ -142,6 +142,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
         return Eigen::Vector3d(estimate->p_WT_m + rt::nsToSeconds(now_ns - estimate->stamp_ns) * estimate->v_WT_mps);
       });
     }
+    server_task_ = server.get();
     task = std::move(server);
   } else {
     std::string known;

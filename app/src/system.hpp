@@ -20,6 +20,7 @@
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/supervisor/supervisor_task.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
+#include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "app_config.hpp"
 
 namespace aerotrack::app {
@@ -70,6 +71,8 @@ class System {
   /// The detection task, if the table has one (for its statistics).
   const perception::DetectionTask* detectionTask() const { return detection_task_; }
 
+  /// The trajectory server task, if the table has one (for the end-to-end latency).
+  const trajectory_server::TrajectoryServerTask* trajectoryServerTask() const { return server_task_; }
   /// The supervisor task, if the table has one.
   const supervisor::SupervisorTask* supervisorTask() const { return supervisor_task_; }
   /// The planning task, if the table has one (for its statistics and the replan hand-over).
@@ -94,6 +97,7 @@ class System {
   const TargetTruthCheckTask* target_check_task_ = nullptr;
   const planning::PlanningTask* planning_task_ = nullptr;
   const supervisor::SupervisorTask* supervisor_task_ = nullptr;
+  const trajectory_server::TrajectoryServerTask* server_task_ = nullptr;
   rt::TimeNs start_ns_ = 0;         ///< The executor clock's time at start.
   rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };

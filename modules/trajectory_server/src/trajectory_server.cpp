@@ -9,6 +9,7 @@ void TrajectoryServer::setTrajectory(const TimedTrajectory& trajectory) {
   if (!trajectory.trajectory || !current_.trajectory) {
     current_ = trajectory;
     pending_ = {};
+    first_sample_ = true;
     return;
   }
   pending_ = trajectory;
@@ -18,8 +19,13 @@ std::optional<hal::Setpoint> TrajectoryServer::sample(rt::TimeNs now_ns) {
   if (pending_.trajectory && now_ns >= pending_.start_ns) {
     current_ = std::move(pending_);
     pending_ = {};
+    first_sample_ = true;
   }
   if (!current_.trajectory) return std::nullopt;
+  if (first_sample_) {
+    first_sample_ = false;
+    if (current_.source_capture_ns >= 0) capture_to_setpoint_.record(now_ns - current_.source_capture_ns);
+  }
   const double t_s = rt::nsToSeconds(now_ns - current_.start_ns);
   TrajectorySample s = current_.trajectory->sample(t_s);
   if (t_s > current_.trajectory->durationS()) {  // finished: hold the end at rest

@@ -167,6 +167,22 @@ TEST(TrajectoryServer, GivenTrajectoryWhoseStartHasPassedThenItTakesOverAtOnce) 
   EXPECT_NEAR(s->p_W_m.y(), 5.0, 1e-12);
 }
 
+TEST(TrajectoryServer, MeasuresCaptureToFirstSetpointLatencyOncePerTrajectory) {
+  TrajectoryServer server(TrajectoryServerParams{});
+  const auto line = std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 10.0);
+  server.setTrajectory({line, 0, -1});  // no image behind it (a take-off): not measured
+  (void)server.sample(rt::secondsToNs(0.01));
+  EXPECT_EQ(server.captureToSetpoint().count(), 0U);
+  // Planned from an image captured at 0.90 s, taking over at 1.05 s, first sampled at 1.06 s.
+  server.setTrajectory({line, rt::secondsToNs(1.05), rt::secondsToNs(0.90)});
+  (void)server.sample(rt::secondsToNs(1.00));  // still the old one
+  EXPECT_EQ(server.captureToSetpoint().count(), 0U);
+  (void)server.sample(rt::secondsToNs(1.06));
+  (void)server.sample(rt::secondsToNs(1.07));
+  ASSERT_EQ(server.captureToSetpoint().count(), 1U);
+  EXPECT_NEAR(server.captureToSetpoint().maxNs(), 0.16e9, 1.0);
+}
+
 TEST(TrajectoryServer, GivenFinishedTrajectoryThenEndIsHeldAtRest) {
   TrajectoryServer server(TrajectoryServerParams{});
   server.setTrajectory({std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 2.0), 0});

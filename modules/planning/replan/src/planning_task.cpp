@@ -39,8 +39,9 @@ double PlanningTask::meanCorridorBoxes() const {
   return built > 0 ? static_cast<double>(corridor_boxes_sum_) / static_cast<double>(built) : 0.0;
 }
 
-void PlanningTask::publish(PoolEntry& entry, rt::TimeNs start_ns) {
+void PlanningTask::publish(PoolEntry& entry, rt::TimeNs start_ns, rt::TimeNs source_capture_ns) {
   entry.timed->start_ns = start_ns;
+  entry.timed->source_capture_ns = source_capture_ns;
   published_ = *entry.timed;
   channels_.trajectories.write(entry.timed);
 }
@@ -62,7 +63,7 @@ bool PlanningTask::handleMode(supervisor::Mode mode, const PlanInputs& inputs) {
     planner_.makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), 0.0), *entry.trajectory);
     ++landings_;
   }
-  publish(entry, start_ns);
+  publish(entry, start_ns, -1);
   return true;
 }
 
@@ -106,7 +107,9 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   }
   const bool flies = report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
                      report.status == PlanStatus::kStopped || report.status == PlanStatus::kTakeOff;
-  if (flies) publish(entry, report.start_ns);
+  // The plan used the estimate's newest measurement (tracking) or none (relocation, stop, take-off).
+  const bool tracked = report.status == PlanStatus::kPlanned && target && target->initialised && !target->lost;
+  if (flies) publish(entry, report.start_ns, tracked ? target->last_accepted_ns : -1);
   const bool failed = report.status == PlanStatus::kStopped || report.status == PlanStatus::kSearchFailed ||
                       report.status == PlanStatus::kCorridorFailed || report.status == PlanStatus::kOptimizerFailed ||
                       report.status == PlanStatus::kCheckFailed;

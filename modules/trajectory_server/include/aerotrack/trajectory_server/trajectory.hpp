@@ -30,6 +30,9 @@ class Trajectory {
 struct TimedTrajectory {
   std::shared_ptr<const Trajectory> trajectory;
   rt::TimeNs start_ns = 0;
+  /// Capture time of the newest image whose measurement the plan used (-1: none, e.g. a take-off), so
+  /// the server can measure the end-to-end latency from image capture to the first setpoint using it.
+  rt::TimeNs source_capture_ns = -1;
 };
 
 }  // namespace aerotrack::trajectory_server

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "aerotrack/hal/types.hpp"
+#include "aerotrack/rt/timing_stats.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 
 namespace aerotrack::trajectory_server {
@@ -38,13 +39,19 @@ class TrajectoryServer {
   /// baseline's fixed camera (Fast-Tracker 1.0), which turns the whole drone to the person. Yaw rate 0.
   std::optional<hal::Setpoint> sampleFacing(rt::TimeNs now_ns, const Eigen::Vector3d& face_W_m);
 
+  /// End-to-end latency (issue 9): for each trajectory that took over, its first setpoint's time minus
+  /// the capture time of the image behind it (TimedTrajectory::source_capture_ns).
+  const rt::LatencyHistogram& captureToSetpoint() const { return capture_to_setpoint_; }
+
   /// The trajectory being served (after any switch due by the last sample()).
   const TimedTrajectory& current() const { return current_; }
 
  private:
   TrajectoryServerParams params_;
   TimedTrajectory current_;
-  TimedTrajectory pending_;  ///< Takes over at its start_ns.
+  TimedTrajectory pending_;   ///< Takes over at its start_ns.
+  bool first_sample_ = true;  ///< The current trajectory has not been sampled yet.
+  rt::LatencyHistogram capture_to_setpoint_;
   double held_yaw_rad_;
 };
 

@@ -21,6 +21,7 @@ class TrajectoryServerTask final : public rt::Task {
       : server_(params), trajectories_(trajectories), vehicle_(vehicle), setpoints_(setpoints) {}
 
   TrajectoryServer& server() { return server_; }
+  const TrajectoryServer& server() const { return server_; }
   /// Where the body must face at a time, or nothing to follow the velocity (set once, before start).
   using FaceFn = std::function<std::optional<Eigen::Vector3d>(rt::TimeNs)>;
   /// Baseline mode: the body yaws to face the point `face` gives (the person's estimate).

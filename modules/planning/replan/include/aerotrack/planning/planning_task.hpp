@@ -94,7 +94,7 @@ class PlanningTask final : public rt::Task {
   std::uint64_t landings_ = 0;
   int failures_in_a_row_ = 0;
   supervisor::Mode last_mode_ = supervisor::Mode::kTakeOff;
-  void publish(PoolEntry& entry, rt::TimeNs start_ns);
+  void publish(PoolEntry& entry, rt::TimeNs start_ns, rt::TimeNs source_capture_ns);
   bool handleMode(supervisor::Mode mode, const PlanInputs& inputs);
   rt::TimingStats cycle_stats_;
 };
