@@ -70,26 +70,6 @@ void printText(const perception::DetectorOutput& out, double latency_ms, const s
   }
 }
 
-/// COCO skeleton edges (the pairs MoveNet's demos draw).
-constexpr std::array<std::pair<int, int>, 18> kEdges = {{{0, 1},
-                                                         {0, 2},
-                                                         {1, 3},
-                                                         {2, 4},
-                                                         {5, 6},
-                                                         {5, 7},
-                                                         {7, 9},
-                                                         {6, 8},
-                                                         {8, 10},
-                                                         {5, 11},
-                                                         {6, 12},
-                                                         {11, 12},
-                                                         {11, 13},
-                                                         {13, 15},
-                                                         {12, 14},
-                                                         {14, 16},
-                                                         {0, 5},
-                                                         {0, 6}}};
-
 void draw(cv::Mat& image, const perception::DetectorOutput& out) {
   constexpr double kMinScore = 0.3;
   for (std::size_t i = 0; i < out.count; ++i) {
@@ -100,7 +80,7 @@ void draw(cv::Mat& image, const perception::DetectorOutput& out) {
     const auto pt = [&](int j) {
       return cv::Point2d(k[static_cast<std::size_t>(j)].u_px, k[static_cast<std::size_t>(j)].v_px);
     };
-    for (const auto& [a, b] : kEdges)
+    for (const auto& [a, b] : hal::kCocoSkeleton)
       if (k[static_cast<std::size_t>(a)].score >= kMinScore && k[static_cast<std::size_t>(b)].score >= kMinScore)
         cv::line(image, pt(a), pt(b), colour, 2, cv::LINE_AA);
     for (int j = 0; j < static_cast<int>(k.size()); ++j)

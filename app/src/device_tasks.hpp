@@ -48,8 +48,13 @@ class OdometryTask final : public rt::Task {
 class GimbalCameraTask final : public rt::Task {
  public:
   GimbalCameraTask(hal::GimbalCamera& device, rt::SpscQueue<hal::DetectionFrame>& detections,
-                   rt::SharedSlot<hal::ImageFrame>& images, std::atomic<rt::TimeNs>& newest_frame_ns)
-      : device_(device), detections_(detections), images_(images), newest_frame_ns_(newest_frame_ns) {}
+                   rt::SharedSlot<hal::ImageFrame>& images, std::atomic<rt::TimeNs>& newest_frame_ns,
+                   rt::LatestSlot<hal::DetectionFrame>& newest_detection)
+      : device_(device),
+        detections_(detections),
+        images_(images),
+        newest_frame_ns_(newest_frame_ns),
+        newest_detection_(newest_detection) {}
   void step(rt::TimeNs now_ns) override {
     if (auto image = device_.grab(now_ns)) {
       newest_frame_ns_.store(image->stamp_ns, std::memory_order_relaxed);
@@ -57,6 +62,7 @@ class GimbalCameraTask final : public rt::Task {
     }
     while (const auto frame = device_.grabDetections(now_ns)) {
       newest_frame_ns_.store(frame->stamp_ns, std::memory_order_relaxed);
+      newest_detection_.write(*frame);
       detections_.try_push(*frame);
     }
   }
@@ -66,6 +72,7 @@ class GimbalCameraTask final : public rt::Task {
   rt::SpscQueue<hal::DetectionFrame>& detections_;
   rt::SharedSlot<hal::ImageFrame>& images_;
   std::atomic<rt::TimeNs>& newest_frame_ns_;  ///< camera health, for the supervisor
+  rt::LatestSlot<hal::DetectionFrame>& newest_detection_;
 };
 
 /// Publishes each new depth frame on the depth channel.

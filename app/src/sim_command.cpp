@@ -141,6 +141,11 @@ int simCommand(const ParsedArgs& args) {
   if (!file) return fail(summary_path + ": write failed");
   const std::string topdown_path = out_dir + "/topdown.png";
   if (const rt::Status s = drawTopdown(sim, topdown_path); !s) return fail(s.error().message);
+  std::string strip_path;
+  if (const CameraStripTask* strip = (*system)->cameraStripTask(); strip != nullptr && strip->panels() > 0) {
+    strip_path = out_dir + "/camera_strip.png";
+    if (const rt::Status s = strip->write(strip_path); !s) return fail(s.error().message);
+  }
 
   const hal::sim::SimMetrics& m = sim.metrics();
   std::printf("%s seed %lld (%s): %s%s\n", trial->spec.name.c_str(), static_cast<long long>(*seed),
@@ -170,7 +175,8 @@ int simCommand(const ParsedArgs& args) {
                 cycle.p99_ms);
   }
   std::fputs(timingTable(info.timings).c_str(), stdout);
-  std::printf("results: %s, %s\n", summary_path.c_str(), topdown_path.c_str());
+  std::printf("results: %s, %s%s%s\n", summary_path.c_str(), topdown_path.c_str(), strip_path.empty() ? "" : ", ",
+              strip_path.c_str());
   return info.interrupted ? 130 : 0;
 }
 

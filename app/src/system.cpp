@@ -1,6 +1,8 @@
 // Wiring: see system.hpp.
 #include "system.hpp"
 
+#include <cmath>
+
 #include "aerotrack/gimbal_control/gimbal_control_task.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "device_tasks.hpp"
@@ -41,10 +43,19 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   const std::string where = config_.source + ": tasks[" + std::to_string(index) + "]";
   std::unique_ptr<rt::Task> task;
   if (spec.name == "sim_world" || spec.name == "baseline_follow" || spec.name == "truth_gimbal" ||
-      spec.name == "target_check") {
+      spec.name == "target_check" || spec.name == "camera_strip") {
     if (!devices_.simulation) return rt::Error{where + ": task '" + spec.name + "' needs a sim backend in hal"};
     if (spec.name == "sim_world") {
       task = std::make_unique<SimWorldTask>(devices_.simulation);
+    } else if (spec.name == "camera_strip") {
+      const hal::CameraIntrinsics& k = devices_.simulation->scenario().spec.gimbal_camera.camera.intrinsics;
+      const double hfov_rad = 2.0 * std::atan2(k.cx_px, k.fx_px);
+      auto strip = std::make_unique<CameraStripTask>(devices_.simulation,
+                                                     CameraStripSources{channels_.newest_detection, channels_.target,
+                                                                        channels_.local_grid, channels_.trajectories},
+                                                     /*every_s=*/4.0, hfov_rad);
+      camera_strip_task_ = strip.get();
+      task = std::move(strip);
     } else if (spec.name == "target_check") {
       auto check = std::make_unique<TargetTruthCheckTask>(devices_.simulation, channels_.target);
       target_check_task_ = check.get();
@@ -59,7 +70,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                           channels_.odometry_target_stream);
   } else if (spec.name == "gimbal_camera") {
     task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections, channels_.images,
-                                              channels_.newest_camera_frame_ns);
+                                              channels_.newest_camera_frame_ns, channels_.newest_detection);
   } else if (spec.name == "depth_camera") {
     task = std::make_unique<DepthCameraTask>(*devices_.depth_camera, channels_.depth);
   } else if (spec.name == "mapping") {

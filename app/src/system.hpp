@@ -22,6 +22,7 @@
 #include "aerotrack/trajectory_server/trajectory.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "app_config.hpp"
+#include "camera_strip.hpp"
 
 namespace aerotrack::app {
 
@@ -49,6 +50,7 @@ struct Channels {
   std::atomic<rt::TimeNs> newest_camera_frame_ns{-1};      ///< capture time of the newest gimbal-camera frame
   rt::LatestSlot<supervisor::SupervisorState> supervisor;  ///< the supervisor's mode
   std::atomic<int> planner_failures_in_a_row{0};           ///< written by the planning task
+  rt::LatestSlot<hal::DetectionFrame> newest_detection;    ///< the newest detector output (for pictures)
 };
 
 class System {
@@ -71,6 +73,8 @@ class System {
   /// The detection task, if the table has one (for its statistics).
   const perception::DetectionTask* detectionTask() const { return detection_task_; }
 
+  /// The camera strip recorder, if the table has one (sim only).
+  const CameraStripTask* cameraStripTask() const { return camera_strip_task_; }
   /// The trajectory server task, if the table has one (for the end-to-end latency).
   const trajectory_server::TrajectoryServerTask* trajectoryServerTask() const { return server_task_; }
   /// The supervisor task, if the table has one.
@@ -98,6 +102,7 @@ class System {
   const planning::PlanningTask* planning_task_ = nullptr;
   const supervisor::SupervisorTask* supervisor_task_ = nullptr;
   const trajectory_server::TrajectoryServerTask* server_task_ = nullptr;
+  const CameraStripTask* camera_strip_task_ = nullptr;
   rt::TimeNs start_ns_ = 0;         ///< The executor clock's time at start.
   rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
 };

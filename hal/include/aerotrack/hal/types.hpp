@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
@@ -101,6 +102,26 @@ struct Keypoint2D {
 
 /// One person found in an image: what the keypoint detector (issue 5) outputs, and what the
 /// simulator's keypoint-mode camera produces so that everything downstream is exercised.
+/// COCO skeleton edges (the pairs MoveNet's demos draw).
+inline constexpr std::array<std::pair<int, int>, 18> kCocoSkeleton = {{{0, 1},
+                                                                       {0, 2},
+                                                                       {1, 3},
+                                                                       {2, 4},
+                                                                       {5, 6},
+                                                                       {5, 7},
+                                                                       {7, 9},
+                                                                       {6, 8},
+                                                                       {8, 10},
+                                                                       {5, 11},
+                                                                       {6, 12},
+                                                                       {11, 12},
+                                                                       {11, 13},
+                                                                       {13, 15},
+                                                                       {12, 14},
+                                                                       {14, 16},
+                                                                       {0, 5},
+                                                                       {0, 6}}};
+
 struct PersonDetection {
   std::array<Keypoint2D, kNumKeypoints> keypoints{};
   double score = 0.0;                                                         ///< Person confidence in [0, 1].
