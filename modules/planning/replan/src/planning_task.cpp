@@ -2,12 +2,6 @@
 #include "aerotrack/planning/planning_task.hpp"
 
 namespace aerotrack::planning {
-namespace {
-
-constexpr int kPoolSize = 6;  // the server holds one or two, the slot one, the planner fills one
-
-}  // namespace
-
 PlanningTask::PoolEntry PlanningTask::makeEntry(int max_pieces) {
   auto trajectory = std::make_shared<PolynomialTrajectory>(max_pieces);
   auto timed = std::make_shared<trajectory_server::TimedTrajectory>();
@@ -17,17 +11,15 @@ PlanningTask::PoolEntry PlanningTask::makeEntry(int max_pieces) {
 
 PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& channels, const rt::Clock& stats_clock)
     : planner_(std::move(planner)), channels_(channels), stats_clock_(stats_clock) {
-  pool_.reserve(std::size_t{2} * kPoolSize);
-  for (int i = 0; i < kPoolSize; ++i) pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
+  pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
 }
 
 PlanningTask::PoolEntry& PlanningTask::freeEntry() {
-  for (PoolEntry& entry : pool_) {
-    // Free when only the pool holds it: the entry's own two handles (the TimedTrajectory holds one).
-    if (entry.timed.use_count() == 1 && entry.trajectory.use_count() == 2) return entry;
-  }
+  // A fresh trajectory object for every cycle (one allocation at 20 Hz). Reusing a pooled one once its
+  // use_count() had dropped back is not a synchronisation with the thread that let it go (use_count is
+  // a relaxed load): ThreadSanitizer caught the planner rewriting a trajectory the server had just read.
   ++pool_growths_;
-  pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
+  pool_.back() = makeEntry(planner_.params().corridor.max_boxes);
   return pool_.back();
 }
 

@@ -153,13 +153,23 @@ void TrackingPlanner::makeStopTrajectory(const StatePva& start, PolynomialTrajec
 PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory& out) {
   PlanReport report;
   if (inputs.odometry == nullptr) return report;
+  const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(params_.planning_budget_s);
+  report.start_ns = start_ns;
+  const StatePva start = startState(inputs, start_ns);
+
+  // Take-off: on (or near) the ground the start lies in the floor's inflation margin, where no search can
+  // begin; climb straight up to the flight altitude first. It needs no map (a vertical climb from where
+  // the drone stands), so the drone does not wait on the ground for the first depth images. (The
+  // supervisor of issue 9 owns take-off and landing as modes; this keeps the planner usable on its own.)
+  if (start(2, 0) < params_.takeoff_below_m) {
+    makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), params_.flight_altitude_m), out);
+    report.status = PlanStatus::kTakeOff;
+    return report;
+  }
   if (inputs.grid == nullptr) {
     report.status = PlanStatus::kNoMap;
     return report;
   }
-  const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(params_.planning_budget_s);
-  report.start_ns = start_ns;
-  const StatePva start = startState(inputs, start_ns);
 
   auto fail = [&](PlanStatus status) {
     report.status = status;
@@ -169,15 +179,6 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
     }
     return report;
   };
-
-  // Take-off: on (or near) the ground the start lies in the floor's inflation margin, where no search can
-  // begin; climb straight up to the flight altitude first (the supervisor of issue 9 owns take-off and
-  // landing as modes; this keeps the planner usable on its own).
-  if (start(2, 0) < params_.takeoff_below_m) {
-    makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), params_.flight_altitude_m), out);
-    report.status = PlanStatus::kTakeOff;
-    return report;
-  }
 
   const estimation::TargetEstimate* target = inputs.target;
   const bool live = target != nullptr && target->initialised && !target->lost;

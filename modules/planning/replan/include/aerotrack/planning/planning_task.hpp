@@ -1,8 +1,8 @@
 // Task glue for the tracking planner (issue 8 item 4): at a fixed rate (default 20 Hz; the paper
 // replans at 13 Hz) it reads the newest odometry, person estimate, local grid and octree snapshot, runs
 // one TrackingPlanner cycle and publishes the trajectory for the trajectory server, which switches to
-// it at its start time. Trajectories come from a small pool of preallocated objects, reused once
-// nobody holds them any more, so a warm cycle publishes without allocating. The cycle's time (prediction
+// it at its start time. Each cycle writes a new trajectory object (one allocation per cycle; see
+// freeEntry() for why reuse by use_count is not safe). The cycle's time (prediction
 // + search + corridor + optimisation + check) is measured with a stats clock passed in, as the executors
 // measure tasks; it is what summary.json reports as the planning time.
 #pragma once
@@ -64,7 +64,7 @@ class PlanningTask final : public rt::Task {
   /// Brakes published on entering hold, and descents on entering land.
   std::uint64_t holds() const { return holds_; }
   std::uint64_t landings() const { return landings_; }
-  /// Trajectory objects allocated after start (0 while the pool suffices).
+  /// Trajectory objects allocated (one per cycle that ran).
   std::uint64_t poolGrowths() const { return pool_growths_; }
   /// The last trajectory published, empty before the first.
   const trajectory_server::TimedTrajectory& lastPublished() const { return published_; }
