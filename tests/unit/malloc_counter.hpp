@@ -32,6 +32,15 @@ class MallocCount {
   long count() const { return g_mallocs.load(); }
 };
 
+/// Mallocs counted while a 100-double heap buffer is made (>= 1 when the interposer works): the check
+/// every allocation test starts with, so that a zero count later means something.
+inline long mallocsOfAHeapBuffer() {
+  const MallocCount count;
+  auto* volatile buffer = new double[100];
+  delete[] buffer;
+  return count.count();
+}
+
 }  // namespace aerotrack::test
 
 #if defined(AEROTRACK_DEFINE_MALLOC_COUNTER) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)

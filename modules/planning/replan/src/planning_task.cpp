@@ -10,17 +10,15 @@ PlanningTask::PoolEntry PlanningTask::makeEntry(int max_pieces) {
 }
 
 PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& channels, const rt::Clock& stats_clock)
-    : planner_(std::move(planner)), channels_(channels), stats_clock_(stats_clock) {
-  pool_.push_back(makeEntry(planner_.params().corridor.max_boxes));
-}
+    : planner_(std::move(planner)), channels_(channels), stats_clock_(stats_clock) {}
 
 PlanningTask::PoolEntry& PlanningTask::freeEntry() {
   // A fresh trajectory object for every cycle (one allocation at 20 Hz). Reusing a pooled one once its
   // use_count() had dropped back is not a synchronisation with the thread that let it go (use_count is
   // a relaxed load): ThreadSanitizer caught the planner rewriting a trajectory the server had just read.
   ++pool_growths_;
-  pool_.back() = makeEntry(planner_.params().corridor.max_boxes);
-  return pool_.back();
+  next_ = makeEntry(planner_.params().corridor.max_boxes);
+  return next_;
 }
 
 double PlanningTask::meanCorridorBoxes() const {

@@ -80,7 +80,7 @@ class PlanningTask final : public rt::Task {
   TrackingPlanner planner_;
   PlanningChannels channels_;
   const rt::Clock& stats_clock_;
-  std::vector<PoolEntry> pool_;
+  PoolEntry next_;  ///< The trajectory this cycle writes (new every cycle).
   trajectory_server::TimedTrajectory published_;
   std::array<std::uint64_t, kPlanStatusCount> counts_{};
   std::uint64_t cycles_ = 0;
