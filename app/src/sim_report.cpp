@@ -72,9 +72,15 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
                             planning::SearchStatus::kInvalidInput}) {
     search_failures[std::string(planning::toString(status))] = task->searchFailures(status);
   }
+  nlohmann::json check_failures = nlohmann::json::object();
+  for (int i = 1; i <= static_cast<int>(planning::CheckVerdict::kTooCloseToPerson); ++i) {
+    const auto verdict = static_cast<planning::CheckVerdict>(i);
+    check_failures[std::string(planning::toString(verdict))] = task->checkFailures(verdict);
+  }
   const rt::TimingSnapshot cycle = task->cycleStats().snapshot();
   return {{"cycles", task->cycles()},
           {"search_failures", search_failures},
+          {"check_failures", check_failures},
           {"outcomes", outcomes},
           {"cycle_ms_p50", cycle.p50_ms},
           {"cycle_ms_p99", cycle.p99_ms},
@@ -122,6 +128,21 @@ nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
           {"detect_ms_max", detect.max_ms}};
 }
 
+namespace {
+
+/// Each loss of sight: when, until when (null: never re-acquired) and why it began.
+nlohmann::json lossEvents(const hal::sim::SimMetrics& m) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const hal::sim::LossEvent& l : m.losses()) {
+    out.push_back({{"start_s", l.start_s},
+                   {"end_s", l.end_s < 0.0 ? nlohmann::json(nullptr) : nlohmann::json(l.end_s)},
+                   {"cause", hal::sim::sightName(l.cause)}});
+  }
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
   const hal::sim::SimMetrics& m = sim.metrics();
   const hal::sim::ScenarioInstance& trial = sim.scenario();
@@ -137,6 +158,8 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"visible_ratio", m.visibleRatio()},
       {"losses", m.losses().size()},
       {"longest_loss_s", m.longestLossS()},
+      {"hidden_s", {{"out_of_image", m.outOfImageS()}, {"occluded", m.occludedS()}}},
+      {"loss_events", lossEvents(m)},
       {"distance_mean_m", m.distanceMeanM()},
       {"distance_max_m", m.distanceMaxM()},
       {"final_distance_m", m.finalDistanceM()},

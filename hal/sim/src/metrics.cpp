@@ -6,8 +6,21 @@
 
 namespace aerotrack::hal::sim {
 
+const char* sightName(Sight sight) {
+  switch (sight) {
+    case Sight::kVisible:
+      return "visible";
+    case Sight::kOutOfImage:
+      return "out_of_image";
+    case Sight::kOccluded:
+      return "occluded";
+  }
+  return "unknown";
+}
+
 void SimMetrics::record(double t_s, const Eigen::Vector3d& drone_m, const Eigen::Vector3d& person_m, double clearance_m,
-                        bool visible, bool tracking, double dt_s) {
+                        Sight sight, bool tracking, double dt_s) {
+  const bool visible = sight == Sight::kVisible;
   const double surface_clearance_m = clearance_m - drone_radius_m_;
   min_clearance_m_ = std::min(min_clearance_m_, surface_clearance_m);
   const bool colliding = surface_clearance_m < 0.0;
@@ -19,11 +32,13 @@ void SimMetrics::record(double t_s, const Eigen::Vector3d& drone_m, const Eigen:
 
   tracked_s_ += dt_s;
   if (visible) visible_s_ += dt_s;
+  if (sight == Sight::kOutOfImage) out_of_image_s_ += dt_s;
+  if (sight == Sight::kOccluded) occluded_s_ += dt_s;
   final_distance_m_ = (drone_m - person_m).head<2>().norm();
   distance_sum_m_ += final_distance_m_;
   distance_max_m_ = std::max(distance_max_m_, final_distance_m_);
   ++samples_tracked_;
-  if (was_visible_ && !visible) losses_.push_back({t_s, -1.0, drone_m});
+  if (was_visible_ && !visible) losses_.push_back({t_s, -1.0, drone_m, sight});
   if (!was_visible_ && visible && !losses_.empty()) losses_.back().end_s = t_s;
   was_visible_ = visible;
 }

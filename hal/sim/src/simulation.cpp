@@ -105,16 +105,22 @@ Eigen::Isometry3d Simulation::cameraPose(const QuadrotorState& drone, double gim
   return T_WC;
 }
 
-bool Simulation::personVisible(const Eigen::Isometry3d& T_WC, const PersonState& person) const {
+Sight Simulation::personSight(const Eigen::Isometry3d& T_WC, const PersonState& person) const {
   const CameraIntrinsics& k = scenario_.spec.gimbal_camera.camera.intrinsics;
   const Eigen::Isometry3d T_CW = T_WC.inverse();
-  for (const Eigen::Vector3d& p_W : {midpoint(person, CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder),
-                                     midpoint(person, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip)}) {
+  const std::array<Eigen::Vector3d, 2> torso_W_m = {
+      midpoint(person, CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder),
+      midpoint(person, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip)};
+  for (const Eigen::Vector3d& p_W : torso_W_m) {
     const auto uv = project(T_CW * p_W, k);
-    if (!uv || uv->x() < 0.0 || uv->y() < 0.0 || uv->x() >= k.width_px || uv->y() >= k.height_px) return false;
-    if (!obstacles_.segmentClear(T_WC.translation(), p_W)) return false;
+    if (!uv || uv->x() < 0.0 || uv->y() < 0.0 || uv->x() >= k.width_px || uv->y() >= k.height_px) {
+      return Sight::kOutOfImage;
+    }
   }
-  return true;
+  for (const Eigen::Vector3d& p_W : torso_W_m) {
+    if (!obstacles_.segmentClear(T_WC.translation(), p_W)) return Sight::kOccluded;
+  }
+  return Sight::kVisible;
 }
 
 void Simulation::step(TimeNs now_ns) {
@@ -155,7 +161,7 @@ void Simulation::sampleDueSensors() {
     truth_.T_WC = cameraPose(truth_.drone, truth_.gimbal_angle_rad);
     const double t_s = rt::nsToSeconds(now_ns_ - start_ns_);
     metrics_.record(t_s, truth_.drone.p_W_m, truth_.person.p_W_m, obstacles_.distance(truth_.drone.p_W_m),
-                    personVisible(truth_.T_WC, truth_.person), t_s >= personStartS(),
+                    personSight(truth_.T_WC, truth_.person), t_s >= personStartS(),
                     rt::nsToSeconds(metrics_period_ns_));
     next_metrics_ns_ += metrics_period_ns_;
   }

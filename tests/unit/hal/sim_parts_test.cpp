@@ -80,12 +80,19 @@ ScenarioSpec specWithSuccess(double distance_m) {
 TEST(SimMetrics, GivenCleanRunThenSuccessAndRatios) {
   SimMetrics m(specWithSuccess(2.5));
   const Eigen::Vector3d person(0, 0, 0), drone(2.5, 0, 1.5);
-  for (int i = 0; i < 100; ++i) m.record(0.02 * i, drone, person, 3.0, i < 50 || i >= 60, i >= 10, 0.02);
+  // Hidden for samples 50-59: out of the image for the first 4, then behind an obstacle.
+  for (int i = 0; i < 100; ++i) {
+    const Sight sight = i < 50 || i >= 60 ? Sight::kVisible : i < 54 ? Sight::kOutOfImage : Sight::kOccluded;
+    m.record(0.02 * i, drone, person, 3.0, sight, i >= 10, 0.02);
+  }
   EXPECT_TRUE(m.success()) << m.failureReason();
   EXPECT_EQ(m.collisions(), 0);
   EXPECT_NEAR(m.visibleRatio(), 80.0 / 90.0, 1e-12);  // 10 of 90 tracked samples invisible
   ASSERT_EQ(m.losses().size(), 1U);
   EXPECT_NEAR(m.longestLossS(), 0.2, 1e-12);
+  EXPECT_EQ(m.losses()[0].cause, Sight::kOutOfImage);  // the loss is blamed on its first sample
+  EXPECT_NEAR(m.outOfImageS(), 4 * 0.02, 1e-12);
+  EXPECT_NEAR(m.occludedS(), 6 * 0.02, 1e-12);
   EXPECT_NEAR(m.distanceMeanM(), 2.5, 1e-12);
   EXPECT_NEAR(m.minClearanceM(), 2.75, 1e-12);
 }
@@ -93,7 +100,7 @@ TEST(SimMetrics, GivenCleanRunThenSuccessAndRatios) {
 TEST(SimMetrics, GivenContactThenOneCollisionPerContactAndFailure) {
   SimMetrics m(specWithSuccess(2.5));
   const Eigen::Vector3d p(2.5, 0, 1.5), q(0, 0, 0);
-  for (double clearance : {1.0, 0.2, 0.1, 1.0, 0.2, 1.0}) m.record(0, p, q, clearance, true, true, 0.02);
+  for (double clearance : {1.0, 0.2, 0.1, 1.0, 0.2, 1.0}) m.record(0, p, q, clearance, Sight::kVisible, true, 0.02);
   EXPECT_EQ(m.collisions(), 2);
   EXPECT_FALSE(m.success());
   EXPECT_NE(m.failureReason().find("2 collision(s)"), std::string::npos);
@@ -101,11 +108,11 @@ TEST(SimMetrics, GivenContactThenOneCollisionPerContactAndFailure) {
 
 TEST(SimMetrics, GivenLossNeverRecoveredOrFarAtTheEndThenFailure) {
   SimMetrics lost(specWithSuccess(2.5));
-  lost.record(1.0, {2, 0, 1}, {0, 0, 0}, 5, true, true, 0.02);
-  lost.record(1.5, {2, 0, 1}, {0, 0, 0}, 5, false, true, 0.02);
+  lost.record(1.0, {2, 0, 1}, {0, 0, 0}, 5, Sight::kVisible, true, 0.02);
+  lost.record(1.5, {2, 0, 1}, {0, 0, 0}, 5, Sight::kOccluded, true, 0.02);
   EXPECT_NE(lost.failureReason().find("never re-acquired"), std::string::npos);
   SimMetrics far(specWithSuccess(2.5));
-  far.record(1.0, {6, 0, 1}, {0, 0, 0}, 5, true, true, 0.02);
+  far.record(1.0, {6, 0, 1}, {0, 0, 0}, 5, Sight::kVisible, true, 0.02);
   EXPECT_NE(far.failureReason().find("final distance 6.0 m exceeds 5.0 m"), std::string::npos);
 }
 

@@ -89,7 +89,11 @@ TEST(Simulation, GivenPersonInViewThenDetectionsAt30HzArriveAfterTheDetectorLate
     }
   ASSERT_GT(detected, 0);
   EXPECT_NEAR(u_sum / detected, 320.0, 15.0);
-  EXPECT_TRUE(sim->personVisible(sim->truth().T_WC, sim->truth().person));
+  EXPECT_EQ(sim->personSight(sim->truth().T_WC, sim->truth().person), Sight::kVisible);
+  // Turned away (the camera yawed half a turn about the world's z), the torso leaves the image.
+  Eigen::Isometry3d T_WC_away = sim->truth().T_WC;
+  T_WC_away.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix() * T_WC_away.linear();
+  EXPECT_EQ(sim->personSight(T_WC_away, sim->truth().person), Sight::kOutOfImage);
 }
 
 TEST(Simulation, GivenWallBetweenThenPersonIsHiddenAndNotDetected) {
@@ -98,7 +102,7 @@ TEST(Simulation, GivenWallBetweenThenPersonIsHiddenAndNotDetected) {
   hover(*sim, 1.0, &frames);
   ASSERT_FALSE(frames.empty());
   for (const DetectionFrame& f : frames) EXPECT_EQ(f.person_count, 0U);
-  EXPECT_FALSE(sim->personVisible(sim->truth().T_WC, sim->truth().person));
+  EXPECT_EQ(sim->personSight(sim->truth().T_WC, sim->truth().person), Sight::kOccluded);
 }
 
 TEST(Simulation, GivenWallAheadThenDepthFramesAt15HzSeeItAtItsDistance) {

@@ -136,8 +136,9 @@ class Simulation {
   Eigen::Isometry3d cameraPose(const QuadrotorState& drone, double gimbal_angle_rad) const;
   /// The person's state at sim time t_ns (standing at the start before their delay).
   PersonState personAt(TimeNs t_ns) const;
-  /// Whether the person's torso is in the gimbal camera's view and line of sight.
-  bool personVisible(const Eigen::Isometry3d& T_WC, const PersonState& person) const;
+  /// Whether the person's torso is in the gimbal camera's view and line of sight, and if not why
+  /// (out of the image is reported first: then the obstacles do not matter).
+  Sight personSight(const Eigen::Isometry3d& T_WC, const PersonState& person) const;
 
  private:
   Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
