@@ -50,7 +50,7 @@ int runCommand(const ParsedArgs& args) {
     std::fprintf(stderr, "aerotrack run: %s\n", system.error().message.c_str());
     return 1;
   }
-  rt::RealtimeExecutor executor(clock, config->realtime);
+  rt::RealtimeExecutor executor(clock, (*system)->realtimeOptions());
   for (const rt::TaskBinding& b : (*system)->bindings()) {
     if (const rt::Status s = executor.add(b); !s) {
       std::fprintf(stderr, "aerotrack run: %s\n", s.error().message.c_str());

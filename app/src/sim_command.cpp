@@ -53,7 +53,7 @@ rt::Status runLockstep(System& system, rt::ManualClock& clock, rt::TimeNs end_ns
 
 rt::Status runRealtime(System& system, const rt::MonotonicClock& clock, rt::TimeNs start_ns, rt::TimeNs end_ns,
                        const std::atomic<bool>& stop, RunInfo& info) {
-  rt::RealtimeExecutor executor(clock, system.config().realtime);
+  rt::RealtimeExecutor executor(clock, system.realtimeOptions());
   if (rt::Status s = addAll(system, executor); !s) return s;
   const auto warnings = executor.start();
   if (!warnings) return warnings.error();

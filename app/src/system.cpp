@@ -119,6 +119,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                                   channels_.newest_camera_frame_ns,
                                                   channels_.target,
                                                   channels_.planner_failures_in_a_row,
+                                                  channels_.deadline_misses,
                                                   channels_.supervisor,
                                                   channels_.gimbal_search_requested};
     auto supervisor_task =

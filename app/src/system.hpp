@@ -51,6 +51,7 @@ struct Channels {
   rt::LatestSlot<supervisor::SupervisorState> supervisor;  ///< the supervisor's mode
   std::atomic<int> planner_failures_in_a_row{0};           ///< written by the planning task
   rt::LatestSlot<hal::DetectionFrame> newest_detection;    ///< the newest detector output (for pictures)
+  std::atomic<std::uint64_t> deadline_misses{0};           ///< periods skipped, fed by the real-time executor only
 };
 
 class System {
@@ -64,6 +65,12 @@ class System {
   Channels& channels() { return channels_; }
   hal::Devices& devices() { return devices_; }
   const AppConfig& config() const { return config_; }
+  /// The real-time executor's options from the config, reporting missed deadlines to the supervisor.
+  rt::RealtimeOptions realtimeOptions() {
+    rt::RealtimeOptions options = config_.realtime;
+    options.deadline_misses = &channels_.deadline_misses;
+    return options;
+  }
   /// The mapping task, if the table has one (for its statistics).
   const mapping::MappingTask* mappingTask() const { return mapping_task_; }
   /// The simulator's check of the target estimate against the truth, if the table has one.

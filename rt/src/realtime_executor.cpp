@@ -126,6 +126,7 @@ void RealtimeExecutor::runPeriodic(TaskSet::Entry& e, TimeNs first_release_ns) {
       // Overran into later periods: skip them and resynchronise to the next future release.
       const auto skipped = static_cast<std::uint64_t>((end_ns - release_ns) / e.period_ns) + 1;
       stats.addMissedDeadlines(skipped);
+      if (options_.deadline_misses != nullptr) options_.deadline_misses->fetch_add(skipped, std::memory_order_relaxed);
       release_ns += static_cast<DurationNs>(skipped) * e.period_ns;
     }
   }

@@ -23,6 +23,10 @@ struct RealtimeOptions {
   bool use_affinity = true;                          ///< Pin tasks whose cpu >= 0.
   bool lock_memory = true;                           ///< Try mlockall(MCL_CURRENT | MCL_FUTURE).
   DurationNs stop_poll_ns = 50 * kNsPerMillisecond;  ///< Longest sleep before re-checking stop.
+  /// When set, every missed deadline (a period skipped by any periodic task) is also counted here,
+  /// for whoever watches the process's timing health (the supervisor's overrun-storm failsafe).
+  /// Only this executor feeds it: in lockstep, deadlines are not wall-clock facts.
+  std::atomic<std::uint64_t>* deadline_misses = nullptr;
 };
 
 class RealtimeExecutor {

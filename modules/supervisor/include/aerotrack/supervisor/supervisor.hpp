@@ -73,7 +73,7 @@ struct SupervisorInputs {
   bool person_live = false;            ///< The estimate is initialised and not lost.
   rt::TimeNs person_accepted_ns = -1;  ///< Capture time of its newest accepted measurement.
   int planner_failures_in_a_row = 0;
-  std::uint64_t deadline_overruns = 0;  ///< Cumulative over the control tasks.
+  std::uint64_t deadline_overruns = 0;  ///< Cumulative missed deadlines of the periodic tasks (real-time only).
 };
 
 struct SupervisorState {

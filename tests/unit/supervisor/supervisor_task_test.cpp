@@ -1,0 +1,73 @@
+// The supervisor task reads every health signal from its channels: here the real-time executor's
+// missed deadlines reach the overrun-storm failsafe, and the gimbal is asked to sweep while searching.
+#include "aerotrack/supervisor/supervisor_task.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+namespace aerotrack::supervisor {
+namespace {
+
+struct Rig {
+  rt::LatestSlot<hal::OdometrySample> odometry;
+  rt::SharedSlot<hal::DepthFrame> depth;
+  std::atomic<rt::TimeNs> camera_ns{-1};
+  rt::LatestSlot<estimation::TargetEstimate> target;
+  std::atomic<int> planner_failures{0};
+  std::atomic<std::uint64_t> deadline_misses{0};
+  rt::LatestSlot<SupervisorState> out;
+  std::atomic<bool> sweep{false};
+  SupervisorTask task{
+      SupervisorParams{}, 0,
+      SupervisorChannels{odometry, depth, camera_ns, target, planner_failures, deadline_misses, out, sweep},
+      /*sweep_when_searching=*/true};
+
+  // Every stream fresh at t_s, flying at 1.5 m; the person seen now when `seen`.
+  void step(double t_s, bool seen) {
+    const rt::TimeNs now_ns = rt::secondsToNs(t_s);
+    hal::OdometrySample o;
+    o.stamp_ns = now_ns;
+    o.p_WB_m.z() = 1.5;
+    odometry.write(o);
+    auto frame = std::make_shared<hal::DepthFrame>();
+    frame->stamp_ns = now_ns;
+    depth.write(std::move(frame));
+    camera_ns.store(now_ns);
+    estimation::TargetEstimate e;
+    e.stamp_ns = now_ns;
+    e.initialised = true;
+    e.lost = !seen;
+    e.last_accepted_ns = seen ? now_ns : 0;
+    target.write(e);
+    task.step(now_ns);
+  }
+};
+
+TEST(SupervisorTask, MissedDeadlinesFromTheExecutorTriggerTheOverrunStorm) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  ASSERT_EQ(rig.out.read()->mode, Mode::kTrack);
+  EXPECT_FALSE(rig.sweep.load());
+  rig.deadline_misses.store(10);  // a few: below the storm (50 per 1 s window)
+  for (const double end = t + 1.5; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kTrack);
+  rig.deadline_misses.store(10 + SupervisorParams{}.overrun_storm);
+  for (const double end = t + 1.5; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kHold);
+  EXPECT_EQ(rig.out.read()->reason, Reason::kOverrunStorm);
+  EXPECT_EQ(rig.task.transitions()[rig.task.transitionCount() - 1].reason, Reason::kOverrunStorm);
+}
+
+TEST(SupervisorTask, LostPersonAsksTheGimbalToSweepWhileRelocating) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  for (const double end = t + 1.0; t < end; t += 0.02) rig.step(t, false);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kRelocate);
+  EXPECT_TRUE(rig.sweep.load());
+}
+
+}  // namespace
+}  // namespace aerotrack::supervisor
