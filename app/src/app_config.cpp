@@ -136,6 +136,8 @@ std::string toYaml(const AppConfig& c) {
     const mapping::MapperParams& m = *c.mapping;
     out << YAML::Key << "mapping" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "resolution_m" << YAML::Value << m.octomap.resolution_m;
+    out << YAML::Key << "prob_hit" << YAML::Value << m.octomap.prob_hit;
+    out << YAML::Key << "prob_miss" << YAML::Value << m.octomap.prob_miss;
     out << YAML::Key << "decimation" << YAML::Value << m.points.decimation;
     out << YAML::Key << "min_range_m" << YAML::Value << m.points.min_range_m;
     out << YAML::Key << "max_range_m" << YAML::Value << m.points.max_range_m;
@@ -208,6 +210,8 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "sweep_rate_radps" << YAML::Value << g.sweep_rate_radps;
     out << YAML::Key << "feed_forward" << YAML::Value << g.feed_forward;
     out << YAML::Key << "max_estimate_age_s" << YAML::Value << g.max_estimate_age_s;
+    out << YAML::Key << "look_at_prediction_s" << YAML::Value << g.look_at_prediction_s;
+    out << YAML::Key << "max_bearing_sigma_rad" << YAML::Value << g.max_bearing_sigma_rad;
     out << YAML::EndMap;
   }
   if (c.supervisor) {

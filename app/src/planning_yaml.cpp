@@ -26,6 +26,8 @@ void emitPlanningYaml(YAML::Emitter& out, const planning::TrackingPlannerParams&
   out << YAML::Key << "goal" << YAML::Value << YAML::BeginMap;
   key(out, "predicted_weight", p.goal.predicted_weight);
   key(out, "tracking_distance_m", p.goal.tracking_distance_m);
+  key(out, "visible_step_rad", p.goal.visible_step_rad);
+  key(out, "visible_max_turn_rad", p.goal.visible_max_turn_rad);
   out << YAML::EndMap;
   const planning::KinodynamicSearchParams& s = p.search;
   out << YAML::Key << "search" << YAML::Value << YAML::BeginMap;
@@ -99,6 +101,7 @@ void emitPlanningYaml(YAML::Emitter& out, const planning::TrackingPlannerParams&
   key(out, "tolerance", c.tolerance);
   key(out, "sample_step_s", c.sample_step_s);
   key(out, "horizon_s", c.horizon_s);
+  key(out, "margin_escape_s", c.margin_escape_s);
   out << YAML::EndMap;
   out << YAML::Key << "collision" << YAML::Value << YAML::BeginMap;
   key(out, "radius_m", p.collision.radius_m);

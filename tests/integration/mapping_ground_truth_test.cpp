@@ -1,14 +1,18 @@
 // The mapper against the simulator's ground truth (issue 4): fly the forest with the simulated
 // D435 (noise sigma = k z^2, dropout), map it, then compare with the true obstacles. Measured
-// (seed 1, 25 s): precision 0.9999 over 36,764 occupied voxels; recall 0.986 on the trees and 0.886
-// on the ground (see below).
+// (seed 1, 25 s), OctoMap's prob_miss 0.4: precision 0.9999 over 36,764 occupied voxels; recall 0.986
+// on the trees and 0.886 on the ground. The configured 0.45: precision 0.9999 over 44,820; recall
+// 0.990 on the trees and 0.969 on the ground. Along sharp_turn's building (32 s): obstacle recall
+// 0.9936 with 0.4, 0.9972 with 0.45.
 //   precision: occupied map voxels whose centre lies within one voxel diagonal of a true surface;
 //   recall:    surface voxels that a noise-free camera at the same poses saw within range, found
 //              occupied in the map (or a face neighbour of them: the noise at 6 m is 5 cm).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "aerotrack/hal/sim/baseline_follower.hpp"
@@ -24,18 +28,31 @@ std::array<int, 3> keyOf(const octomap::OcTreeKey& k) {
   return {k[0], k[1], k[2]};
 }
 
-TEST(MappingGroundTruth, GivenAForestSweepThenTreeVoxelsHavePrecisionAndRecallAbove95Percent) {
-  auto spec = hal::sim::loadScenarioSpec(AEROTRACK_SOURCE_DIR "/config/scenarios/forest.yaml");
-  ASSERT_TRUE(spec);
-  auto trial = hal::sim::instantiate(*spec, 1);
-  ASSERT_TRUE(trial);
-  auto sim = hal::sim::Simulation::create(*trial, hal::sim::SimulationOptions{}, 0);
-  ASSERT_TRUE(sim);
-  mapping::MapperParams params;
-  auto mapper = mapping::Mapper::create(params);
-  ASSERT_TRUE(mapper) << mapper.error().message;
-  hal::sim::BaselineFollower follower({}, trial->spec.drone.start_m, trial->spec.drone.start_yaw_rad);
+struct MapScore {
+  std::size_t occupied = 0, seen = 0;
+  double precision = 0.0, recall = 0.0, obstacle_recall = 0.0, ground_recall = 0.0;
+  std::uint64_t frames = 0;
+};
 
+/// Flies `scenario` (seed 1) for duration_s with the truth-fed follower, maps it with prob_miss, and
+/// scores the map against the true obstacles (see the top of the file).
+MapScore mapAndScore(const std::string& scenario, double duration_s, double prob_miss) {
+  MapScore score;
+  auto spec = hal::sim::loadScenarioSpec(AEROTRACK_SOURCE_DIR "/config/scenarios/" + scenario + ".yaml");
+  EXPECT_TRUE(spec);
+  if (!spec) return score;
+  auto trial = hal::sim::instantiate(*spec, 1);
+  EXPECT_TRUE(trial);
+  if (!trial) return score;
+  auto sim = hal::sim::Simulation::create(*trial, hal::sim::SimulationOptions{}, 0);
+  EXPECT_TRUE(sim);
+  if (!sim) return score;
+  mapping::MapperParams params;
+  params.octomap.prob_miss = prob_miss;
+  auto mapper = mapping::Mapper::create(params);
+  EXPECT_TRUE(mapper) << mapper.error().message;
+  if (!mapper) return score;
+  hal::sim::BaselineFollower follower({}, trial->spec.drone.start_m, trial->spec.drone.start_yaw_rad);
   hal::sim::DepthCameraParams exact = trial->spec.depth_camera.camera;
   exact.noise_coeff_per_m = 0.0;
   exact.dropout_probability = 0.0;
@@ -46,7 +63,7 @@ TEST(MappingGroundTruth, GivenAForestSweepThenTreeVoxelsHavePrecisionAndRecallAb
   std::uint64_t depth_version = 0;
   std::vector<std::shared_ptr<const hal::DepthFrame>> pending_frames;
 
-  const rt::TimeNs end_ns = rt::secondsToNs(25.0);
+  const rt::TimeNs end_ns = rt::secondsToNs(duration_s);
   for (rt::TimeNs t = 0; t <= end_ns; t += 2'000'000) {  // the physics step: captures fall on step ends
     (*sim)->step(t);
     const auto truth = (*sim)->truthOut().read();
@@ -70,7 +87,7 @@ TEST(MappingGroundTruth, GivenAForestSweepThenTreeVoxelsHavePrecisionAndRecallAb
         hal::sim::renderDepth((*sim)->obstacles(), T_WC, exact, rng, exact_depth);
         hal::DepthFrame exact_frame = *frame;
         exact_frame.depth_m = exact_depth;
-        ASSERT_TRUE(mapping::depthToPoints(exact_frame, T_WC, params.points, hits, misses));
+        EXPECT_TRUE(mapping::depthToPoints(exact_frame, T_WC, params.points, hits, misses));
         for (const auto& p : hits) truth_seen.insert(keyOf(tree.coordToKey(p)));
       }
     }
@@ -81,8 +98,7 @@ TEST(MappingGroundTruth, GivenAForestSweepThenTreeVoxelsHavePrecisionAndRecallAb
       pending_frames.erase(pending_frames.begin());
     }
   }
-  ASSERT_GT(mapper->stats().frames_inserted, 300U);
-  ASSERT_GT(truth_seen.size(), 1000U);
+  score.frames = mapper->stats().frames_inserted;
 
   // Precision: every occupied leaf, by its distance to the nearest true surface.
   const double tolerance_m = tree.getResolution() * std::sqrt(3.0);
@@ -116,24 +132,51 @@ TEST(MappingGroundTruth, GivenAForestSweepThenTreeVoxelsHavePrecisionAndRecallAb
       ground_found += hit ? 1 : 0;
     }
   }
-  const double precision = static_cast<double>(near_surface) / static_cast<double>(occupied);
-  const double recall = static_cast<double>(found) / static_cast<double>(truth_seen.size());
-  const double tree_recall =
-      static_cast<double>(found - ground_found) / static_cast<double>(truth_seen.size() - ground_seen);
-  const double ground_recall = static_cast<double>(ground_found) / static_cast<double>(ground_seen);
-  std::printf("recall on trees %.4f (%zu voxels), on the ground %.4f (%zu voxels)\n", tree_recall,
-              truth_seen.size() - ground_seen, ground_recall, ground_seen);
-  RecordProperty("precision", std::to_string(precision));
-  RecordProperty("recall", std::to_string(recall));
-  std::printf("mapping vs ground truth: %zu occupied voxels, precision %.4f; %zu seen surface voxels, recall %.4f\n",
-              occupied, precision, truth_seen.size(), recall);
-  EXPECT_GE(precision, 0.95);
-  // The obstacles -- the trees -- are what the planner must not miss.
-  EXPECT_GE(tree_recall, 0.95);
-  // The ground is mapped less completely: rays that graze it far away clear floor voxels that
-  // steeper rays marked (a known OctoMap effect). Measured 0.886; kept as a floor, not a goal.
-  EXPECT_GE(ground_recall, 0.85);
-  EXPECT_GE(recall, 0.93);
+  score.occupied = occupied;
+  score.seen = truth_seen.size();
+  score.precision = static_cast<double>(near_surface) / static_cast<double>(std::max<std::size_t>(occupied, 1));
+  score.recall = static_cast<double>(found) / static_cast<double>(std::max<std::size_t>(truth_seen.size(), 1));
+  score.obstacle_recall = static_cast<double>(found - ground_found) /
+                          static_cast<double>(std::max<std::size_t>(truth_seen.size() - ground_seen, 1));
+  score.ground_recall = static_cast<double>(ground_found) / static_cast<double>(std::max<std::size_t>(ground_seen, 1));
+  std::printf(
+      "%s, prob_miss %.2f: %zu occupied voxels, precision %.4f; %zu seen surface voxels, recall %.4f "
+      "(obstacles %.4f, ground %.4f)\n",
+      scenario.c_str(), prob_miss, occupied, score.precision, score.seen, score.recall, score.obstacle_recall,
+      score.ground_recall);
+  return score;
+}
+
+TEST(MappingGroundTruth, GivenAForestSweepThenTreeVoxelsHavePrecisionAndRecallAbove95Percent) {
+  // OctoMap's own sensor model (prob_miss 0.4) and the configured one (config/sim.yaml: 0.45).
+  for (const double prob_miss : {0.4, 0.45}) {
+    const MapScore s = mapAndScore("forest", 25.0, prob_miss);
+    ASSERT_GT(s.frames, 300U);
+    ASSERT_GT(s.seen, 1000U);
+    RecordProperty("precision_" + std::to_string(prob_miss), std::to_string(s.precision));
+    RecordProperty("recall_" + std::to_string(prob_miss), std::to_string(s.recall));
+    EXPECT_GE(s.precision, 0.95);
+    // The obstacles -- the trees -- are what the planner must not miss.
+    EXPECT_GE(s.obstacle_recall, 0.95);
+    // The ground is mapped less completely: rays that graze it far away clear floor voxels that
+    // steeper rays marked (a known OctoMap effect). Kept as a floor, not a goal.
+    EXPECT_GE(s.ground_recall, 0.85);
+    EXPECT_GE(s.recall, 0.93);
+  }
+}
+
+// A wall flown along at close range is seen at grazing angles: rays to points beyond it pass through
+// its surface voxels and clear them (each pass a "miss"). With OctoMap's prob_miss 0.4 a wall voxel at
+// the upper clamp is cleared by 9 such frames (0.6 s at 15 Hz); the planner then cut the sharp turn's
+// corner into the building (issue 9). With 0.45 it takes 17. Flown along the building of sharp_turn (the
+// person walks 0.9 m from it) and round its corner, the building must stay mapped.
+TEST(MappingGroundTruth, GivenAWallFlownAlongAtCloseRangeThenItStaysMapped) {
+  const MapScore octomap_default = mapAndScore("sharp_turn", 32.0, 0.4);
+  const MapScore configured = mapAndScore("sharp_turn", 32.0, 0.45);
+  ASSERT_GT(configured.seen, 1000U);
+  EXPECT_GE(configured.precision, 0.95);
+  EXPECT_GE(configured.obstacle_recall, 0.95);
+  EXPECT_GT(configured.obstacle_recall, octomap_default.obstacle_recall);
 }
 
 }  // namespace

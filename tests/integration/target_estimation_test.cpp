@@ -14,7 +14,12 @@
 namespace aerotrack::app {
 namespace {
 
-nlohmann::json estimationOf(const std::string& scenario, std::uint64_t seed, double speed_mps) {
+struct TrackedRun {
+  nlohmann::json estimation;
+  double visible_ratio = 0.0;  ///< The share of the time the person could be seen (the simulator's truth).
+};
+
+TrackedRun estimationOf(const std::string& scenario, std::uint64_t seed, double speed_mps) {
   auto config = loadAppConfig(AEROTRACK_SOURCE_DIR "/config/sim.yaml");
   EXPECT_TRUE(config) << config.error().message;
   auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/" + scenario + ".yaml", seed, speed_mps);
@@ -26,17 +31,23 @@ nlohmann::json estimationOf(const std::string& scenario, std::uint64_t seed, dou
   rt::LockstepExecutor executor(clock, wall);
   for (const auto& b : (*system)->bindings()) EXPECT_TRUE(executor.add(b));
   EXPECT_TRUE(executor.runUntil(rt::secondsToNs(trial->duration_s)));
-  return estimationSummary((*system)->targetTask(), (*system)->targetCheckTask());
+  return {estimationSummary((*system)->targetTask(), (*system)->targetCheckTask()),
+          (*system)->devices().simulation->metrics().visibleRatio()};
 }
 
 class TargetEstimation : public ::testing::TestWithParam<std::uint64_t> {};
 
 TEST_P(TargetEstimation, GivenSharpTurnAt1p5MpsWhenTrackedThenTheEstimateMeetsTheAccuracyTargets) {
-  const nlohmann::json e = estimationOf("sharp_turn", GetParam(), 1.5);
-  std::printf("seed %llu: %s\n", static_cast<unsigned long long>(GetParam()), e.dump().c_str());
+  const TrackedRun run = estimationOf("sharp_turn", GetParam(), 1.5);
+  const nlohmann::json& e = run.estimation;
+  std::printf("seed %llu: visible %.4f, %s\n", static_cast<unsigned long long>(GetParam()), run.visible_ratio,
+              e.dump().c_str());
   ASSERT_FALSE(e.is_null());
   EXPECT_GT(e["accepted"].get<int>(), 500);
-  EXPECT_GT(e["live_ratio"].get<double>(), 0.99);
+  // Live whenever the person can be seen: the corner of the building hides them for a second or two at
+  // the turn (the path keeps 0.9 m from the wall), and a loss is declared lost_after_s after the last
+  // detection, so the live share may trail the visible share by a little.
+  EXPECT_GT(e["live_ratio"].get<double>(), run.visible_ratio - 0.03);
   EXPECT_LE(e["position_error_mean_m"].get<double>(), 0.10);
   EXPECT_LE(e["velocity_error_mean_mps"].get<double>(), 0.30);
 }

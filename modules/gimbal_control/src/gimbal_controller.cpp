@@ -36,6 +36,8 @@ rt::Status validate(const GimbalControlParams& p) {
   if (!(p.sweep_rate_radps > 0.0 && p.sweep_rate_radps <= p.max_rate_radps))
     return rt::Error{"sweep_rate_radps must be in (0, max_rate_radps]"};
   if (!(p.max_estimate_age_s > 0.0)) return rt::Error{"max_estimate_age_s must be > 0"};
+  if (!(p.look_at_prediction_s >= 0.0)) return rt::Error{"look_at_prediction_s must be >= 0"};
+  if (!(p.max_bearing_sigma_rad > 0.0)) return rt::Error{"max_bearing_sigma_rad must be > 0"};
   return rt::ok();
 }
 
@@ -49,6 +51,8 @@ GimbalControlParams parseGimbalControlParams(const rt::ConfigNode& node) {
   p.sweep_rate_radps = node.getDouble("sweep_rate_radps", 0.1, 50.0);
   p.feed_forward = node.getBool("feed_forward");
   p.max_estimate_age_s = node.getDouble("max_estimate_age_s", 0.01, 10.0);
+  p.look_at_prediction_s = node.getDouble("look_at_prediction_s", 0.0, 60.0);
+  p.max_bearing_sigma_rad = node.getDouble("max_bearing_sigma_rad", 0.01, 3.2);
   if (p.sweep_rate_radps > p.max_rate_radps) node.fail("sweep_rate_radps", "must not exceed max_rate_radps");
   node.finish();
   return p;
@@ -58,6 +62,15 @@ double horizontalBearingError(const Eigen::Isometry3d& T_WC, const Eigen::Vector
   const Eigen::Vector3d d = p_W_m - T_WC.translation();
   const Eigen::Vector3d axis = T_WC.linear().col(0);  // C is FLU: x is the optical axis
   return wrapPi(std::atan2(d.y(), d.x()) - std::atan2(axis.y(), axis.x()));
+}
+
+double bearingSigmaRad(const Eigen::Isometry3d& T_WC, const estimation::TargetEstimate& target) {
+  const Eigen::Vector2d d = (target.p_WT_m - T_WC.translation()).head<2>();
+  const double range_m = d.norm();
+  if (range_m < 1e-6) return M_PI;
+  const Eigen::Vector2d across(-d.y() / range_m, d.x() / range_m);
+  const double variance_m2 = across.dot(target.covariance.topLeftCorner<2, 2>() * across);
+  return std::atan2(std::sqrt(std::max(variance_m2, 0.0)), range_m);
 }
 
 GimbalOutput GimbalController::update(const GimbalInputs& in) {
@@ -78,9 +91,15 @@ GimbalOutput GimbalController::update(const GimbalInputs& in) {
   const double body_yaw_rate_radps = (T_WB.linear() * in.odometry->w_WB_B_radps).z();
 
   const estimation::TargetEstimate* target = in.target;
-  const bool live = target != nullptr && target->initialised && !target->lost &&
-                    rt::nsToSeconds(in.now_ns - target->stamp_ns) <= params_.max_estimate_age_s;
-  if (!live || in.search_requested) {
+  const bool fresh = target != nullptr && target->initialised &&
+                     rt::nsToSeconds(in.now_ns - target->stamp_ns) <= params_.max_estimate_age_s;
+  // Lost (or relocating) recently, with a prediction still sharp enough to put the person in the image:
+  // it is the best place to look.
+  const bool recently_seen = fresh &&
+                             rt::nsToSeconds(in.now_ns - target->last_accepted_ns) <= params_.look_at_prediction_s &&
+                             bearingSigmaRad(T_WC, *target) <= params_.max_bearing_sigma_rad;
+  const bool live = fresh && !target->lost && !in.search_requested;
+  if (!live && !recently_seen) {
     // Sweep: a constant rate over the ground, whatever the body does.
     out.mode = GimbalMode::kSearch;
     integral_rad_s_ = 0.0;

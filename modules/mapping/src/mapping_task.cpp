@@ -7,6 +7,8 @@ MapperParams parseMapperParams(const rt::ConfigNode& node) {
   MapperParams p;
   p.octomap.resolution_m = node.getDouble("resolution_m", 0.02, 1.0);
   p.grid.resolution_m = p.octomap.resolution_m;
+  p.octomap.prob_hit = node.getDouble("prob_hit", 0.51, 0.99);
+  p.octomap.prob_miss = node.getDouble("prob_miss", 0.01, 0.49);
   p.points.decimation = node.getInt("decimation", 1, 64);
   p.points.min_range_m = node.getDouble("min_range_m", 0.0, 5.0);
   p.points.max_range_m = node.getDouble("max_range_m", 0.5, 50.0);

@@ -1,7 +1,7 @@
 // Gimbal control against a simulated 1-DOF gimbal (an integrator of the commanded rate, rate-limited
 // like the motor) on a body that may spin: the error converges, the feed-forward cancels the body's yaw
 // rate and follows a walking person, the gimbal spins without limit and never unwinds, the integral
-// does not wind up, and a lost person starts a sweep the right way round.
+// does not wind up, and a lost person is looked for where predicted, then swept for the right way round.
 #include "aerotrack/gimbal_control/gimbal_controller.hpp"
 
 #include <gtest/gtest.h>
@@ -41,6 +41,7 @@ struct Rig {
     odometry.w_WB_B_radps = Eigen::Vector3d(0, 0, body_yaw_rate_radps);
     odometry.v_WB_mps = body_velocity;
     target.stamp_ns = now_ns;
+    if (!target.lost) target.last_accepted_ns = now_ns;  // detections keep coming while not lost
     GimbalInputs in;
     in.now_ns = now_ns;
     in.gimbal = &gimbal;
@@ -138,22 +139,71 @@ TEST(GimbalController, IntegralDoesNotWindUpWhileSaturated) {
   EXPECT_LT(overshoot, 0.05);
 }
 
-TEST(GimbalController, LostPersonStartsASweepTowardsWhereTheyWereLastSeen) {
+TEST(GimbalController, LostPersonIsLookedForWhereTheyArePredictedThenSwept) {
   Rig rig;
+  rig.target.p_WT_m = Eigen::Vector3d(4.0, -1.0, 1.0);  // to the right, walking to the left
+  rig.target.v_WT_mps = Eigen::Vector3d(0.0, 1.0, 0.0);
+  for (int k = 0; k < 200; ++k) rig.step();
+  rig.target.lost = true;
+  // First the camera stays on the prediction (the rig moves the estimate on by its velocity).
+  const int look_steps = static_cast<int>(rig.params.look_at_prediction_s / kDt) - 1;
+  for (int k = 0; k < look_steps; ++k) {
+    ASSERT_EQ(rig.step().mode, GimbalMode::kTrack) << k;
+    EXPECT_LT(std::abs(rig.error()), 0.05) << k;
+  }
+  // Then the sweep (its direction: the next test), a whole turn in 2 pi / sweep rate, and on.
+  rig.step();
+  rig.step();
+  const GimbalOutput out = rig.step();
+  EXPECT_EQ(out.mode, GimbalMode::kSearch);
+  EXPECT_NEAR(std::abs(out.command.rate_radps), rig.params.sweep_rate_radps, 1e-9);
+  const double start = rig.gimbal.angle_rad;
+  for (int k = 0; k < static_cast<int>(2 * M_PI / rig.params.sweep_rate_radps / kDt); ++k) rig.step();
+  EXPECT_NEAR(std::abs(rig.gimbal.angle_rad - start), 2 * M_PI, 0.05);
+}
+
+TEST(GimbalController, WithoutLookingAtThePredictionALostPersonIsSweptForAtOnceTowardsWhereTheyWereSeen) {
+  GimbalControlParams params;
+  params.look_at_prediction_s = 0.0;
+  Rig rig(params);
   rig.target.p_WT_m = Eigen::Vector3d(4.0, -1.0, 1.0);  // to the right
   for (int k = 0; k < 20; ++k) rig.step();
   rig.target.lost = true;
   const GimbalOutput out = rig.step();
   EXPECT_EQ(out.mode, GimbalMode::kSearch);
   EXPECT_NEAR(out.command.rate_radps, -rig.params.sweep_rate_radps, 1e-9);  // to the right
-  // A whole turn in 2 pi / sweep rate, and on.
-  const double start = rig.gimbal.angle_rad;
-  for (int k = 0; k < static_cast<int>(2 * M_PI / rig.params.sweep_rate_radps / kDt); ++k) rig.step();
-  EXPECT_NEAR(rig.gimbal.angle_rad - start, -2 * M_PI, 0.05);
-  // The supervisor can ask for the sweep even while the estimate is live.
-  rig.target.lost = false;
+}
+
+TEST(GimbalController, BearingSigmaIsTheCovarianceAcrossTheLineOfSightOverTheRange) {
+  estimation::TargetEstimate target;
+  target.p_WT_m = Eigen::Vector3d(4.0, 0.0, 1.0);  // straight ahead: "across" is y
+  target.covariance.setZero();
+  target.covariance(0, 0) = 100.0;  // along the line of sight: does not matter
+  target.covariance(1, 1) = 1.0;
+  EXPECT_NEAR(bearingSigmaRad(Eigen::Isometry3d::Identity(), target), std::atan(0.25), 1e-12);
+}
+
+TEST(GimbalController, AnUncertainPredictionIsNotLookedAtButSweptFor) {
+  Rig rig;
+  rig.target.p_WT_m = Eigen::Vector3d(4.0, -1.0, 1.0);
+  for (int k = 0; k < 20; ++k) rig.step();
+  rig.target.lost = true;
+  rig.target.covariance = 0.25 * Eigen::Matrix<double, 6, 6>::Identity();  // 0.5 m at ~4 m: still sharp
+  EXPECT_EQ(rig.step().mode, GimbalMode::kTrack);
+  rig.target.covariance = 9.0 * Eigen::Matrix<double, 6, 6>::Identity();  // 3 m at ~4 m: could be anywhere
+  EXPECT_EQ(rig.step().mode, GimbalMode::kSearch);
+}
+
+TEST(GimbalController, SupervisorsSweepRequestWaitsUntilThePredictionIsOld) {
+  Rig rig;
+  rig.target.p_WT_m = Eigen::Vector3d(4.0, 1.0, 1.0);
+  for (int k = 0; k < 20; ++k) rig.step();
+  // Detections still arrive: the request does not turn the camera away from the person.
+  EXPECT_EQ(rig.step(true).mode, GimbalMode::kTrack);
+  // None for longer than look_at_prediction_s: the sweep starts.
+  rig.target.lost = true;
+  rig.target.last_accepted_ns = rig.target.stamp_ns - rt::secondsToNs(rig.params.look_at_prediction_s + 0.01);
   EXPECT_EQ(rig.step(true).mode, GimbalMode::kSearch);
-  EXPECT_EQ(rig.step(false).mode, GimbalMode::kTrack);
 }
 
 TEST(GimbalController, MissingInputsCommandNothing) {
@@ -168,7 +218,8 @@ TEST(GimbalControlParams, EveryKeyIsRequiredAndChecked) {
   const std::string good =
       "g:\n  kp_per_s: 6.0\n  ki_per_s2: 9.0\n  integral_limit_rad_s: 0.2\n  integral_zone_rad: 0.3\n  max_rate_radps: "
       "4.0\n"
-      "  sweep_rate_radps: 2.0\n  feed_forward: true\n  max_estimate_age_s: 0.5\n";
+      "  sweep_rate_radps: 2.0\n  feed_forward: true\n  max_estimate_age_s: 0.5\n  look_at_prediction_s: 5.0\n  "
+      "max_bearing_sigma_rad: 0.38\n";
   auto node = rt::ConfigNode::fromString(good, "g.yaml");
   ASSERT_TRUE(node.has_value());
   const GimbalControlParams p = parseGimbalControlParams(node->child("g"));
@@ -177,7 +228,8 @@ TEST(GimbalControlParams, EveryKeyIsRequiredAndChecked) {
   auto fast_sweep = rt::ConfigNode::fromString(
       "g:\n  kp_per_s: 6.0\n  ki_per_s2: 9.0\n  integral_limit_rad_s: 0.2\n  integral_zone_rad: 0.3\n  max_rate_radps: "
       "1.0\n"
-      "  sweep_rate_radps: 2.0\n  feed_forward: true\n  max_estimate_age_s: 0.5\n",
+      "  sweep_rate_radps: 2.0\n  feed_forward: true\n  max_estimate_age_s: 0.5\n  look_at_prediction_s: 5.0\n  "
+      "max_bearing_sigma_rad: 0.38\n",
       "g.yaml");
   ASSERT_TRUE(fast_sweep.has_value());
   EXPECT_THROW(parseGimbalControlParams(fast_sweep->child("g")), rt::ConfigError);

@@ -171,7 +171,7 @@ TEST(ScenarioFile, GivenMalformedFieldsThenErrorsNameThem) {
   const auto misspelt = withReplaced("  height_m: 1.75", "  hight_m: 1.75");
   ASSERT_FALSE(misspelt);
   EXPECT_NE(misspelt.error().message.find("person.height_m: missing required key"), std::string::npos);
-  const auto no_speed = withReplaced("- {p_m: [0.0, 0.0], speed_mps: 1.5}", "- {p_m: [0.0, 0.0]}");
+  const auto no_speed = withReplaced("- {p_m: [0.0, 0.9], speed_mps: 1.5}", "- {p_m: [0.0, 0.9]}");
   ASSERT_FALSE(no_speed);
   EXPECT_NE(no_speed.error().message.find("person.path[0].speed_mps: missing required key"), std::string::npos)
       << no_speed.error().message;

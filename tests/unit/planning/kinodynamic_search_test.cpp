@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <random>
 
+#include <Eigen/Geometry>
+
 #include "aerotrack/planning/kinodynamic_search.hpp"
 #include "aerotrack/planning/obvp.hpp"
 #include "search_test_util.hpp"
@@ -284,6 +286,43 @@ TEST(TrackingGoal, GivenCurrentAndPredictedPersonStatesThenTheGoalIsTheMixHeldAt
   const KinematicState behind =
       makeTrackingGoal(now, now, Eigen::Vector3d(4.0, 0.0, 2.0), TrackingGoalParams{0.0, 2.0});
   EXPECT_TRUE(behind.p_W_m.isApprox(Eigen::Vector3d(2.0, 0.0, 2.0))) << behind.p_W_m.transpose();
+}
+
+TEST(TrackingGoal, GivenAPersonRoundACornerThenTheVisibleGoalTurnsOutOfTheCornersShadow) {
+  // A building x in [0, 4], y in [1, 5]; the person beside its east face, the drone south of it: the
+  // plain goal (on the line from the person to the drone) lies at the building's south-east corner, in
+  // its shadow.
+  const mapping::LocalGrid grid =
+      makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5), {{{0.0, 1.0, 0.0}, {4.0, 5.0, 4.0}}});
+  KinematicState person = at(5.0, 3.0, 1.1);
+  person.v_W_mps = Eigen::Vector3d(0.0, 1.0, 0.0);
+  const Eigen::Vector3d drone(2.0, -1.0, 1.5);
+  const TrackingGoalParams params;
+  const KinematicState plain = makeTrackingGoal(person, person, drone, params);
+  ASSERT_FALSE(!grid.isOccupied(plain.p_W_m) && grid.lineOfSight(plain.p_W_m, person.p_W_m));
+  const KinematicState visible = makeVisibleTrackingGoal(grid, person, person, drone, params);
+  EXPECT_FALSE(grid.isOccupied(visible.p_W_m));
+  EXPECT_TRUE(grid.lineOfSight(visible.p_W_m, person.p_W_m));
+  EXPECT_NEAR((visible.p_W_m - person.p_W_m).head<2>().norm(), params.tracking_distance_m, 1e-9);
+  EXPECT_EQ(visible.p_W_m.z(), plain.p_W_m.z());
+  EXPECT_TRUE(visible.v_W_mps.isApprox(plain.v_W_mps));
+  // It is the nearest such point round the circle: every smaller turn (either way) is unusable.
+  const Eigen::Vector2d plain_offset = (plain.p_W_m - person.p_W_m).head<2>();
+  const Eigen::Vector2d visible_offset = (visible.p_W_m - person.p_W_m).head<2>();
+  const double turn = std::abs(std::atan2(plain_offset.x() * visible_offset.y() - plain_offset.y() * visible_offset.x(),
+                                          plain_offset.dot(visible_offset)));
+  EXPECT_GT(turn, 0.0);
+  for (double smaller = params.visible_step_rad; smaller < turn - 1e-6; smaller += params.visible_step_rad) {
+    for (const double sign : {1.0, -1.0}) {
+      Eigen::Vector3d p = plain.p_W_m;
+      p.head<2>() = person.p_W_m.head<2>() + Eigen::Rotation2Dd(sign * smaller) * plain_offset;
+      EXPECT_FALSE(!grid.isOccupied(p) && grid.lineOfSight(p, person.p_W_m)) << smaller;
+    }
+  }
+  // Seen from the open side, the plain goal stands.
+  const Eigen::Vector3d drone_east(9.0, 3.0, 1.5);
+  const KinematicState open = makeVisibleTrackingGoal(grid, person, person, drone_east, params);
+  EXPECT_TRUE(open.p_W_m.isApprox(makeTrackingGoal(person, person, drone_east, params).p_W_m));
 }
 
 TEST(KinodynamicSearchParams, GivenAConfigSectionThenEveryKeyIsReadStrictly) {

@@ -1,7 +1,8 @@
 // The replanning cycle (TrackingPlanner) and its task (PlanningTask): the start state is the current
 // trajectory's state at the hand-over time; a plan around a wall is clear in the grid, within the limits
 // and starts exactly at the start state; a failed cycle publishes nothing and the old trajectory goes on;
-// a failed cycle whose old trajectory is blocked publishes a stop; on the ground it takes off first.
+// a failed cycle whose old trajectory is blocked publishes a stop (also when the drone is already inside
+// the margin of a surface seen late, and the trajectory stays in it); on the ground it takes off first.
 #define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "aerotrack/planning/tracking_planner.hpp"
 
@@ -327,6 +328,51 @@ TEST(PlanningTask, FailedCycleWithBlockedOldTrajectoryStops) {
   const double handover_s = rt::nsToSeconds(stop.start_ns - first.start_ns);
   EXPECT_LT((stop.trajectory->sample(0.0).p_W_m - first.trajectory->sample(handover_s).p_W_m).norm(), 1e-9);
   EXPECT_LT(stop.trajectory->sample(stop.trajectory->durationS()).v_W_mps.norm(), 1e-9);
+}
+
+TEST(MarginWalk, AStartInTheMarginMayOnlyBeLeftQuickly) {
+  MarginWalk leaving(0.3);  // in the margin for 0.2 s, then clear: fine
+  for (double t = 0.0; t < 0.2; t += 0.02) EXPECT_FALSE(leaving.blocked(t, true)) << t;
+  for (double t = 0.2; t < 1.0; t += 0.02) EXPECT_FALSE(leaving.blocked(t, false)) << t;
+  EXPECT_TRUE(leaving.blocked(1.0, true));  // back in after clear: a collision ahead
+
+  MarginWalk staying(0.3);  // never leaves: blocked once the escape time is over
+  double first_blocked_s = -1.0;
+  for (double t = 0.0; t < 1.0 && first_blocked_s < 0.0; t += 0.02)
+    if (staying.blocked(t, true)) first_blocked_s = t;
+  EXPECT_NEAR(first_blocked_s, 0.32, 0.011);
+}
+
+TEST(PlanningTask, FailedCycleAlongASurfaceSeenBesideTheDroneStops) {
+  TrackingPlannerParams params = defaultParams();
+  TaskRig rig(params);
+  const WallWorld world;
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
+  rig.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
+  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
+  rig.step(0.0);
+  ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
+  const trajectory_server::TimedTrajectory first = rig.task->lastPublished();
+  // A surface is seen right beside the drone (the far face of a corner rounded in unknown space): its
+  // inflation margin covers the drone and the old trajectory ahead, which never leaves it. The old rule
+  // (only a margin entered after a clear sample counts) would have flown on along it.
+  const Eigen::Vector3d a = first.trajectory->sample(0.1).p_W_m;
+  Eigen::Vector3d lo = a, hi = a;
+  for (double t = 0.1; t <= 1.5; t += 0.02) {
+    lo = lo.cwiseMin(first.trajectory->sample(t).p_W_m);
+    hi = hi.cwiseMax(first.trajectory->sample(t).p_W_m);
+  }
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(
+      makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
+                  {{lo - Eigen::Vector3d(0.05, 0.05, 0.05), hi + Eigen::Vector3d(0.05, 0.05, 0.05)}})));
+  ASSERT_TRUE(rig.grid.read()->isOccupied(a));
+  rig.odometry.write(odometryAt(a, rt::secondsToNs(0.1)));
+  estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.1));
+  lost.lost = true;
+  rig.target.write(lost);
+  rig.step(0.1);
+  EXPECT_EQ(rig.task->count(PlanStatus::kStopped), 1U);
+  EXPECT_NE(rig.task->lastPublished().trajectory, first.trajectory);
 }
 
 }  // namespace

@@ -39,6 +39,8 @@ TrackingGoalParams parseGoalParams(const rt::ConfigNode& node) {
   TrackingGoalParams p;
   p.predicted_weight = node.getDouble("predicted_weight", 0.0, 1.0);
   p.tracking_distance_m = node.getDouble("tracking_distance_m", 0.0, 50.0);
+  p.visible_step_rad = node.getDouble("visible_step_rad", 0.01, 3.2);
+  p.visible_max_turn_rad = node.getDouble("visible_max_turn_rad", 0.0, 3.2);
   node.finish();
   return p;
 }

@@ -17,7 +17,7 @@ PlanningTask::PoolEntry& PlanningTask::freeEntry() {
   // use_count() had dropped back is not a synchronisation with the thread that let it go (use_count is
   // a relaxed load): ThreadSanitizer caught the planner rewriting a trajectory the server had just read.
   ++pool_growths_;
-  next_ = makeEntry(planner_.params().corridor.max_boxes);
+  next_ = makeEntry(planner_.params().corridor.max_boxes + 1);  // + the brake to rest at the end
   return next_;
 }
 
@@ -89,6 +89,7 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   ++counts_[static_cast<std::size_t>(report.status)];
   if (report.search_status == SearchStatus::kPartial) ++search_partial_;
   if (report.status == PlanStatus::kSearchFailed) ++search_failures_[static_cast<std::size_t>(report.search_status)];
+  if (report.status == PlanStatus::kCheckFailed) ++check_failures_[static_cast<std::size_t>(report.check)];
   if (report.corridor_boxes > 0) corridor_boxes_sum_ += static_cast<std::uint64_t>(report.corridor_boxes);
   if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
       report.status == PlanStatus::kCheckFailed) {

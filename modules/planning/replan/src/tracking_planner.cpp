@@ -111,11 +111,9 @@ bool TrackingPlanner::currentBlocked(const PlanInputs& inputs) const {
   const double t0 = rt::nsToSeconds(inputs.now_ns - inputs.current->start_ns);
   if (t0 >= current.durationS()) return false;  // already holding at rest
   const double t1 = std::min(current.durationS(), t0 + params_.stop_check_horizon_s);
-  bool left_margin = false;
+  MarginWalk margin(params_.check.margin_escape_s);
   for (double t = t0; t <= t1; t += params_.check.sample_step_s) {
-    const bool blocked = inputs.grid->isOccupied(current.sample(t).p_W_m);
-    if (!blocked) left_margin = true;
-    if (blocked && left_margin) return true;
+    if (margin.blocked(t - t0, inputs.grid->isOccupied(current.sample(t).p_W_m))) return true;
   }
   return false;
 }
@@ -141,13 +139,40 @@ void TrackingPlanner::onePieceToRest(const StatePva& start, const Eigen::Vector3
   if (stop_spline_.generate(no_waypoints, one_duration_)) out.assign(stop_spline_);
 }
 
+namespace {
+
+// Below this speed (m/s) and acceleration (m/s^2) a trajectory's end is at rest: no brake is appended.
+constexpr double kAtRest = 1e-3;
+
+// Constant deceleration a_max / 2 from speed v stops in 2 v / a_max seconds over v^2 / a_max metres;
+// the minimum-jerk piece with that duration and end point stays within the limit (its peak deceleration
+// is about 1.9 times the mean, and the mean is a_max / 2).
+double stopDurationS(double speed_mps, double max_acceleration_mps2) {
+  return std::max(0.5, 2.0 * speed_mps / max_acceleration_mps2);
+}
+
+}  // namespace
+
 void TrackingPlanner::makeStopTrajectory(const StatePva& start, PolynomialTrajectory& out) {
-  // Constant deceleration a_max / 2 from speed v stops in 2 v / a_max seconds over v^2 / a_max metres;
-  // the minimum-jerk piece with that duration and end point stays within the limit (its peak deceleration
-  // is about 1.9 times the mean, and the mean is a_max / 2).
-  const double speed = start.col(1).norm();
-  const double duration_s = std::max(0.5, 2.0 * speed / params_.optimizer.max_acceleration_mps2);
+  const double duration_s = stopDurationS(start.col(1).norm(), params_.optimizer.max_acceleration_mps2);
   onePieceToRest(start, start.col(0) + start.col(1) * (duration_s / 2.0), duration_s, out);
+}
+
+void TrackingPlanner::appendStop(PolynomialTrajectory& out) {
+  const double end_s = out.durationS();
+  const trajectory_server::TrajectorySample end = out.sample(end_s);
+  if (end.v_W_mps.norm() < kAtRest && end.a_W_mps2.norm() < kAtRest) return;
+  StatePva start;
+  start << end.p_W_m, end.v_W_mps, end.a_W_mps2;
+  const double duration_s = stopDurationS(end.v_W_mps.norm(), params_.optimizer.max_acceleration_mps2);
+  StatePva rest = StatePva::Zero();
+  rest.col(0) = end.p_W_m + end.v_W_mps * (duration_s / 2.0);
+  stop_spline_.reset(start, rest, 1);
+  one_duration_(0) = duration_s;
+  const Eigen::Matrix3Xd no_waypoints(3, 0);
+  if (stop_spline_.generate(no_waypoints, one_duration_)) {
+    out.append(stop_spline_.coefficients().topRows<6>(), duration_s);
+  }
 }
 
 PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory& out) {
@@ -219,7 +244,11 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   person_predicted.v_W_mps = person_velocity_at(predicted_ns);
   // The goal is held at the flight altitude (makeTrackingGoal keeps the height of the point it is given).
   const Eigen::Vector3d p_drone_at_altitude(start(0, 0), start(1, 0), params_.flight_altitude_m);
-  const KinematicState goal = makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
+  // Proposed mode: a goal that sees the person (the baseline, Fast-Tracker 1.0, has no visibility terms).
+  const KinematicState goal =
+      search_.occlusionAware()
+          ? makeVisibleTrackingGoal(*inputs.grid, person_now, person_predicted, p_drone_at_altitude, params_.goal)
+          : makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
 
   // Search (Sect. V-B). Its inputs are per-axis limited: the optimised start may exceed them slightly.
   KinematicState search_start;
@@ -260,14 +289,28 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   StatePva end = StatePva::Zero();
   const KinematicState path_end = path_.stateAt(path_.duration_s);
   end.col(0) = path_end.p_W_m;
-  end.col(1) = path_end.v_W_mps;
+  // A complete path ends at the goal with the person's velocity, if the drone could brake from there
+  // (appendStop below: straight on over v T / 2) without entering the inflated grid; else it stops at
+  // the goal (a goal beside a wall whose velocity points into it, as at a corner the person turned). A
+  // partial path (the search's budget ran out) ends where the search stopped looking, heading on into
+  // space it never examined: it stops there too.
+  end.col(1) = path_.status == SearchStatus::kPartial ? Eigen::Vector3d::Zero() : path_end.v_W_mps;
   if (end.col(1).norm() > params_.optimizer.max_velocity_mps)
     end.col(1) *= params_.optimizer.max_velocity_mps / end.col(1).norm();
+  const double brake_s = stopDurationS(end.col(1).norm(), params_.optimizer.max_acceleration_mps2);
+  if (!inputs.grid->segmentFree(end.col(0), end.col(0) + end.col(1) * (brake_s / 2.0))) end.col(1).setZero();
   const TrajectoryProblem problem{start, end, corridor_.boxes, corridor_.waypoints_W_m, durations_s_};
   const auto optimized = optimizer_.optimize(problem, out);
   if (!optimized) return fail(PlanStatus::kOptimizerFailed);
   report.optimizer_status = optimized->status;
   report.optimizer_iterations = optimized->iterations;
+
+  // Every published trajectory ends at rest: the optimised part ends moving (towards the goal, or where a
+  // partial search stopped), and the server holds a finished trajectory's end point. Without the brake
+  // the drone would overshoot that point, into whatever lies beyond it, if no later plan took over (a
+  // relocation flew into a wall that way). With it, the check below proves the brake clear too: the
+  // drone can always stop on the trajectory it flies.
+  appendStop(out);
 
   // Final check (issue 8 item 3), then the distance to the person along the way.
   CheckResult check = checkTrajectory(out, params_.check, *inputs.grid, checker_, inputs.octree);

@@ -35,6 +35,7 @@ rt::Status validate(const TrajectoryCheckParams& p) {
   if (!(p.tolerance >= 0.0 && p.tolerance <= 1.0)) return rt::Error{"tolerance must be in [0, 1]"};
   if (!(p.sample_step_s > 0.0)) return rt::Error{"sample_step_s must be > 0"};
   if (!(p.horizon_s > 0.0)) return rt::Error{"horizon_s must be > 0"};
+  if (!(p.margin_escape_s > 0.0)) return rt::Error{"margin_escape_s must be > 0"};
   return rt::ok();
 }
 
@@ -46,6 +47,7 @@ TrajectoryCheckParams parseTrajectoryCheckParams(const rt::ConfigNode& node) {
   p.tolerance = node.getDouble("tolerance", 0.0, 1.0);
   p.sample_step_s = node.getDouble("sample_step_s", 1e-3, 1.0);
   p.horizon_s = node.getDouble("horizon_s", 0.1, 60.0);
+  p.margin_escape_s = node.getDouble("margin_escape_s", 0.01, 10.0);
   node.finish();
   return p;
 }
@@ -59,16 +61,14 @@ CheckResult checkTrajectory(const PolynomialTrajectory& trajectory, const Trajec
   const double a2 = std::pow(params.max_acceleration_mps2 * scale, 2);
   const double j2 = std::pow(params.max_jerk_mps3 * scale, 2);
   const int steps = std::max(1, static_cast<int>(std::ceil(end_s / params.sample_step_s)));
-  bool left_start_margin = false;
+  MarginWalk margin(params.margin_escape_s);
   for (int k = 0; k <= steps; ++k) {
     const double t = end_s * k / steps;
     const trajectory_server::TrajectorySample s = trajectory.sample(t);
     if (s.v_W_mps.squaredNorm() > v2) return {CheckVerdict::kVelocity, t};
     if (s.a_W_mps2.squaredNorm() > a2) return {CheckVerdict::kAcceleration, t};
     if (trajectory.derivative(3, t).squaredNorm() > j2) return {CheckVerdict::kJerk, t};
-    const bool blocked = grid.isOccupied(s.p_W_m);
-    if (!blocked) left_start_margin = true;
-    if (blocked && left_start_margin) return {CheckVerdict::kGridBlocked, t};
+    if (margin.blocked(t, grid.isOccupied(s.p_W_m))) return {CheckVerdict::kGridBlocked, t};
   }
   if (octree != nullptr) {
     const auto report = checker.check(trajectory, 0.0, end_s, *octree);

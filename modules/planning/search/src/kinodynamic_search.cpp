@@ -6,6 +6,8 @@
 #include <limits>
 #include <string>
 
+#include <Eigen/Geometry>
+
 #include "aerotrack/planning/obvp.hpp"
 
 namespace aerotrack::planning {
@@ -96,6 +98,32 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
   goal.p_W_m.head<2>() = p_mix.head<2>() + params.tracking_distance_m * away;
   goal.p_W_m.z() = p_drone_W_m.z();
   goal.v_W_mps = Eigen::Vector3d(v_mix.x(), v_mix.y(), 0.0);
+  return goal;
+}
+
+KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
+                                       const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
+                                       const TrackingGoalParams& params) {
+  KinematicState goal = makeTrackingGoal(person_now, person_predicted, p_drone_W_m, params);
+  const double w = std::clamp(params.predicted_weight, 0.0, 1.0);
+  const Eigen::Vector3d p_person = (1.0 - w) * person_now.p_W_m + w * person_predicted.p_W_m;
+  const auto usable = [&](const Eigen::Vector3d& p) { return !grid.isOccupied(p) && grid.lineOfSight(p, p_person); };
+  if (usable(goal.p_W_m)) return goal;
+  const Eigen::Vector2d offset = goal.p_W_m.head<2>() - p_person.head<2>();
+  const int steps = params.visible_step_rad > 0.0
+                        ? static_cast<int>(std::floor(params.visible_max_turn_rad / params.visible_step_rad + 1e-9))
+                        : 0;
+  for (int k = 1; k <= steps; ++k) {
+    for (const int sign : {1, -1}) {
+      const double angle = sign * k * params.visible_step_rad;
+      Eigen::Vector3d candidate = goal.p_W_m;
+      candidate.head<2>() = p_person.head<2>() + Eigen::Rotation2Dd(angle) * offset;
+      if (usable(candidate)) {
+        goal.p_W_m = candidate;
+        return goal;
+      }
+    }
+  }
   return goal;
 }
 

@@ -26,6 +26,12 @@ void PolynomialTrajectory::assign(const RowMatrixX3d& coefficients, const Eigen:
   }
 }
 
+void PolynomialTrajectory::append(const Eigen::Matrix<double, 6, 3>& coefficients, double duration_s) {
+  coeffs_.push_back(coefficients);
+  durations_s_.push_back(duration_s);
+  total_s_ += duration_s;
+}
+
 int PolynomialTrajectory::locate(double& t_s) const {
   t_s = std::clamp(t_s, 0.0, total_s_);
   const int last = pieces() - 1;

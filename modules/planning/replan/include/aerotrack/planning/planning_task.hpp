@@ -58,6 +58,8 @@ class PlanningTask final : public rt::Task {
   std::uint64_t searchPartial() const { return search_partial_; }
   /// Failed searches by how they ended (index: SearchStatus).
   std::uint64_t searchFailures(SearchStatus status) const { return search_failures_[static_cast<std::size_t>(status)]; }
+  /// Failed final checks by verdict (CheckVerdict).
+  std::uint64_t checkFailures(CheckVerdict verdict) const { return check_failures_[static_cast<std::size_t>(verdict)]; }
   std::uint64_t optimizerMaxIterations() const { return optimizer_max_iterations_; }
   std::uint64_t optimizerLineSearch() const { return optimizer_line_search_; }
   double meanCorridorBoxes() const;
@@ -86,6 +88,7 @@ class PlanningTask final : public rt::Task {
   std::uint64_t cycles_ = 0;
   std::uint64_t search_partial_ = 0;
   std::array<std::uint64_t, 5> search_failures_{};
+  std::array<std::uint64_t, 8> check_failures_{};  // by CheckVerdict
   std::uint64_t optimizer_max_iterations_ = 0;
   std::uint64_t optimizer_line_search_ = 0;
   std::uint64_t corridor_boxes_sum_ = 0;

@@ -138,6 +138,8 @@ class TrackingPlanner {
   void makeMoveTrajectory(const StatePva& start, const Eigen::Vector3d& end_W_m, PolynomialTrajectory& out);
   /// A minimum-jerk brake from `start` to rest, along the current velocity, within the acceleration limit.
   void makeStopTrajectory(const StatePva& start, PolynomialTrajectory& out);
+  /// Appends to `out` a brake from its end state to rest (as makeStopTrajectory), unless it ends at rest.
+  void appendStop(PolynomialTrajectory& out);
 
  private:
   TrackingPlanner(const TrackingPlannerParams& params, KinodynamicSearch search, CorridorBuilder corridor,

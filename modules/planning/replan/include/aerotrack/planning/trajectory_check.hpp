@@ -2,8 +2,8 @@
 // optimiser's penalties are soft, so its output is verified, not trusted). Sampled velocity,
 // acceleration and jerk within the limits (norms, with a tolerance), every sample clear in the inflated
 // local grid, and the FCL sphere check against the newest octree snapshot (mapping/collision). A
-// trajectory that starts inside the inflation margin (the drone was pushed close to something) is
-// allowed to leave it: only samples after the first clear one must be clear.
+// trajectory that starts inside the inflation margin (the drone was pushed close to something, or a
+// surface was just seen beside it) is allowed to leave it, but only quickly (MarginWalk).
 #pragma once
 
 #include <cstdint>
@@ -26,6 +26,28 @@ struct TrajectoryCheckParams {
   double tolerance = 0.05;             ///< Relative excess allowed over each limit; in [0, 1].
   double sample_step_s = 0.02;         ///< Time between limit and grid samples; > 0.
   double horizon_s = 3.0;              ///< Only this much of the trajectory is checked (the rest is replanned); > 0.
+  double margin_escape_s = 0.3;        ///< A start inside the inflation margin must be left within this; > 0.
+};
+
+/// Judges a trajectory's samples against the inflated grid, in time order. A sample in the margin after
+/// a clear one is a collision ahead. A start in the margin is tolerated only while the trajectory leaves
+/// it within escape_s: one that stays in (flying along a surface first seen at close range, e.g. the
+/// far face of a corner rounded in unknown space) is blocked too -- the drone must brake, not go on.
+class MarginWalk {
+ public:
+  explicit MarginWalk(double escape_s) : escape_s_(escape_s) {}
+  /// t_s: time since the first sample; occupied: the sample lies in the inflated grid's occupied cells.
+  bool blocked(double t_s, bool occupied) {
+    if (!occupied) {
+      left_margin_ = true;
+      return false;
+    }
+    return left_margin_ || t_s > escape_s_;
+  }
+
+ private:
+  double escape_s_;
+  bool left_margin_ = false;
 };
 
 rt::Status validate(const TrajectoryCheckParams& params);

@@ -66,6 +66,10 @@ struct KinematicState {
 struct TrackingGoalParams {
   double predicted_weight = 0.5;     ///< w in x_g = (1 - w) x_tc + w x_tp; in [0, 1].
   double tracking_distance_m = 2.5;  ///< Horizontal distance held from the mixed person position; >= 0.
+  /// Visible goal (makeVisibleTrackingGoal): candidate steps round the person, and the largest turn; both
+  /// > 0 (a step larger than the turn tries the plain goal only).
+  double visible_step_rad = 0.2618;      // 15 degrees
+  double visible_max_turn_rad = 1.5708;  // 90 degrees either way
 };
 
 /// The goal state: the mix of the person's current and predicted states, moved horizontally towards the
@@ -74,6 +78,16 @@ struct TrackingGoalParams {
 /// with z = 0. Pure, allocation-free, thread-safe.
 KinematicState makeTrackingGoal(const KinematicState& person_now, const KinematicState& person_predicted,
                                 const Eigen::Vector3d& p_drone_W_m, const TrackingGoalParams& params);
+
+/// makeTrackingGoal, kept where it is when it is free in the grid and the person (at the mixed position)
+/// is in its line of sight; else the nearest point on the same circle round the person that is both,
+/// turning both ways from it in visible_step_rad up to visible_max_turn_rad (the plain goal if none is).
+/// Why: the plain goal lies on the line from the person to the drone, so once the person has turned a
+/// corner it sits in the corner's shadow, and a drone that reaches it sees nothing (the relocation of
+/// issue 9 stopped there). The velocity is the plain goal's. Allocation-free; O(candidates x cells).
+KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
+                                       const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
+                                       const TrackingGoalParams& params);
 
 /// The person's (predicted) position in W at an absolute time t_s (the clock of start_time_s below).
 using PersonPositionFn = std::function<Eigen::Vector3d(double t_s)>;
@@ -122,6 +136,7 @@ class KinodynamicSearch {
   const KinodynamicSearchParams& params() const { return params_; }
   /// Switches the occlusion penalty on or off (the baseline mode) without reallocating.
   void setOcclusionAware(bool occlusion_aware) { params_.occlusion_aware = occlusion_aware; }
+  bool occlusionAware() const { return params_.occlusion_aware; }
 
   /// Searches from start to goal in `grid` (blocked = LocalGrid::isOccupied, which applies the inflation
   /// and the grid's unknown policy; the path must also stay in the window). start_time_s is the absolute

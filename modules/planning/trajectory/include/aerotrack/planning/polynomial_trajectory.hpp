@@ -22,6 +22,9 @@ class PolynomialTrajectory final : public trajectory_server::Trajectory {
   void assign(const MinJerkSpline& spline);
   /// Copies from coefficients (6M x 3, rows 6i..6i+5 = piece i) and durations (M).
   void assign(const RowMatrixX3d& coefficients, const Eigen::VectorXd& durations_s);
+  /// Appends one piece after the last (coefficients in its own time, 0 .. duration_s). The caller keeps
+  /// the junction continuous (e.g. a brake that starts from the end state).
+  void append(const Eigen::Matrix<double, 6, 3>& coefficients, double duration_s);
 
   int pieces() const { return static_cast<int>(durations_s_.size()); }
   double pieceDurationS(int i) const { return durations_s_[static_cast<std::size_t>(i)]; }
