@@ -24,8 +24,8 @@ run_cell sharp_turn 1.5 proposed
 run_cell sharp_turn 1.5 baseline
 run_cell forest 3.0 proposed
 {
-  echo "| scenario | person speed | mode | success | person visible | mean distance | planning p50 / p99 (max over trials) | collisions |"
-  echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
+  echo "| scenario | person speed | mode | success | person visible | losses of sight (all trials) | hidden a run: behind obstacles / out of image | mean distance | planning p50 / p99 (max over trials) | collisions |"
+  echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
   printf '%s\n' "${rows[@]}"
 } > "$out/TABLE.md"
 echo "table1: $out/TABLE.md"

@@ -101,6 +101,8 @@ int benchCommand(const ParsedArgs& args) {
   nlohmann::json per_trial = nlohmann::json::array();
   int successes = 0, failed_runs = 0, collisions = 0;
   double visible_sum = 0.0, distance_sum = 0.0, rtf_sum = 0.0, plan_p50_sum = 0.0, plan_p99_max = 0.0;
+  double occluded_sum_s = 0.0, out_of_image_sum_s = 0.0, longest_loss_max_s = 0.0;
+  long long losses = 0;
   int planned_trials = 0;
   std::printf("%6s %8s %8s %10s %9s %9s %9s  %s\n", "seed", "success", "visible", "long_loss", "dist_m", "clear_m",
               "rt_x", "failure");
@@ -123,6 +125,12 @@ int benchCommand(const ParsedArgs& args) {
     visible_sum += s.value("visible_ratio", 0.0);
     distance_sum += s.value("distance_mean_m", 0.0);
     rtf_sum += s.value("realtime_factor", 0.0);
+    losses += s.value("losses", 0LL);
+    longest_loss_max_s = std::max(longest_loss_max_s, s.value("longest_loss_s", 0.0));
+    if (s.contains("hidden_s") && s["hidden_s"].is_object()) {
+      occluded_sum_s += s["hidden_s"].value("occluded", 0.0);
+      out_of_image_sum_s += s["hidden_s"].value("out_of_image", 0.0);
+    }
     if (s.contains("planning") && s["planning"].is_object()) {
       ++planned_trials;
       plan_p50_sum += s["planning"].value("cycle_ms_p50", 0.0);
@@ -145,6 +153,9 @@ int benchCommand(const ParsedArgs& args) {
       {"success_rate", successes / static_cast<double>(*trials)},
       {"collisions", collisions},
       {"visible_ratio_mean", visible_sum / n},
+      {"losses", losses},
+      {"longest_loss_s_max", longest_loss_max_s},
+      {"hidden_s_mean", {{"occluded", occluded_sum_s / n}, {"out_of_image", out_of_image_sum_s / n}}},
       {"distance_mean_m", distance_sum / n},
       {"realtime_factor_mean", rtf_sum / n},
       {"mode", args.valueOr("mode", "proposed")},
@@ -160,11 +171,12 @@ int benchCommand(const ParsedArgs& args) {
               args.values.at("scenario").c_str(), successes, static_cast<long long>(*trials),
               100.0 * successes / static_cast<double>(*trials), collisions, 100.0 * visible_sum / n, out_dir.c_str());
   // One row of the paper's Table I, in markdown (scripts/table1.sh collects them).
-  std::printf("| %s | %s | %s | %d/%lld | %.1f %% | %.2f m | %.2f / %.2f ms | %d |\n", scenario_tag.c_str(),
-              args.has("speed") ? (args.values.at("speed") + " m/s").c_str() : "scenario's",
-              args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials),
-              100.0 * visible_sum / n, distance_sum / n, planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0,
-              plan_p99_max, collisions);
+  std::printf(
+      "| %s | %s | %s | %d/%lld | %.1f %% | %lld, longest %.1f s | %.2f / %.2f s | %.2f m | %.2f / %.2f ms | %d |\n",
+      scenario_tag.c_str(), args.has("speed") ? (args.values.at("speed") + " m/s").c_str() : "scenario's",
+      args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials), 100.0 * visible_sum / n,
+      losses, longest_loss_max_s, occluded_sum_s / n, out_of_image_sum_s / n, distance_sum / n,
+      planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0, plan_p99_max, collisions);
   if (stop.load()) return 130;
   return failed_runs == 0 ? 0 : 1;
 }

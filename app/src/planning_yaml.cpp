@@ -21,6 +21,7 @@ void emitPlanningYaml(YAML::Emitter& out, const planning::TrackingPlannerParams&
   key(out, "replan_reset_distance_m", p.replan_reset_distance_m);
   key(out, "stop_check_horizon_s", p.stop_check_horizon_s);
   key(out, "flight_altitude_m", p.flight_altitude_m);
+  key(out, "person_sight_height_m", p.person_sight_height_m);
   key(out, "takeoff_below_m", p.takeoff_below_m);
   key(out, "min_person_distance_m", p.min_person_distance_m);
   out << YAML::Key << "goal" << YAML::Value << YAML::BeginMap;

@@ -175,6 +175,33 @@ TEST(TrackingPlanner, RefusesATrajectoryThatComesTooCloseToThePerson) {
   EXPECT_EQ(report.check, CheckVerdict::kTooCloseToPerson);
 }
 
+TEST(TrackingPlanner, SeesThePersonAtTorsoHeightNotAtTheEstimatesGroundPlaneZ) {
+  // The localization regression's z is a ground-plane constant below the ground (config: about -0.3 m
+  // in W). Lines of sight to that point cross the mapped ground next to the person, so before the sight
+  // height every search node was "occluded" and the occlusion term did nothing.
+  TrackingPlannerParams params = defaultParams();
+  params.search.max_expansions = 5000;
+  params.search.max_nodes = 100000;
+  TrackingPlanner planner = makePlanner(params);
+  const mapping::LocalGrid open_ground =
+      makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5), {{{-10, -10, -0.2}, {10, 10, 0.0}}});
+  const hal::OdometrySample odometry = odometryAt(Eigen::Vector3d(0, 0, 1.5));
+  PolynomialTrajectory out(24);
+  PlanReport report;
+  for (int k = 0; k <= 6; ++k) {
+    const estimation::TargetEstimate person = personAt(Eigen::Vector3d(6.0, 0.0, -0.3), rt::secondsToNs(0.05 * k));
+    PlanInputs in;
+    in.now_ns = rt::secondsToNs(0.05 * k);
+    in.odometry = &odometry;
+    in.target = &person;
+    in.grid = &open_ground;
+    report = planner.plan(in, out);
+  }
+  ASSERT_EQ(report.status, PlanStatus::kPlanned);
+  ASSERT_GT(planner.searchPath().expansions, 0);
+  EXPECT_EQ(planner.searchPath().occluded_nodes, 0);  // nothing hides the person in the open
+}
+
 TEST(TrackingPlanner, OnTheGroundItTakesOffFirst) {
   TrackingPlanner planner = makePlanner();
   const WallWorld world;

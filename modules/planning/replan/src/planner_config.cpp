@@ -15,6 +15,7 @@ rt::Status validate(const TrackingPlannerParams& p) {
   if (!(p.takeoff_below_m >= 0.0)) return rt::Error{"takeoff_below_m must be >= 0"};
   if (!(p.min_person_distance_m >= 0.0)) return rt::Error{"min_person_distance_m must be >= 0"};
   if (!(p.flight_altitude_m > p.takeoff_below_m)) return rt::Error{"flight_altitude_m must exceed takeoff_below_m"};
+  if (!(p.person_sight_height_m > 0.0)) return rt::Error{"person_sight_height_m must be > 0"};
   if (!(p.goal.predicted_weight >= 0.0 && p.goal.predicted_weight <= 1.0))
     return rt::Error{"goal.predicted_weight must be in [0, 1]"};
   if (!(p.goal.tracking_distance_m >= 0.0)) return rt::Error{"goal.tracking_distance_m must be >= 0"};
@@ -55,6 +56,7 @@ TrackingPlannerParams parseTrackingPlannerParams(const rt::ConfigNode& node) {
   p.replan_reset_distance_m = node.getDouble("replan_reset_distance_m", 0.01, 100.0);
   p.stop_check_horizon_s = node.getDouble("stop_check_horizon_s", 0.0, 60.0);
   p.flight_altitude_m = node.getDouble("flight_altitude_m", 0.1, 100.0);
+  p.person_sight_height_m = node.getDouble("person_sight_height_m", 0.1, 5.0);
   p.takeoff_below_m = node.getDouble("takeoff_below_m", 0.0, 100.0);
   p.min_person_distance_m = node.getDouble("min_person_distance_m", 0.0, 50.0);
   p.goal = parseGoalParams(node.child("goal"));

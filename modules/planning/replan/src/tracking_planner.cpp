@@ -222,14 +222,20 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   report.predicted = path_prediction != nullptr;
   const double horizon_s = params_.prediction.horizon_s;
   // Past its end a prediction is continued at its end velocity (a Bezier extrapolated would diverge).
+  // The person's horizontal position at t_ns, at the height the planner sees them from (torso centre).
   auto person_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
+    Eigen::Vector3d p;
     if (path_prediction != nullptr) {
       const rt::TimeNs end_ns = path_prediction->end_ns;
-      if (t_ns <= end_ns) return path_prediction->position(t_ns);
-      return path_prediction->position(end_ns) + rt::nsToSeconds(t_ns - end_ns) * path_prediction->velocity(end_ns);
+      p = t_ns <= end_ns ? path_prediction->position(t_ns)
+                         : Eigen::Vector3d(path_prediction->position(end_ns) +
+                                           rt::nsToSeconds(t_ns - end_ns) * path_prediction->velocity(end_ns));
+    } else {
+      const double ahead_s = std::min(rt::nsToSeconds(t_ns - target->stamp_ns), horizon_s);
+      p = target->p_WT_m + ahead_s * target->v_WT_mps;
     }
-    const double ahead_s = std::min(rt::nsToSeconds(t_ns - target->stamp_ns), horizon_s);
-    return target->p_WT_m + ahead_s * target->v_WT_mps;
+    p.z() = params_.person_sight_height_m;
+    return p;
   };
   auto person_velocity_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
     if (path_prediction != nullptr) return path_prediction->velocity(std::min(t_ns, path_prediction->end_ns));

@@ -50,6 +50,11 @@ struct TrackingPlannerParams {
   double stop_check_horizon_s = 1.0;     ///< On a failed cycle, this much of the current trajectory must be clear.
   double flight_altitude_m = 1.5;        ///< The goal's height (W z); > takeoff_below_m.
   double takeoff_below_m = 0.5;          ///< A start lower than this climbs straight to flight_altitude_m first; >= 0.
+  /// The height (W z) at which the planner sees the person: lines of sight for the occlusion term and the
+  /// visible goal end at the estimate's horizontal position at this height (the torso's centre). The
+  /// estimate's own z is the localization regression's ground-plane constant (the paper's assumption 1),
+  /// about 0.3 m below the ground: sight lines to it crossed the ground and every node was occluded.
+  double person_sight_height_m = 1.1;  ///< > 0.
   /// Never fly into the person: a trajectory that comes horizontally closer to their predicted path than
   /// this (or than it starts, if it starts closer) is refused by the final check; >= 0.
   double min_person_distance_m = 1.0;
@@ -133,6 +138,7 @@ class TrackingPlanner {
   /// The search path cut into the polyline the corridor follows (exposed for tests).
   const std::vector<Eigen::Vector3d>& polyline() const { return polyline_; }
   const Corridor& corridor() const { return corridor_; }
+  const SearchPath& searchPath() const { return path_; }
 
   /// A minimum-jerk move from `start` to rest at end_W_m, at half the optimiser's limits.
   void makeMoveTrajectory(const StatePva& start, const Eigen::Vector3d& end_W_m, PolynomialTrajectory& out);
