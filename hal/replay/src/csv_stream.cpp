@@ -1,0 +1,192 @@
+// Timestamped CSV streams: see csv_stream.hpp.
+#include "aerotrack/hal/replay/csv_stream.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <utility>
+
+namespace aerotrack::hal::replay {
+namespace {
+
+std::vector<std::string> splitFields(const std::string& text) {
+  std::vector<std::string> fields;
+  std::size_t begin = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', begin);
+    fields.push_back(text.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin));
+    if (comma == std::string::npos) return fields;
+    begin = comma + 1;
+  }
+}
+
+std::string joinHeader(const std::vector<std::string>& columns) {
+  std::string header = "stamp_ns";
+  for (const std::string& c : columns) header += "," + c;
+  return header;
+}
+
+/// Reads one line without its newline; false at the end of the file. `complete`: it ended in '\n'.
+bool readLine(std::FILE* file, std::string& line, bool& complete) {
+  line.clear();
+  complete = false;
+  int c = 0;
+  while ((c = std::fgetc(file)) != EOF) {
+    if (c == '\n') {
+      complete = true;
+      return true;
+    }
+    line.push_back(static_cast<char>(c));
+  }
+  return !line.empty();
+}
+
+}  // namespace
+
+rt::Expected<CsvStreamReader> CsvStreamReader::open(const std::string& path, const std::vector<std::string>& columns,
+                                                    BadRowPolicy policy) {
+  CsvStreamReader reader;
+  reader.file_.reset(std::fopen(path.c_str(), "rb"));
+  if (!reader.file_) return rt::Error{path + ": cannot open: " + std::strerror(errno)};
+  reader.path_ = path;
+  reader.columns_ = columns;
+  reader.policy_ = policy;
+  std::string header;
+  bool complete = false;
+  if (!readLine(reader.file_.get(), header, complete) || !complete) {
+    return rt::Error{path + ":1: missing header (expected '" + joinHeader(columns) + "')"};
+  }
+  if (!header.empty() && header.back() == '\r') header.pop_back();
+  if (header != joinHeader(columns)) {
+    return rt::Error{path + ":1: header '" + header + "' is not '" + joinHeader(columns) + "'"};
+  }
+  return reader;
+}
+
+rt::Expected<CsvRecord> CsvStreamReader::parse(const std::string& text, int line) const {
+  const std::vector<std::string> fields = splitFields(text);
+  if (fields.size() != columns_.size() + 1) {
+    return rt::Error{std::to_string(fields.size()) + " fields, expected " + std::to_string(columns_.size() + 1)};
+  }
+  CsvRecord record;
+  record.line = line;
+  const std::string& stamp = fields[0];
+  const auto [end, ec] = std::from_chars(stamp.data(), stamp.data() + stamp.size(), record.stamp_ns);
+  if (ec != std::errc() || end != stamp.data() + stamp.size()) {
+    return rt::Error{"stamp_ns: expected integer nanoseconds, got '" + stamp + "'"};
+  }
+  record.values.assign(columns_.size(), 0.0);
+  for (std::size_t i = 0; i < columns_.size(); ++i) {
+    const std::string& field = fields[i + 1];
+    const char* first = field.data();
+    const char* last = field.data() + field.size();
+    const auto [ptr, error] = std::from_chars(first, last, record.values[i]);
+    if (error != std::errc() || ptr != last || field.empty()) {
+      return rt::Error{columns_[i] + ": expected a number, got '" + field + "'"};
+    }
+  }
+  return record;
+}
+
+rt::Expected<std::optional<CsvRecord>> CsvStreamReader::next() {
+  std::string text;
+  bool complete = false;
+  while (readLine(file_.get(), text, complete)) {
+    ++line_;
+    if (!complete) {  // what a killed recorder leaves: not a record
+      truncated_tail_ = true;
+      return std::optional<CsvRecord>{};
+    }
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    if (text.empty()) continue;
+    auto record = parse(text, line_);
+    std::string problem;
+    if (!record) {
+      problem = record.error().message;
+    } else if (record->stamp_ns < last_stamp_ns_) {
+      problem = "stamp_ns " + std::to_string(record->stamp_ns) + " goes back from " + std::to_string(last_stamp_ns_);
+    }
+    if (problem.empty()) {
+      last_stamp_ns_ = record->stamp_ns;
+      return std::optional<CsvRecord>{std::move(record.value())};
+    }
+    const std::string message = path_ + ":" + std::to_string(line_) + ": " + problem;
+    if (policy_ == BadRowPolicy::kStrict) return rt::Error{message};
+    if (skipped_rows_++ == 0) first_skip_message_ = message;
+  }
+  if (std::ferror(file_.get()) != 0) return rt::Error{path_ + ":" + std::to_string(line_) + ": read error"};
+  return std::optional<CsvRecord>{};
+}
+
+rt::Expected<CsvStreamWriter> CsvStreamWriter::create(const std::string& path,
+                                                      const std::vector<std::string>& columns) {
+  CsvStreamWriter writer;
+  writer.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (writer.fd_ < 0) return rt::Error{path + ": cannot create: " + std::strerror(errno)};
+  writer.path_ = path;
+  writer.columns_ = columns.size();
+  if (rt::Status s = writer.writeAll(joinHeader(columns) + "\n"); !s) return s.error();
+  return writer;
+}
+
+CsvStreamWriter::CsvStreamWriter(CsvStreamWriter&& other) noexcept
+    : fd_(std::exchange(other.fd_, -1)),
+      path_(std::move(other.path_)),
+      columns_(other.columns_),
+      line_(std::move(other.line_)) {}
+
+CsvStreamWriter& CsvStreamWriter::operator=(CsvStreamWriter&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = std::exchange(other.fd_, -1);
+    path_ = std::move(other.path_);
+    columns_ = other.columns_;
+    line_ = std::move(other.line_);
+  }
+  return *this;
+}
+
+CsvStreamWriter::~CsvStreamWriter() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+rt::Status CsvStreamWriter::writeAll(const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return rt::Error{path_ + ": write failed: " + std::strerror(errno)};
+    done += static_cast<std::size_t>(n);
+  }
+  return rt::ok();
+}
+
+rt::Status CsvStreamWriter::write(rt::TimeNs stamp_ns, const std::vector<double>& values) {
+  if (fd_ < 0) return rt::Error{path_ + ": write after close"};
+  if (values.size() != columns_) {
+    return rt::Error{path_ + ": a record of " + std::to_string(values.size()) + " values, expected " +
+                     std::to_string(columns_)};
+  }
+  line_ = std::to_string(stamp_ns);
+  char number[32];
+  for (const double v : values) {
+    // Shortest form that reads back to the same double (std::to_chars round-trips exactly).
+    const auto [end, ec] = std::to_chars(number, number + sizeof(number), v);
+    line_.push_back(',');
+    line_.append(number, ec == std::errc() ? end : number);
+  }
+  line_.push_back('\n');
+  return writeAll(line_);
+}
+
+rt::Status CsvStreamWriter::close() {
+  if (fd_ < 0) return rt::ok();
+  const int fd = std::exchange(fd_, -1);
+  if (::close(fd) != 0) return rt::Error{path_ + ": close failed: " + std::strerror(errno)};
+  return rt::ok();
+}
+
+}  // namespace aerotrack::hal::replay

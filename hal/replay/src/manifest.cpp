@@ -1,0 +1,119 @@
+// Dataset manifest: see manifest.hpp.
+#include "aerotrack/hal/replay/manifest.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <set>
+
+#include "aerotrack/rt/config_node.hpp"
+
+namespace aerotrack::hal::replay {
+namespace {
+
+const std::set<std::string>& knownDevices() {
+  static const std::set<std::string> kDevices = {
+      "odometry", "gimbal", "gimbal_commands", "setpoints", "gimbal_camera", "depth_camera", "can"};
+  return kDevices;
+}
+
+RecordedCamera parseCamera(const rt::ConfigNode& node) {
+  RecordedCamera c;
+  c.intrinsics.width_px = node.getInt("width_px", 1, 100000);
+  c.intrinsics.height_px = node.getInt("height_px", 1, 100000);
+  c.intrinsics.fx_px = node.getDouble("fx_px", 1e-3, 1e7);
+  c.intrinsics.fy_px = node.getDouble("fy_px", 1e-3, 1e7);
+  c.intrinsics.cx_px = node.getDouble("cx_px", -1e6, 1e6);
+  c.intrinsics.cy_px = node.getDouble("cy_px", -1e6, 1e6);
+  const std::vector<double> d = node.getDoubleList("distortion", 5, -1e3, 1e3);
+  for (std::size_t i = 0; i < 5; ++i) c.intrinsics.distortion[i] = d[i];
+  const std::vector<double> mount = node.getDoubleList("mount_m", 3, -10.0, 10.0);
+  c.mount_B_m = Eigen::Vector3d(mount[0], mount[1], mount[2]);
+  node.finish();
+  return c;
+}
+
+void emitCamera(YAML::Emitter& out, const char* key, const RecordedCamera& c) {
+  out << YAML::Key << key << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "width_px" << YAML::Value << c.intrinsics.width_px;
+  out << YAML::Key << "height_px" << YAML::Value << c.intrinsics.height_px;
+  out << YAML::Key << "fx_px" << YAML::Value << c.intrinsics.fx_px;
+  out << YAML::Key << "fy_px" << YAML::Value << c.intrinsics.fy_px;
+  out << YAML::Key << "cx_px" << YAML::Value << c.intrinsics.cx_px;
+  out << YAML::Key << "cy_px" << YAML::Value << c.intrinsics.cy_px;
+  out << YAML::Key << "distortion" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const double k : c.intrinsics.distortion) out << k;
+  out << YAML::EndSeq;
+  out << YAML::Key << "mount_m" << YAML::Value << YAML::Flow << YAML::BeginSeq << c.mount_B_m.x() << c.mount_B_m.y()
+      << c.mount_B_m.z() << YAML::EndSeq;
+  out << YAML::EndMap;
+}
+
+}  // namespace
+
+const StreamEntry* DatasetManifest::stream(const std::string& device) const {
+  for (const StreamEntry& s : streams) {
+    if (s.device == device) return &s;
+  }
+  return nullptr;
+}
+
+rt::Expected<DatasetManifest> readManifest(const std::string& path) {
+  auto root = rt::ConfigNode::loadFile(path);
+  if (!root) return root.error();
+  try {
+    DatasetManifest m;
+    if (root->getString("format") != "aerotrack-dataset") root->fail("format", "expected 'aerotrack-dataset'");
+    m.format_version = root->getInt("format_version", 1, 1000000);
+    if (m.format_version != kDatasetFormatVersion) {
+      root->fail("format_version", std::to_string(m.format_version) + " is not supported (this build reads " +
+                                       std::to_string(kDatasetFormatVersion) + ")");
+    }
+    m.software_version = root->getString("software_version");
+    m.start_ns = static_cast<rt::TimeNs>(root->getUint64("start_ns"));
+    m.source = root->getEnum("source", {"sim", "real", "import"});
+    for (const rt::ConfigNode& s : root->childList("streams")) {
+      StreamEntry entry{s.getString("device"), s.getString("file")};
+      if (knownDevices().count(entry.device) == 0) s.fail("device", "unknown device '" + entry.device + "'");
+      if (entry.file.empty() || entry.file.front() == '/' || entry.file.find("..") != std::string::npos) {
+        s.fail("file", "must be a path inside the dataset's folder, got '" + entry.file + "'");
+      }
+      if (m.stream(entry.device) != nullptr) s.fail("device", "'" + entry.device + "' listed twice");
+      s.finish();
+      m.streams.push_back(entry);
+    }
+    if (root->has("gimbal_camera")) m.gimbal_camera = parseCamera(root->child("gimbal_camera"));
+    if (root->has("depth_camera")) m.depth_camera = parseCamera(root->child("depth_camera"));
+    root->finish();
+    return m;
+  } catch (const rt::ConfigError& e) {
+    return rt::Error{e.what()};
+  }
+}
+
+rt::Status writeManifest(const DatasetManifest& m, const std::string& path) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << YAML::BeginMap;
+  out << YAML::Key << "format" << YAML::Value << "aerotrack-dataset";
+  out << YAML::Key << "format_version" << YAML::Value << m.format_version;
+  out << YAML::Key << "software_version" << YAML::Value << m.software_version;
+  out << YAML::Key << "start_ns" << YAML::Value << m.start_ns;
+  out << YAML::Key << "source" << YAML::Value << m.source;
+  out << YAML::Key << "streams" << YAML::Value << YAML::BeginSeq;
+  for (const StreamEntry& s : m.streams) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "device" << YAML::Value << s.device << YAML::Key << "file"
+        << YAML::Value << s.file << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  if (m.gimbal_camera) emitCamera(out, "gimbal_camera", *m.gimbal_camera);
+  if (m.depth_camera) emitCamera(out, "depth_camera", *m.depth_camera);
+  out << YAML::EndMap;
+  std::ofstream file(path, std::ios::trunc);
+  file << "# aerotrack recorded dataset (hal/replay/README.md)\n" << out.c_str() << "\n";
+  file.close();
+  if (!file) return rt::Error{path + ": write failed"};
+  return rt::ok();
+}
+
+}  // namespace aerotrack::hal::replay
