@@ -13,13 +13,31 @@ bool HalConfig::usesSim() const {
   return false;
 }
 
+bool HalConfig::usesReplay() const {
+  for (const std::string* backend : {&gimbal_camera, &depth_camera, &gimbal, &odometry, &vehicle_link})
+    if (*backend == "replay") return true;
+  return false;
+}
+
 HalConfig parseHalConfig(const rt::ConfigNode& node) {
   HalConfig c;
   c.gimbal_camera = node.getEnum("gimbal_camera", {"null", "sim"});
   c.depth_camera = node.getEnum("depth_camera", {"null", "sim"});
-  c.gimbal = node.getEnum("gimbal", {"null", "sim"});
-  c.odometry = node.getEnum("odometry", {"null", "sim"});
-  c.vehicle_link = node.getEnum("vehicle_link", {"null", "sim"});
+  // Replay serves the numeric streams so far; the cameras' image streams are still to come.
+  c.gimbal = node.getEnum("gimbal", {"null", "sim", "replay"});
+  c.odometry = node.getEnum("odometry", {"null", "sim", "replay"});
+  c.vehicle_link = node.getEnum("vehicle_link", {"null", "sim", "replay"});
+  if (node.has("replay")) {
+    const rt::ConfigNode r = node.child("replay");
+    c.replay.dir = r.getString("dir");
+    c.replay.offset_s = r.getDouble("offset_s", 0.0, 1e9);
+    c.replay.loop = r.getBool("loop");
+    c.replay.bad_rows = r.getEnum("bad_rows", {"skip", "strict"}) == "strict" ? replay::BadRowPolicy::kStrict
+                                                                              : replay::BadRowPolicy::kSkip;
+    r.finish();
+  } else if (c.usesReplay()) {
+    node.fail("replay", "a replay backend needs the replay: map (dir, offset_s, loop, bad_rows)");
+  }
   node.finish();
   return c;
 }
@@ -31,6 +49,15 @@ void emitYaml(YAML::Emitter& out, const HalConfig& c) {
   out << YAML::Key << "gimbal" << YAML::Value << c.gimbal;
   out << YAML::Key << "odometry" << YAML::Value << c.odometry;
   out << YAML::Key << "vehicle_link" << YAML::Value << c.vehicle_link;
+  if (c.usesReplay()) {
+    out << YAML::Key << "replay" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "dir" << YAML::Value << c.replay.dir;
+    out << YAML::Key << "offset_s" << YAML::Value << c.replay.offset_s;
+    out << YAML::Key << "loop" << YAML::Value << c.replay.loop;
+    out << YAML::Key << "bad_rows" << YAML::Value
+        << (c.replay.bad_rows == replay::BadRowPolicy::kStrict ? "strict" : "skip");
+    out << YAML::EndMap;
+  }
   out << YAML::EndMap;
 }
 
@@ -90,6 +117,20 @@ rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioIn
     if (!simulation) return simulation.error();
     d.simulation = std::move(simulation.value());
   }
+  std::shared_ptr<replay::ReplayDataset> recording;
+  if (config.usesReplay()) {
+    auto opened = replay::ReplayDataset::open(config.replay, start_ns);
+    if (!opened) return rt::Error{"hal: replay: " + opened.error().message};
+    recording = std::move(opened.value());
+    // A replayed device whose stream was not recorded would be silent: say so at start, not in flight.
+    const std::pair<const std::string*, const char*> needs[] = {{&config.odometry, "odometry"},
+                                                                {&config.gimbal, "gimbal"}};
+    for (const auto& [backend, device] : needs) {
+      if (*backend == "replay" && recording->manifest().stream(device) == nullptr) {
+        return rt::Error{"hal: replay: " + config.replay.dir + " has no " + device + " stream"};
+      }
+    }
+  }
   const bool sim_camera = config.gimbal_camera == "sim";
   if (sim_camera)
     d.gimbal_camera = std::make_unique<sim::SimGimbalCamera>(d.simulation);
@@ -101,14 +142,20 @@ rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioIn
     d.depth_camera = std::make_unique<null::NullDepthCamera>();
   if (config.gimbal == "sim")
     d.gimbal = std::make_unique<sim::SimGimbal>(d.simulation);
+  else if (config.gimbal == "replay")
+    d.gimbal = std::make_unique<replay::ReplayGimbal>(recording);
   else
     d.gimbal = std::make_unique<null::NullGimbal>();
   if (config.odometry == "sim")
     d.odometry = std::make_unique<sim::SimOdometry>(d.simulation);
+  else if (config.odometry == "replay")
+    d.odometry = std::make_unique<replay::ReplayOdometry>(recording);
   else
     d.odometry = std::make_unique<null::NullOdometry>();
   if (config.vehicle_link == "sim")
     d.vehicle_link = std::make_unique<sim::SimVehicleLink>(d.simulation);
+  else if (config.vehicle_link == "replay")
+    d.vehicle_link = std::make_unique<replay::ReplayVehicleLink>(recording);
   else
     d.vehicle_link = std::make_unique<null::NullVehicleLink>();
   return d;

@@ -1,10 +1,13 @@
 // The simulator's own parts: the gimbal motor against closed-form responses, the ground-truth
-// metrics' verdicts, the baseline follower's trail geometry, and the device factory.
+// metrics' verdicts, the baseline follower's trail geometry, and the device factory (sim, null, replay).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "aerotrack/hal/factory.hpp"
+#include "aerotrack/hal/replay/stream_codecs.hpp"
 #include "aerotrack/hal/sim/baseline_follower.hpp"
 #include "aerotrack/hal/sim/gimbal_motor.hpp"
 #include "aerotrack/hal/sim/metrics.hpp"
@@ -182,7 +185,55 @@ TEST(DeviceFactory, GivenUnknownBackendInConfigThenErrorNamesKey) {
   ASSERT_TRUE(root);
   const auto parsed = rt::parseConfig<HalConfig>([&] { return parseHalConfig(*root); });
   ASSERT_FALSE(parsed);
-  EXPECT_EQ(parsed.error().message, "hal.yaml:4: odometry: 'gps' is not one of: null, sim");
+  EXPECT_EQ(parsed.error().message, "hal.yaml:4: odometry: 'gps' is not one of: null, sim, replay");
+}
+
+TEST(DeviceFactory, GivenReplayBackendsThenTheyServeTheRecordingOrSayWhatIsMissing) {
+  const std::string base =
+      "gimbal_camera: null\ndepth_camera: null\ngimbal: replay\nodometry: replay\n"
+      "vehicle_link: replay\n";
+  const auto no_map = rt::ConfigNode::fromString(base, "hal.yaml");
+  ASSERT_TRUE(no_map);
+  const auto refused = rt::parseConfig<HalConfig>([&] { return parseHalConfig(*no_map); });
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("replay: a replay backend needs the replay: map"), std::string::npos);
+
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("aerotrack-factory-replay-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  replay::DatasetManifest m;
+  m.software_version = "test";
+  m.start_ns = 5'000'000'000;
+  m.source = "sim";
+  m.streams = {{"odometry", "odometry.csv"}};
+  ASSERT_TRUE(replay::writeManifest(m, (dir / "manifest.yaml").string()));
+  {
+    auto w = replay::CsvStreamWriter::create((dir / "odometry.csv").string(), replay::OdometryCodec::columns());
+    ASSERT_TRUE(w);
+    OdometrySample o;
+    o.stamp_ns = m.start_ns;
+    o.p_WB_m = {1, 2, 3};
+    ASSERT_TRUE(w->write(o.stamp_ns, replay::OdometryCodec::encode(o)));
+  }
+  const auto root = rt::ConfigNode::fromString(
+      base + "replay:\n  dir: " + dir.string() + "\n  offset_s: 0\n  loop: false\n  bad_rows: strict\n", "hal.yaml");
+  ASSERT_TRUE(root);
+  const auto config = rt::parseConfig<HalConfig>([&] { return parseHalConfig(*root); });
+  ASSERT_TRUE(config) << config.error().message;
+  // No gimbal stream in the recording: a start-up error, not a silent gimbal.
+  const auto missing = makeDevices(*config, nullptr, SimulationOptions{}, 0);
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("has no gimbal stream"), std::string::npos) << missing.error().message;
+  HalConfig odometry_only = *config;
+  odometry_only.gimbal = "null";
+  const auto d = makeDevices(odometry_only, nullptr, SimulationOptions{}, 0);
+  ASSERT_TRUE(d) << d.error().message;
+  EXPECT_EQ(d->odometry->backend(), "replay");
+  EXPECT_EQ(d->vehicle_link->backend(), "replay");
+  const auto sample = d->odometry->read(0);
+  ASSERT_TRUE(sample.has_value());
+  EXPECT_EQ(sample->p_WB_m, Eigen::Vector3d(1, 2, 3));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

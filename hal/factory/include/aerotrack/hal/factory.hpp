@@ -10,6 +10,7 @@
 #include <yaml-cpp/emitter.h>
 
 #include "aerotrack/hal/devices.hpp"
+#include "aerotrack/hal/replay/replay_devices.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
@@ -23,8 +24,12 @@ struct HalConfig {
   std::string gimbal = "null";
   std::string odometry = "null";
   std::string vehicle_link = "null";
+  /// The `replay:` map inside `hal:`: required when a backend is "replay" (issue 10): `dir`, `offset_s`,
+  /// `loop`, `bad_rows` (skip | strict).
+  replay::ReplayOptions replay;
 
   bool usesSim() const;
+  bool usesReplay() const;
 };
 
 /// The `sim:` section: which scenario the sim backends fly and how.
