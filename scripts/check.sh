@@ -36,7 +36,8 @@ for step in "${steps[@]}"; do
         ctest --test-dir build-asan -j "$jobs" --output-on-failure -L 'unit|integration|cli'
       ;;
     tsan)
-      sanitized_build build-tsan thread rt_executor_tests rt_stress_tests sim_world_concurrency_tests sim_realtime_tests
+      sanitized_build build-tsan thread rt_executor_tests rt_stress_tests sim_world_concurrency_tests sim_realtime_tests \
+        hal_recorder_tests
       # GCC 12's TSan cannot map its shadow memory under a high mmap ASLR entropy (Linux >= 6.5
       # defaults): run without address randomisation.
       TSAN_OPTIONS=halt_on_error=1 setarch "$(uname -m)" -R \

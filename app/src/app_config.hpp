@@ -42,6 +42,9 @@ struct AppConfig {
   /// The paper's comparison (not in YAML; `sim --mode`): false, this system; true, Fast-Tracker 1.0 --
   /// camera fixed to the body (the drone yaws to face the person), no occlusion term, no camera sweep.
   bool baseline_mode = false;
+  /// `--record DIR` (run, sim): record what the devices deliver and are told into a dataset there
+  /// (hal/replay/README.md). Empty: no recording.
+  std::string record_dir;
   VehicleConfig vehicle;
   hal::HalConfig hal;
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.

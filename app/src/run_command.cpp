@@ -14,7 +14,8 @@
 namespace aerotrack::app {
 
 int runCommand(const ParsedArgs& args) {
-  const auto config = loadAppConfig(args.values.at("config"));
+  auto config = loadAppConfig(args.values.at("config"));
+  if (config) config->record_dir = args.valueOr("record", "");
   if (!config) {
     std::fprintf(stderr, "aerotrack run: %s\n", config.error().message.c_str());
     return 1;
@@ -74,6 +75,11 @@ int runCommand(const ParsedArgs& args) {
 
   std::fputs(timingTable(snapshotTimings(executor.stats())).c_str(), stdout);
   std::fputs(deviceHealthReport((*system)->devices(), clock.now()).c_str(), stdout);
+  if (auto recorded = (*system)->finishRecording(); !recorded) {
+    std::fprintf(stderr, "aerotrack run: %s\n", recorded.error().message.c_str());
+  } else if (!recorded->empty()) {
+    std::printf("%s\n", recorded->c_str());
+  }
   if (signals.received() != 0) std::fprintf(stderr, "aerotrack run: stopped by signal %d\n", signals.received());
   return 0;
 }

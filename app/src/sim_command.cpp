@@ -85,6 +85,7 @@ int simCommand(const ParsedArgs& args) {
   if (!config) return fail(config.error().message);
   if (!config->hal.usesSim()) return fail(config->source + ": hal: no device uses the sim backend");
   config->baseline_mode = mode == "baseline";
+  config->record_dir = args.valueOr("record", "");
   const std::string scenario_name = args.values.at("scenario");
   auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
   if (!trial) return fail(trial.error().message);
@@ -175,6 +176,11 @@ int simCommand(const ParsedArgs& args) {
                 cycle.p99_ms);
   }
   std::fputs(timingTable(info.timings).c_str(), stdout);
+  if (auto recorded = (*system)->finishRecording(); !recorded) {
+    std::fprintf(stderr, "aerotrack sim: %s\n", recorded.error().message.c_str());
+  } else if (!recorded->empty()) {
+    std::printf("%s\n", recorded->c_str());
+  }
   std::printf("results: %s, %s%s%s\n", summary_path.c_str(), topdown_path.c_str(), strip_path.empty() ? "" : ", ",
               strip_path.c_str());
   return info.interrupted ? 130 : 0;

@@ -27,6 +27,20 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
   auto devices = hal::makeDevices(config.hal, scenario, sim_options, start_ns);
   if (!devices) return rt::Error{config.source + ": " + devices.error().message};
   system->devices_ = std::move(devices.value());
+  if (!config.record_dir.empty()) {
+    hal::replay::RecorderOptions options;
+    options.dir = config.record_dir;
+    options.software_version = "aerotrack (" + config.source + ")";
+    options.source = config.hal.usesSim() ? "sim" : "real";
+    auto recorder = hal::replay::DatasetRecorder::start(options, start_ns);
+    if (!recorder) return recorder.error();
+    system->recorder_ = std::move(recorder.value());
+    hal::Devices& d = system->devices_;
+    hal::replay::DatasetRecorder& r = *system->recorder_;
+    d.odometry = std::make_unique<hal::replay::RecordingOdometry>(std::move(d.odometry), r);
+    d.gimbal = std::make_unique<hal::replay::RecordingGimbal>(std::move(d.gimbal), r);
+    d.vehicle_link = std::make_unique<hal::replay::RecordingVehicleLink>(std::move(d.vehicle_link), r);
+  }
 
   bool has_world_task = false;
   for (std::size_t i = 0; i < config.tasks.size(); ++i) {
@@ -179,6 +193,23 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   tasks_.push_back(std::move(task));
   bindings_.push_back({spec, tasks_.back().get(), doorbell});
   return rt::ok();
+}
+
+rt::Expected<std::string> System::finishRecording() {
+  if (!recorder_) return std::string();
+  const rt::Status status = recorder_->stop();
+  using hal::replay::RecordedStream;
+  std::uint64_t dropped = 0;
+  for (const RecordedStream s : {RecordedStream::kOdometry, RecordedStream::kGimbal, RecordedStream::kGimbalCommands,
+                                 RecordedStream::kSetpoints})
+    dropped += recorder_->dropped(s);
+  if (!status) return status.error();
+  return "recorded " + recorder_->dir() + ": odometry " +
+         std::to_string(recorder_->written(RecordedStream::kOdometry)) + ", gimbal " +
+         std::to_string(recorder_->written(RecordedStream::kGimbal)) + ", gimbal commands " +
+         std::to_string(recorder_->written(RecordedStream::kGimbalCommands)) + ", setpoints " +
+         std::to_string(recorder_->written(RecordedStream::kSetpoints)) + " records; " + std::to_string(dropped) +
+         " dropped (disk too slow)";
 }
 
 }  // namespace aerotrack::app

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "aerotrack/hal/factory.hpp"
+#include "aerotrack/hal/replay/recorder.hpp"
 #include "aerotrack/mapping/mapping_task.hpp"
 #include "aerotrack/perception/detection_task.hpp"
 #include "aerotrack/planning/planning_task.hpp"
@@ -64,6 +65,9 @@ class System {
   const std::vector<rt::TaskBinding>& bindings() const { return bindings_; }
   Channels& channels() { return channels_; }
   hal::Devices& devices() { return devices_; }
+  /// After the executor has stopped: ends the recording (if any) and says what it holds, in one line
+  /// ("" without --record). The Error is a write failure; what was written before it stays readable.
+  rt::Expected<std::string> finishRecording();
   const AppConfig& config() const { return config_; }
   /// The real-time executor's options from the config, reporting missed deadlines to the supervisor.
   rt::RealtimeOptions realtimeOptions() {
@@ -97,6 +101,7 @@ class System {
   rt::Status addTask(const rt::TaskSpec& spec, std::size_t index);
 
   AppConfig config_;
+  std::unique_ptr<hal::replay::DatasetRecorder> recorder_;  // before devices_: the recording decorators use it
   hal::Devices devices_;
   Channels channels_;
   std::vector<std::unique_ptr<rt::Task>> tasks_;
