@@ -115,7 +115,7 @@ TEST(AppConfig, GivenAMissingLocalizationFileThenErrorNamesTheKeyAndTheFile) {
 
 TEST(AppConfig, GivenBadBackendThenErrorNamesIt) {
   const std::string yaml = simYamlWith("odometry: sim", "odometry: vicon");
-  EXPECT_EQ(errorOf(yaml), at(yaml, "odometry: vicon") + ": hal.odometry: 'vicon' is not one of: null, sim");
+  EXPECT_EQ(errorOf(yaml), at(yaml, "odometry: vicon") + ": hal.odometry: 'vicon' is not one of: null, sim, replay");
 }
 
 hal::sim::ScenarioInstance openTrial() {
