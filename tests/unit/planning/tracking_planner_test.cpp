@@ -274,6 +274,25 @@ struct TaskRig {
                                           PlanningChannels{odometry, target, grid, octree, trajectories}, clock);
   }
   void step(double t_s) { task->step(rt::secondsToNs(t_s)); }
+
+  /// One cycle at t = 0 from (0, 0, 1.5) towards a person standing behind WallWorld's wall: what it
+  /// published (empty if it did not plan).
+  trajectory_server::TimedTrajectory planOnceAroundTheWall() {
+    const WallWorld world;
+    grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
+    odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
+    target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
+    step(0.0);
+    return task->count(PlanStatus::kPlanned) == 1U ? task->lastPublished() : trajectory_server::TimedTrajectory{};
+  }
+  /// A cycle at t_s with the drone at p and the person lost (the cycle fails).
+  void loseThePersonAt(double t_s, const Eigen::Vector3d& p) {
+    odometry.write(odometryAt(p, rt::secondsToNs(t_s)));
+    estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(t_s));
+    lost.lost = true;
+    target.write(lost);
+    step(t_s);
+  }
 };
 
 TEST(PlanningTask, FailedCycleKeepsTheOldTrajectory) {
@@ -328,24 +347,15 @@ TEST(PlanningTask, FailedCycleWithBlockedOldTrajectoryStops) {
   TrackingPlannerParams params = defaultParams();
   params.stop_check_horizon_s = 2.0;
   TaskRig rig(params);
-  const WallWorld world;
-  rig.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
-  rig.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
-  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
-  rig.step(0.0);
-  ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
-  const trajectory_server::TimedTrajectory first = rig.task->lastPublished();
+  const trajectory_server::TimedTrajectory first = rig.planOnceAroundTheWall();
+  ASSERT_TRUE(first.trajectory);
   // An obstacle appears across the old trajectory 1.7 s ahead, and in the same cycle the person is lost
   // (the cycle fails): the old trajectory must not be flown into it.
   const Eigen::Vector3d p = first.trajectory->sample(1.8).p_W_m;
   rig.grid.write(std::make_shared<const mapping::LocalGrid>(
       makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
                   {{p - Eigen::Vector3d(0.1, 1.0, 1.0), p + Eigen::Vector3d(0.1, 1.0, 1.0)}})));
-  rig.odometry.write(odometryAt(first.trajectory->sample(0.1).p_W_m, rt::secondsToNs(0.1)));
-  estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.1));
-  lost.lost = true;
-  rig.target.write(lost);
-  rig.step(0.1);
+  rig.loseThePersonAt(0.1, first.trajectory->sample(0.1).p_W_m);
   ASSERT_EQ(rig.task->count(PlanStatus::kStopped), 1U)
       << "no_target " << rig.task->count(PlanStatus::kNoTarget) << " duration " << first.trajectory->durationS()
       << " p " << p.transpose();
@@ -373,13 +383,8 @@ TEST(MarginWalk, AStartInTheMarginMayOnlyBeLeftQuickly) {
 TEST(PlanningTask, FailedCycleAlongASurfaceSeenBesideTheDroneStops) {
   TrackingPlannerParams params = defaultParams();
   TaskRig rig(params);
-  const WallWorld world;
-  rig.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
-  rig.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
-  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0));
-  rig.step(0.0);
-  ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
-  const trajectory_server::TimedTrajectory first = rig.task->lastPublished();
+  const trajectory_server::TimedTrajectory first = rig.planOnceAroundTheWall();
+  ASSERT_TRUE(first.trajectory);
   // A surface is seen right beside the drone (the far face of a corner rounded in unknown space): its
   // inflation margin covers the drone and the old trajectory ahead, which never leaves it. The old rule
   // (only a margin entered after a clear sample counts) would have flown on along it.
@@ -393,11 +398,7 @@ TEST(PlanningTask, FailedCycleAlongASurfaceSeenBesideTheDroneStops) {
       makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
                   {{lo - Eigen::Vector3d(0.05, 0.05, 0.05), hi + Eigen::Vector3d(0.05, 0.05, 0.05)}})));
   ASSERT_TRUE(rig.grid.read()->isOccupied(a));
-  rig.odometry.write(odometryAt(a, rt::secondsToNs(0.1)));
-  estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.1));
-  lost.lost = true;
-  rig.target.write(lost);
-  rig.step(0.1);
+  rig.loseThePersonAt(0.1, a);
   EXPECT_EQ(rig.task->count(PlanStatus::kStopped), 1U);
   EXPECT_NE(rig.task->lastPublished().trajectory, first.trajectory);
 }

@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "aerotrack/hal/replay/stream_codecs.hpp"
+#include "temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {
@@ -21,12 +22,7 @@ constexpr rt::TimeNs kMs = 1'000'000;
 
 class Recording {
  public:
-  Recording() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() /
-           ("aerotrack-replay-dev-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
+  Recording() : dir_(tmp_.path()) {
     DatasetManifest m;
     m.software_version = "test";
     m.start_ns = kStart;
@@ -47,11 +43,11 @@ class Recording {
       }
     }
   }
-  ~Recording() { std::filesystem::remove_all(dir_); }
   std::string dir() const { return dir_.string(); }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
 
  private:
+  test::TempDir tmp_;
   std::filesystem::path dir_;
 };
 
