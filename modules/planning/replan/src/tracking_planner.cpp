@@ -129,14 +129,18 @@ void TrackingPlanner::makeMoveTrajectory(const StatePva& start, const Eigen::Vec
   onePieceToRest(start, end_W_m, duration_s, out);
 }
 
-void TrackingPlanner::onePieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s,
-                                     PolynomialTrajectory& out) {
+bool TrackingPlanner::pieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s) {
   StatePva end = StatePva::Zero();
   end.col(0) = end_W_m;
   stop_spline_.reset(start, end, 1);
   one_duration_(0) = duration_s;
   const Eigen::Matrix3Xd no_waypoints(3, 0);
-  if (stop_spline_.generate(no_waypoints, one_duration_)) out.assign(stop_spline_);
+  return stop_spline_.generate(no_waypoints, one_duration_);
+}
+
+void TrackingPlanner::onePieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s,
+                                     PolynomialTrajectory& out) {
+  if (pieceToRest(start, end_W_m, duration_s)) out.assign(stop_spline_);
 }
 
 namespace {
@@ -165,12 +169,7 @@ void TrackingPlanner::appendStop(PolynomialTrajectory& out) {
   StatePva start;
   start << end.p_W_m, end.v_W_mps, end.a_W_mps2;
   const double duration_s = stopDurationS(end.v_W_mps.norm(), params_.optimizer.max_acceleration_mps2);
-  StatePva rest = StatePva::Zero();
-  rest.col(0) = end.p_W_m + end.v_W_mps * (duration_s / 2.0);
-  stop_spline_.reset(start, rest, 1);
-  one_duration_(0) = duration_s;
-  const Eigen::Matrix3Xd no_waypoints(3, 0);
-  if (stop_spline_.generate(no_waypoints, one_duration_)) {
+  if (pieceToRest(start, end.p_W_m + end.v_W_mps * (duration_s / 2.0), duration_s)) {
     out.append(stop_spline_.coefficients().topRows<6>(), duration_s);
   }
 }

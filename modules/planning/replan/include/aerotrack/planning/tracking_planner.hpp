@@ -167,6 +167,8 @@ class TrackingPlanner {
   /// One minimum-jerk piece from `start` to rest at end_W_m in duration_s (the stop, take-off and land moves).
   void onePieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s,
                       PolynomialTrajectory& out);
+  /// The same piece, generated into stop_spline_ only (false if the solve failed).
+  bool pieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s);
   MinJerkSpline stop_spline_;
   Eigen::VectorXd one_duration_;
   std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
