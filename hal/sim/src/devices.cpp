@@ -57,14 +57,12 @@ DeviceHealth SimGimbalCamera::health(TimeNs now_ns) const {
 }
 
 std::shared_ptr<ImageFrame> SimGimbalCamera::freeFrame() {
-  // A pooled frame no one else holds, whose pixels no one else shares, is reused in place.
-  for (std::shared_ptr<ImageFrame>& frame : pool_) {
-    if (frame && frame.use_count() == 1 && (frame->bgr.u == nullptr || frame->bgr.u->refcount == 1)) return frame;
-  }
-  std::shared_ptr<ImageFrame>& slot = pool_[pool_next_];
-  pool_next_ = (pool_next_ + 1) % pool_.size();
-  slot = std::make_shared<ImageFrame>();  // every frame is still in use: a new one (the old stays with its holders)
-  return slot;
+  std::shared_ptr<ImageFrame> frame = pool_.acquire();  // a frame no one holds any more
+  // Its pixels may still be shared by a cv::Mat someone copied out of it: then they are theirs, and the
+  // renderer draws into new ones. OpenCV counts Mat references with acq_rel atomics; this acquire load
+  // pairs with the other holder's release of them.
+  if (frame->bgr.u != nullptr && __atomic_load_n(&frame->bgr.u->refcount, __ATOMIC_ACQUIRE) != 1) frame->bgr.release();
+  return frame;
 }
 
 ImageFrameHandle SimGimbalCamera::grab(TimeNs now_ns) {

@@ -24,7 +24,7 @@ rt::Expected<Mapper> Mapper::create(const MapperParams& params) {
   m.inserter_ = std::make_unique<FrameInserter>(std::move(inserter.value()));
   m.map_ = std::make_unique<OctomapMap>(std::move(map.value()));
   m.grid_ = std::make_unique<LocalGrid>(std::move(grid.value()));
-  for (std::size_t i = 0; i < params.grid_pool_size; ++i) m.pool_.push_back(std::make_shared<LocalGrid>(*m.grid_));
+  m.pool_ = std::make_unique<rt::LendingPool<LocalGrid>>(params.grid_pool_size, *m.grid_);
   return m;
 }
 
@@ -33,16 +33,11 @@ void Mapper::addOdometry(const hal::OdometrySample& sample) {
 }
 
 std::shared_ptr<const LocalGrid> Mapper::publishGrid() {
-  // A pool grid that only the pool holds is free to reuse; readers keep theirs alive.
-  for (const std::shared_ptr<LocalGrid>& g : pool_) {
-    if (g.use_count() == 1) {
-      g->copyFrom(*grid_);
-      return g;
-    }
-  }
-  ++stats_.grid_snapshots_allocated;
-  pool_.push_back(std::make_shared<LocalGrid>(*grid_));
-  return pool_.back();
+  // A grid no reader holds any more is rewritten in place; readers keep theirs as long as they like.
+  std::shared_ptr<LocalGrid> g = pool_->acquire();
+  g->copyFrom(*grid_);
+  stats_.grid_snapshots_allocated = pool_->growths();
+  return g;
 }
 
 rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame) {

@@ -11,7 +11,6 @@
 
 #include <cstdint>
 #include <memory>
-#include <vector>
 
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/mapping/depth_points.hpp"
@@ -20,6 +19,7 @@
 #include "aerotrack/mapping/octomap_map.hpp"
 #include "aerotrack/mapping/pose_history.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/lending_pool.hpp"
 
 namespace aerotrack::mapping {
 
@@ -82,7 +82,7 @@ class Mapper {
   std::unique_ptr<FrameInserter> inserter_;
   std::unique_ptr<OctomapMap> map_;
   std::unique_ptr<LocalGrid> grid_;
-  std::vector<std::shared_ptr<LocalGrid>> pool_;
+  std::unique_ptr<rt::LendingPool<LocalGrid>> pool_;
   MapperStats stats_;
   bool grid_initialised_ = false;
 };

@@ -2,11 +2,11 @@
 // so the modules cannot tell them from real devices.
 #pragma once
 
-#include <array>
 #include <memory>
 
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
+#include "aerotrack/rt/lending_pool.hpp"
 
 namespace aerotrack::hal::sim {
 
@@ -52,7 +52,8 @@ class SimGimbal final : public Gimbal {
 ///    into an ImageFrame stamped at its exposure time, at most one per exposure, so at the camera's
 ///    rate when called at least that often (older waiting exposures are skipped: sequence gaps);
 ///    grabDetections() returns nothing. Rendering (a few ms) runs on the caller's thread. Frames come
-///    from a small pool: a frame is reused once no one holds it, so after warm-up nothing is allocated.
+///    from a small pool (rt::LendingPool): a frame is reused once no one holds it, so after warm-up
+///    nothing is allocated.
 /// One task uses the device (the simulation's camera queues have one consumer).
 class SimGimbalCamera final : public GimbalCamera {
  public:
@@ -66,8 +67,7 @@ class SimGimbalCamera final : public GimbalCamera {
   std::shared_ptr<ImageFrame> freeFrame();
 
   std::shared_ptr<Simulation> sim_;
-  std::array<std::shared_ptr<ImageFrame>, 4> pool_{};
-  std::size_t pool_next_ = 0;
+  rt::LendingPool<ImageFrame> pool_{4, ImageFrame{}};
   RenderScratch scratch_;
   TimeNs last_stamp_ns_ = 0;
 };
