@@ -59,10 +59,11 @@ rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame) {
     if (rt::Status s = grid_->rebuild(tree); !s) return s.error();
     grid_initialised_ = true;
   } else {
-    if (rt::Status s = grid_->applyChanges(tree); !s) return s.error();
+    // Only what this insert changed (the window already holds the rest): no tree searches.
+    for (const VoxelChange& change : map_->changes())
+      grid_->setVoxel(change.key, change.occupied ? CellState::kOccupied : CellState::kFree);
     if (auto moved = grid_->recenter(drone_W_m, tree); !moved) return moved.error();
   }
-  map_->resetChanges();
   stats_.occupied_voxels = map_->occupiedVoxelCount();
 
   MapUpdate update;

@@ -308,23 +308,26 @@ rt::Status LocalGrid::rebuild(const octomap::OcTree& tree) {
 
 rt::Status LocalGrid::applyChanges(const octomap::OcTree& tree) {
   if (auto status = checkResolution(tree); !status) return status;
-  constexpr Word kMinusOne = static_cast<Word>(-static_cast<int>(kCountOne));
   for (auto it = tree.changedKeysBegin(), end = tree.changedKeysEnd(); it != end; ++it) {
-    const CellIndex cell = fromKey(it->first);
-    if (!inStorage(cell)) continue;
     // search() returns the covering coarse leaf where the tree has pruned 8 equal children.
     const octomap::OcTreeNode* node = tree.search(it->first);
-    const CellState now = node == nullptr             ? CellState::kUnknown
-                          : tree.isNodeOccupied(node) ? CellState::kOccupied
-                                                      : CellState::kFree;
-    Word& word = cells_[slotOf(cell)];
-    const auto before = static_cast<CellState>(word & kStateMask);
-    if (before == now) continue;
-    word = static_cast<Word>((word & ~kStateMask) | static_cast<Word>(now));
-    if (before == CellState::kOccupied) addStencil(cell, kMinusOne);
-    if (now == CellState::kOccupied) addStencil(cell, kCountOne);
+    setVoxel(it->first, node == nullptr             ? CellState::kUnknown
+                        : tree.isNodeOccupied(node) ? CellState::kOccupied
+                                                    : CellState::kFree);
   }
   return rt::ok();
+}
+
+void LocalGrid::setVoxel(const octomap::OcTreeKey& key, CellState now) {
+  constexpr Word kMinusOne = static_cast<Word>(-static_cast<int>(kCountOne));
+  const CellIndex cell = fromKey(key);
+  if (!inStorage(cell)) return;
+  Word& word = cells_[slotOf(cell)];
+  const auto before = static_cast<CellState>(word & kStateMask);
+  if (before == now) return;
+  word = static_cast<Word>((word & ~kStateMask) | static_cast<Word>(now));
+  if (before == CellState::kOccupied) addStencil(cell, kMinusOne);
+  if (now == CellState::kOccupied) addStencil(cell, kCountOne);
 }
 
 rt::Expected<bool> LocalGrid::recenter(const Eigen::Vector3d& center_W_m, const octomap::OcTree& tree) {

@@ -135,7 +135,8 @@ class InsertionOcTree final : public octomap::OcTree {
     std::int64_t occupied_delta = 0;  ///< Change in occupied leaf-resolution voxels.
   };
 
-  ApplyCounts applyBatch(const std::vector<KeyBatch::Entry>& entries) {
+  /// Applies the batch; appends to changes every voxel that is new or whose occupied/free state flipped.
+  ApplyCounts applyBatch(const std::vector<KeyBatch::Entry>& entries, std::vector<VoxelChange>& changes) {
     ApplyCounts counts;
     if (entries.empty()) return counts;
     if (root == nullptr) {
@@ -161,7 +162,7 @@ class InsertionOcTree final : public octomap::OcTree {
       }
       first = false;
       previous = key;
-      applyOne(key, entry.occupied, len, counts);
+      applyOne(key, entry.occupied, len, counts, changes);
     }
     len = unwind(len, 0);
     if (dirty_[0]) finalize(path_[0]);
@@ -192,7 +193,8 @@ class InsertionOcTree final : public octomap::OcTree {
   }
 
   /// OcTree::updateNode(key, occupied) from path_[len]; len becomes the depth reached.
-  void applyOne(const octomap::OcTreeKey& key, bool occupied, unsigned& len, ApplyCounts& counts) {
+  void applyOne(const octomap::OcTreeKey& key, bool occupied, unsigned& len, ApplyCounts& counts,
+                std::vector<VoxelChange>& changes) {
     octomap::OcTreeNode* node = path_[len];
     unsigned depth = len;
     for (; depth < kDepth; ++depth) {
@@ -227,6 +229,7 @@ class InsertionOcTree final : public octomap::OcTree {
     updateNodeLogOdds(node, occupied ? prob_hit_log : prob_miss_log);
     const bool is_occupied = isNodeOccupied(node);
     counts.occupied_delta += static_cast<std::int64_t>(is_occupied) - static_cast<std::int64_t>(was_occupied);
+    if (is_new || was_occupied != is_occupied) changes.push_back(VoxelChange{key, is_occupied});
     if (use_change_detection) {  // OccupancyOcTreeBase::updateNodeRecurs's bookkeeping.
       if (is_new) {
         changed_keys.insert(std::pair<octomap::OcTreeKey, bool>(key, true));
@@ -250,8 +253,10 @@ class InsertionOcTree final : public octomap::OcTree {
 }  // namespace
 
 struct OctomapMap::Workspace {
+  Workspace() { changes.reserve(std::size_t{1} << (kInitialLog2Slots - 1)); }
   KeyBatch batch{kInitialLog2Slots};
-  octomap::KeyRay ray;  ///< Preallocated by OctoMap (100 000 keys).
+  std::vector<VoxelChange> changes;  ///< The latest insert's, at most one per distinct voxel.
+  octomap::KeyRay ray;               ///< Preallocated by OctoMap (100 000 keys).
 };
 
 rt::Status validate(const OctomapMapParams& params) {
@@ -285,7 +290,9 @@ rt::Expected<OctomapMap> OctomapMap::create(const OctomapMapParams& params) {
   tree->setClampingThresMin(params.clamp_min);
   tree->setClampingThresMax(params.clamp_max);
   tree->setOccupancyThres(params.occupancy_threshold);
-  tree->enableChangeDetection(true);
+  // OctoMap's own change detection keeps a std::unordered_map node per changed key (an allocation
+  // each, thousands per frame); insert() reports its changes in a reused vector instead.
+  tree->enableChangeDetection(false);
   return OctomapMap(params, std::move(tree), std::make_unique<Workspace>());
 }
 
@@ -300,6 +307,7 @@ OctomapMap::~OctomapMap() = default;
 rt::Expected<InsertStats> OctomapMap::insert(const octomap::Pointcloud& hits_W, const octomap::Pointcloud& misses_W,
                                              const Eigen::Vector3d& origin_W) {
   octomap::OcTree& tree = *tree_;
+  workspace_->changes.clear();
   const octomap::point3d origin(static_cast<float>(origin_W.x()), static_cast<float>(origin_W.y()),
                                 static_cast<float>(origin_W.z()));
   // Half the tree's edge: 2^15 voxels (3276.8 m at 0.1 m).
@@ -346,13 +354,18 @@ rt::Expected<InsertStats> OctomapMap::insert(const octomap::Pointcloud& hits_W, 
       ++stats.free_voxels;
     }
   }
-  const InsertionOcTree::ApplyCounts counts = static_cast<InsertionOcTree&>(tree).applyBatch(batch.entries());
+  const InsertionOcTree::ApplyCounts counts =
+      static_cast<InsertionOcTree&>(tree).applyBatch(batch.entries(), workspace_->changes);
   stats.saturated_voxels = counts.saturated;
   const std::int64_t occupied_delta = counts.occupied_delta;
   occupied_voxels_ += occupied_delta;
   ++frames_inserted_;
   last_insert_ = stats;
   return stats;
+}
+
+const std::vector<VoxelChange>& OctomapMap::changes() const {
+  return workspace_->changes;
 }
 
 std::size_t OctomapMap::recountOccupiedVoxels() {

@@ -25,7 +25,8 @@
 
 namespace octomap {
 class OcTree;
-}
+class OcTreeKey;
+}  // namespace octomap
 
 namespace aerotrack::mapping {
 
@@ -84,6 +85,12 @@ class LocalGrid {
   /// allocation. Changes OctoMap does not record (deleteNode, clear, readBinary) need rebuild(tree).
   /// Error (grid untouched) if the tree's resolution differs from resolution_m.
   rt::Status applyChanges(const octomap::OcTree& tree);
+
+  /// Sets the state of the voxel with this octree key, as an insertion reported it (the fast path of
+  /// applyChanges for an owner that knows what changed: OctomapMap::changes(), no tree search). Outside
+  /// the storage: ignored. The inflation counts of its stencil follow when it starts or stops being
+  /// occupied. O(1), O(stencil) on such a flip; no allocation. The caller checks the resolutions match.
+  void setVoxel(const octomap::OcTreeKey& key, CellState now);
 
   /// Moves the window, snapped to whole cells, so that it is centred on center_W_m, if its current
   /// centre is farther than recenter_distance_m from it; returns whether it moved. Cells that stay

@@ -7,14 +7,16 @@
 // batches the frame's voxel keys in a reused open-addressing hash set instead of two
 // std::unordered_sets, and skips voxels already clamped in the update's direction with one
 // search. Miss points (see depth_points.hpp) clear up to, not including, their end voxel and
-// mark nothing occupied. Change detection is on: after each insert, tree().changedKeysBegin() ..
-// changedKeysEnd() lists the leaf keys created or whose occupied/free state flipped since the
-// last resetChanges() (OctoMap's semantics; the dense local grid reads them).
+// mark nothing occupied. After each insert, changes() lists the leaf voxels that the insert
+// created or whose occupied/free state it flipped, with their new state (what OctoMap's change
+// detection records, which stays off: it allocates a hash-map node per key); the dense local
+// grid is kept in sync from it.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <octomap/OcTree.h>
 #include <octomap/Pointcloud.h>
@@ -50,14 +52,20 @@ struct InsertStats {
   std::size_t updatedVoxels() const { return free_voxels + occupied_voxels; }
 };
 
-/// Thread safety: none; one owner thread calls insert(), resetChanges() and snapshot(); readers
-/// on other threads use snapshots. Allocation: the tree allocates nodes as it grows and OctoMap's
-/// change-detection map allocates per changed key (both inside OctoMap); the key batch and the
-/// ray buffer (~3 MB) are allocated in create(), and the batch grows only if a frame touches more
-/// than 65 536 distinct voxels (a 160 x 120 / 4 frame at 6 m touches ~27 000).
+/// A leaf voxel an insert created (it was unknown) or whose occupied/free state it flipped.
+struct VoxelChange {
+  octomap::OcTreeKey key;
+  bool occupied = false;  ///< The state after the insert (false: free).
+};
+
+/// Thread safety: none; one owner thread calls insert() and snapshot(); readers on other threads
+/// use snapshots. Allocation: the tree allocates nodes as it grows (inside OctoMap); the key
+/// batch, the change list and the ray buffer (~3 MB) are allocated in create(), and the batch
+/// grows only if a frame touches more than 65 536 distinct voxels (a 160 x 120 / 4 frame at 6 m
+/// touches ~27 000).
 class OctomapMap {
  public:
-  /// Validates params; builds an empty tree with change detection enabled.
+  /// Validates params; builds an empty tree (OctoMap's change detection off: see changes()).
   static rt::Expected<OctomapMap> create(const OctomapMapParams& params = {});
 
   OctomapMap(OctomapMap&& other) noexcept;
@@ -74,14 +82,14 @@ class OctomapMap {
   rt::Expected<InsertStats> insert(const octomap::Pointcloud& hits_W, const octomap::Pointcloud& misses_W,
                                    const Eigen::Vector3d& origin_W);
 
-  /// The tree, for queries and for change-detection readers. Editing it directly makes
-  /// occupiedVoxelCount() stale until recountOccupiedVoxels().
+  /// The tree, for queries. Editing it directly makes occupiedVoxelCount() stale until
+  /// recountOccupiedVoxels(), and is not reported by changes().
   octomap::OcTree& tree() { return *tree_; }
   const octomap::OcTree& tree() const { return *tree_; }
 
-  /// Forgets the changed keys (OcTree::resetChangeDetection). The owner calls it once every
-  /// consumer has read them after an insert.
-  void resetChanges() { tree_->resetChangeDetection(); }
+  /// The voxels the latest insert created or flipped, each once, in the order it applied them
+  /// (empty before the first insert and after a failed one). Valid until the next insert.
+  const std::vector<VoxelChange>& changes() const;
 
   /// Occupied voxels at leaf resolution (a pruned inner node counts for every leaf voxel it
   /// covers), kept incrementally by insert(): O(1).
