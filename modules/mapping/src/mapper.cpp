@@ -35,7 +35,7 @@ void Mapper::addOdometry(const hal::OdometrySample& sample) {
 std::shared_ptr<const LocalGrid> Mapper::publishGrid() {
   // A grid no reader holds any more is rewritten in place; readers keep theirs as long as they like.
   std::shared_ptr<LocalGrid> g = pool_->acquire();
-  g->copyFrom(*grid_);
+  g->copyChangesFrom(*grid_);  // only the rows written since this pool grid was last published
   stats_.grid_snapshots_allocated = pool_->growths();
   return g;
 }

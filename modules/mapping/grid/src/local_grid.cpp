@@ -154,6 +154,8 @@ rt::Expected<LocalGrid> LocalGrid::create(const LocalGridParams& params) {
   if (!storageFitsKeys(storage_min, dims)) return paramError("size_m", "window exceeds the octree's key range");
   grid.setOrigin(storage_min, CellIndex::Zero());
   grid.cells_.assign(static_cast<std::size_t>(total), Word{0});
+  grid.cells_per_row_ = static_cast<std::size_t>(grid.dims_.x());
+  grid.row_stamps_.assign(static_cast<std::size_t>(grid.dims_.y()) * static_cast<std::size_t>(grid.dims_.z()), 0);
   return grid;
 }
 
@@ -168,6 +170,35 @@ void LocalGrid::setOrigin(const CellIndex& storage_min_cell, const CellIndex& st
 
 void LocalGrid::copyFrom(const LocalGrid& other) {
   if (this == &other) return;
+  copyGeometryFrom(other);
+  // assign() reuses the existing buffers when they are large enough.
+  stencil_rows_.assign(other.stencil_rows_.begin(), other.stencil_rows_.end());
+  cells_.assign(other.cells_.begin(), other.cells_.end());
+  row_stamps_.assign(other.row_stamps_.begin(), other.row_stamps_.end());
+  copyStampsFrom(other);
+}
+
+void LocalGrid::copyChangesFrom(const LocalGrid& other) {
+  const bool incremental = copied_from_ == &other && other.full_stamp_ <= copied_at_stamp_ &&
+                           copied_at_stamp_ <= other.stamp_ && dims_ == other.dims_ &&
+                           stencil_size_ == other.stencil_size_ && cells_.size() == other.cells_.size() &&
+                           row_stamps_.size() == other.row_stamps_.size();
+  if (!incremental) {
+    copyFrom(other);
+    return;
+  }
+  copyGeometryFrom(other);
+  for (std::size_t row = 0; row < row_stamps_.size(); ++row) {
+    if (other.row_stamps_[row] <= copied_at_stamp_) continue;
+    const auto first = other.cells_.begin() + static_cast<std::ptrdiff_t>(row * cells_per_row_);
+    std::copy(first, first + static_cast<std::ptrdiff_t>(cells_per_row_),
+              cells_.begin() + static_cast<std::ptrdiff_t>(row * cells_per_row_));
+    row_stamps_[row] = other.row_stamps_[row];
+  }
+  copyStampsFrom(other);
+}
+
+void LocalGrid::copyGeometryFrom(const LocalGrid& other) {
   params_ = other.params_;
   inv_resolution_per_m_ = other.inv_resolution_per_m_;
   size_cells_ = other.size_cells_;
@@ -178,9 +209,14 @@ void LocalGrid::copyFrom(const LocalGrid& other) {
   storage_min_slot_ = other.storage_min_slot_;
   window_min_slot_ = other.window_min_slot_;
   stencil_size_ = other.stencil_size_;
-  // assign() reuses the existing buffers when they are large enough.
-  stencil_rows_.assign(other.stencil_rows_.begin(), other.stencil_rows_.end());
-  cells_.assign(other.cells_.begin(), other.cells_.end());
+  cells_per_row_ = other.cells_per_row_;
+}
+
+void LocalGrid::copyStampsFrom(const LocalGrid& other) {
+  stamp_ = other.stamp_;
+  full_stamp_ = other.full_stamp_;
+  copied_from_ = &other;
+  copied_at_stamp_ = other.stamp_;
 }
 
 // --- Storage helpers. ---
@@ -223,6 +259,7 @@ void LocalGrid::forEachCellIn(const CellBox& box, const F& f) {
   for (cell.z() = box.lo.z(); cell.z() < box.hi.z(); ++cell.z()) {
     for (cell.y() = box.lo.y(); cell.y() < box.hi.y(); ++cell.y()) {
       const std::size_t row = rowBase(cell.y(), cell.z());
+      touchRow(row);
       int sx = sx_first;
       for (cell.x() = box.lo.x(); cell.x() < box.hi.x(); ++cell.x()) {
         f(static_cast<const CellIndex&>(cell), cells_[row + static_cast<std::size_t>(sx)]);
@@ -243,6 +280,7 @@ void LocalGrid::addStencil(const CellIndex& center, Word delta) {
     const int x_begin = std::max(center.x() - row.half_x, x_min);
     const int x_end = std::min(center.x() + row.half_x, x_max);
     const std::size_t base = rowBase(y, z);
+    touchRow(base);
     int sx = x_begin - storage_min_cell_.x() + storage_min_slot_.x();  // in [0, 2 dims): no modulo needed
     if (sx >= dims_.x()) sx -= dims_.x();
     for (int x = x_begin; x <= x_end; ++x) {
@@ -259,7 +297,9 @@ void LocalGrid::addStencilWhere(const CellIndex& center, Word delta, const Pred&
     for (int dx = -row.half_x; dx <= row.half_x; ++dx) {
       const CellIndex cell(center.x() + dx, center.y() + row.dy, center.z() + row.dz);
       if (!inStorage(cell) || !pred(cell)) continue;
-      Word& word = cells_[slotOf(cell)];
+      const std::size_t slot = slotOf(cell);
+      touchRow(slot);
+      Word& word = cells_[slot];
       word = static_cast<Word>(word + delta);
     }
   }
@@ -292,6 +332,7 @@ void LocalGrid::fillStatesFromTree(const octomap::OcTree& tree, const CellBox& b
 }
 
 void LocalGrid::recountAll() {
+  touchAll();
   for (Word& word : cells_) word = static_cast<Word>(word & kStateMask);
   forEachCellIn(storageBox(), [this](const CellIndex& cell, Word& word) {
     if ((word & kStateMask) == static_cast<Word>(CellState::kOccupied)) addStencil(cell, kCountOne);
@@ -300,6 +341,7 @@ void LocalGrid::recountAll() {
 
 rt::Status LocalGrid::rebuild(const octomap::OcTree& tree) {
   if (auto status = checkResolution(tree); !status) return status;
+  touchAll();
   std::fill(cells_.begin(), cells_.end(), Word{0});
   fillStatesFromTree(tree, storageBox());
   recountAll();
@@ -322,9 +364,11 @@ void LocalGrid::setVoxel(const octomap::OcTreeKey& key, CellState now) {
   constexpr Word kMinusOne = static_cast<Word>(-static_cast<int>(kCountOne));
   const CellIndex cell = fromKey(key);
   if (!inStorage(cell)) return;
-  Word& word = cells_[slotOf(cell)];
+  const std::size_t slot = slotOf(cell);
+  Word& word = cells_[slot];
   const auto before = static_cast<CellState>(word & kStateMask);
   if (before == now) return;
+  touchRow(slot);
   word = static_cast<Word>((word & ~kStateMask) | static_cast<Word>(now));
   if (before == CellState::kOccupied) addStencil(cell, kMinusOne);
   if (now == CellState::kOccupied) addStencil(cell, kCountOne);
@@ -353,6 +397,7 @@ rt::Expected<bool> LocalGrid::recenter(const Eigen::Vector3d& center_W_m, const 
   const CellBox kept = intersect(old_box, new_box);
   if (kept.empty()) {  // nothing to keep: a full refill
     setOrigin(new_storage_min, storage_min_slot_);
+    touchAll();
     std::fill(cells_.begin(), cells_.end(), Word{0});
     fillStatesFromTree(tree, new_box);
     recountAll();

@@ -10,6 +10,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -176,9 +177,26 @@ class InsertionOcTree final : public octomap::OcTree {
     return occupied ? node->getLogOdds() >= clamping_thres_max : node->getLogOdds() <= clamping_thres_min;
   }
 
-  /// An inner node after its subtree changed: prune it, or set it to its children's maximum.
+  /// An inner node after its subtree changed: prune it, or set it to its children's maximum
+  /// (OcTree's pruneNode, else updateOccupancyChildren). One pass over the children decides both:
+  /// the two library calls would each chase the eight child pointers again.
   void finalize(octomap::OcTreeNode* node) {
-    if (!pruneNode(node)) node->updateOccupancyChildren();
+    float max_log_odds = -std::numeric_limits<float>::max();  // getMaxChildLogOdds's start
+    bool collapsible = true;                                  // isNodeCollapsible: 8 equal leaves
+    float first = 0.0F;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (!nodeChildExists(node, i)) {
+        collapsible = false;
+        continue;
+      }
+      const octomap::OcTreeNode* child = getNodeChild(node, i);
+      const float log_odds = child->getLogOdds();
+      max_log_odds = std::max(max_log_odds, log_odds);
+      if (i == 0) first = log_odds;
+      if (collapsible && (nodeHasChildren(child) || log_odds != first)) collapsible = false;
+    }
+    if (collapsible && pruneNode(node)) return;
+    node->setLogOdds(max_log_odds);
   }
 
   /// Leaves path_ depths len .. to + 1 (finalizing the changed ones); returns min(len, to).

@@ -260,6 +260,43 @@ TEST(LocalGridSnapshot, GivenAPoolGridWhenCopiedFromTheMapperThenContentsMatchWi
   test::expectSameGrid(other, mapper, "copyFrom other size");
 }
 
+TEST(LocalGridSnapshot, GivenThreePoolGridsCopiedInTurnWhileTheGridChangesThenEachIncrementalCopyEqualsIt) {
+  // The mapper's pattern: one grid changes frame after frame (flips, window moves, a refill) and
+  // three published grids take turns to catch up with it, each lagging by a few frames.
+  auto tree = makeTree();
+  LocalGridParams params = smallParams();
+  params.size_m = Eigen::Vector3d(3.0, 2.4, 1.2);
+  params.recenter_distance_m = 0.2;
+  LocalGrid grid = makeGrid(params);
+  ASSERT_TRUE(grid.rebuild(tree).has_value());
+  std::vector<LocalGrid> pool(3, grid);
+  LocalGrid stranger = makeGrid(params);  // another source: its copies must not be taken as increments
+  std::mt19937 rng(21);
+  std::uniform_int_distribution<int> xy(-25, 24);
+  std::uniform_int_distribution<int> z(-8, 7);
+  Eigen::Vector3d centre_W_m = Eigen::Vector3d::Zero();
+  for (int frame = 0; frame < 60; ++frame) {
+    for (int i = 0; i < 40; ++i) {
+      const CellIndex cell(xy(rng), xy(rng), z(rng));
+      const bool occupied = (rng() % 3) != 0;
+      setCell(tree, cell, occupied);
+      grid.setVoxel(test::keyOf(cell), occupied ? CellState::kOccupied : CellState::kFree);
+    }
+    centre_W_m += Eigen::Vector3d(0.07, -0.05, 0.01 * std::sin(frame));
+    ASSERT_TRUE(grid.recenter(centre_W_m, tree).has_value());
+    if (frame == 33) {
+      ASSERT_TRUE(grid.rebuild(tree).has_value());  // a whole refill
+    }
+    LocalGrid& snapshot = pool[static_cast<std::size_t>(frame) % pool.size()];
+    if (frame == 45) snapshot.copyFrom(stranger);  // last copied from elsewhere: must copy whole
+    const long before = g_allocations.load();
+    snapshot.copyChangesFrom(grid);
+    EXPECT_EQ(g_allocations.load() - before, 0);
+    test::expectSameGrid(snapshot, grid, "frame " + std::to_string(frame));
+    test::expectSameGrid(grid, test::rebuiltAt(grid, tree), "grid itself, frame " + std::to_string(frame));
+  }
+}
+
 TEST(LocalGridAllocation, GivenASyncedGridWhenQueriedAndChangesAppliedThenNothingIsAllocated) {
   auto tree = makeTree();
   LocalGrid grid = makeGrid(LocalGridParams{});

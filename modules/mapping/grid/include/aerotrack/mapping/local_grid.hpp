@@ -107,6 +107,14 @@ class LocalGrid {
   /// exclusive access. Cost: one copy of the storage (about 4.5 MB for the default 20 x 20 x 5 m).
   void copyFrom(const LocalGrid& other);
 
+  /// copyFrom that copies only the storage rows (x runs of cells) other wrote since this grid's last
+  /// copy of it -- for a pool of published snapshots that each lag the owner's grid by a few frames.
+  /// Falls back to copyFrom when this grid's last copy was not of other (by address), when other was
+  /// refilled whole since, or when the sizes differ. The caller must not have modified this grid since
+  /// its last copy. Cost: O(rows) to compare write stamps plus the changed rows (a frame of forest
+  /// flight touches a few hundred of the ~14 000 rows; a window move, the entering slabs).
+  void copyChangesFrom(const LocalGrid& other);
+
   // --- Queries: O(1) or O(cells traversed), const, no allocation. Points in W, metres. ---
 
   /// Blocked for planning: an occupied voxel within the inflation radius of the cell's centre, or the
@@ -186,6 +194,8 @@ class LocalGrid {
   std::size_t slotOf(const CellIndex& cell) const;  // storage index; the cell must be inStorage
   std::size_t rowBase(int y, int z) const;          // storage index of slot x = 0 in row (y, z), in storage
   void setOrigin(const CellIndex& storage_min_cell, const CellIndex& storage_min_slot);
+  void copyGeometryFrom(const LocalGrid& other);  // everything but the cells, stencil rows and stamps
+  void copyStampsFrom(const LocalGrid& other);
   void fillStatesFromTree(const octomap::OcTree& tree, const CellBox& box);  // states only, box in storage
   void recountAll();                                                         // counts from states, whole storage
   void addStencil(const CellIndex& center, Word delta);                      // every storage cell within the radius
@@ -193,6 +203,8 @@ class LocalGrid {
   void addStencilWhere(const CellIndex& center, Word delta, const Pred& pred);  // ... and pred(cell)
   template <class F>
   void forEachCellIn(const CellBox& box, const F& f);  // f(cell, word&), box inside storage
+  void touchRow(std::size_t storage_index) { row_stamps_[storage_index / cells_per_row_] = ++stamp_; }
+  void touchAll() { full_stamp_ = ++stamp_; }
   template <class Visit>
   bool traverse(const Eigen::Vector3d& a_W_m, const Eigen::Vector3d& b_W_m, const Visit& visit) const;
 
@@ -208,6 +220,14 @@ class LocalGrid {
   std::vector<StencilRow> stencil_rows_;
   int stencil_size_ = 0;
   std::vector<Word> cells_;  // x fastest: slot = sx + dims.x * (sy + dims.y * sz)
+  // Write stamps for copyChangesFrom: every write to a storage row (dims.x cells) stamps it with
+  // ++stamp_; a whole refill sets full_stamp_. A copy remembers its source and the source's stamp_.
+  std::size_t cells_per_row_ = 1;
+  std::vector<std::uint64_t> row_stamps_;
+  std::uint64_t stamp_ = 0;
+  std::uint64_t full_stamp_ = 0;
+  const LocalGrid* copied_from_ = nullptr;
+  std::uint64_t copied_at_stamp_ = 0;
 };
 
 // --- Inline hot-path queries. ---
