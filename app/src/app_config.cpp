@@ -21,6 +21,7 @@ rt::TaskSpec parseTaskSpec(const rt::ConfigNode& node) {
   t.budget_ms = node.getDouble("budget_ms", 1e-6, 10000.0);
   t.priority = node.getIntOr("priority", 0, 0, 99);
   t.cpu = node.getIntOr("cpu", -1, -1, 1023);
+  t.latency_ms = node.getDoubleOr("latency_ms", 0.0, 0.0, 10000.0);
   node.finish();
   if (const rt::Status s = rt::validate(t); !s) node.fail("", s.error().message);
   return t;

@@ -3,6 +3,11 @@
 // priority, then table order.
 #include "aerotrack/rt/lockstep_executor.hpp"
 
+#include <algorithm>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
 #include "aerotrack/rt/doorbell.hpp"
 
 namespace aerotrack::rt {
@@ -20,10 +25,124 @@ void hashMix(std::uint64_t& hash, std::uint64_t value) {
 
 }  // namespace
 
+/// One thread that runs one OverlappedTask::work() at a time. The hand-over is a mutex and a
+/// condition variable: this is the simulator's executor, not a real-time path.
+class LockstepExecutor::Worker {
+ public:
+  explicit Worker(const Clock& stats_clock) : stats_clock_(stats_clock), thread_([this] { run(); }) {}
+  ~Worker() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      quit_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+
+  /// Hands over a job; the worker must be idle (the executor joins first).
+  void start(OverlappedTask* task) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      job_ = task;
+    }
+    wake_.notify_all();
+  }
+
+  /// Waits until the job is done; returns how long work() took.
+  DurationNs join() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [this] { return job_ == nullptr; });
+    return work_ns_;
+  }
+
+ private:
+  void run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [this] { return quit_ || job_ != nullptr; });
+      if (job_ == nullptr) return;  // quit, and nothing left to do
+      OverlappedTask* task = job_;
+      lock.unlock();
+      const TimeNs begin_ns = stats_clock_.now();
+      task->work();
+      const DurationNs work_ns = stats_clock_.now() - begin_ns;
+      lock.lock();
+      work_ns_ = work_ns;
+      job_ = nullptr;
+      done_.notify_all();
+    }
+  }
+
+  const Clock& stats_clock_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::condition_variable done_;
+  OverlappedTask* job_ = nullptr;
+  DurationNs work_ns_ = 0;
+  bool quit_ = false;
+  std::thread thread_;  // last: starts after the members it uses
+};
+
 LockstepExecutor::LockstepExecutor(ManualClock& sim_clock, const Clock& stats_clock)
     : clock_(sim_clock), stats_clock_(stats_clock) {}
 
+LockstepExecutor::~LockstepExecutor() = default;
+
+void LockstepExecutor::joinWorker() {
+  if (!busy_) return;
+  const DurationNs work_ns = worker_->join();
+  busy_ = false;
+  tasks_.entries()[in_flight_].stats->recordRun(in_flight_gather_ns_ + work_ns);
+}
+
+bool LockstepExecutor::startOverlapped(std::size_t index, TimeNs now_ns) {
+  TaskSet::Entry& entry = tasks_.entries()[index];
+  if (!(entry.binding.spec.latency_ms > 0.0)) return false;
+  auto* task = dynamic_cast<OverlappedTask*>(entry.binding.task);
+  if (task == nullptr) return false;
+  // Released again before its outputs appeared (an event task, or a latency of a whole period).
+  for (std::size_t i = 0; i < pending_.size(); ++i) {
+    if (pending_[i].index == index) {
+      publish(i, now_ns);
+      break;
+    }
+  }
+  hashMix(trace_hash_, index);
+  hashMix(trace_hash_, static_cast<std::uint64_t>(now_ns));
+  ++steps_;
+  const TimeNs begin_ns = stats_clock_.now();
+  const bool has_work = task->gather(now_ns);
+  const DurationNs gather_ns = stats_clock_.now() - begin_ns;
+  if (!has_work) {
+    entry.stats->recordRun(gather_ns);
+    return true;
+  }
+  joinWorker();  // one job at a time
+  if (!worker_) worker_ = std::make_unique<Worker>(stats_clock_);
+  worker_->start(task);
+  busy_ = true;
+  in_flight_ = index;
+  in_flight_gather_ns_ = gather_ns;
+  const auto latency_ns = static_cast<DurationNs>(entry.binding.spec.latency_ms * 1e6);
+  pending_.push_back({index, now_ns + latency_ns});
+  return true;
+}
+
+void LockstepExecutor::publish(std::size_t i, TimeNs now_ns) {
+  const Publication p = pending_[i];
+  pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(i));
+  if (busy_ && in_flight_ == p.index) joinWorker();
+  const TimeNs publish_ns = std::max(p.publish_ns, now_ns);
+  if (publish_ns > clock_.now()) clock_.set(publish_ns);
+  static_cast<OverlappedTask*>(tasks_.entries()[p.index].binding.task)->publish(publish_ns);
+  hashMix(trace_hash_, p.index + tasks_.entries().size());
+  hashMix(trace_hash_, static_cast<std::uint64_t>(publish_ns));
+}
+
 void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
+  if (startOverlapped(index, now_ns)) return;
   TaskSet::Entry& entry = tasks_.entries()[index];
   const TimeNs begin = stats_clock_.now();
   entry.binding.task->step(now_ns);
@@ -52,7 +171,7 @@ Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) 
   const std::vector<TaskSet::Entry>& entries = tasks_.entries();
   next_release_ns_.resize(entries.size(), clock_.now());  // new tasks start now
   for (;;) {
-    if (stop != nullptr && stop->load(std::memory_order_acquire)) return ok();
+    if (stop != nullptr && stop->load(std::memory_order_acquire)) break;
     std::size_t next = entries.size();
     for (std::size_t i = 0; i < entries.size(); ++i) {
       if (!entries[i].binding.spec.periodic()) continue;
@@ -61,17 +180,39 @@ Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) 
            entries[i].binding.spec.priority > entries[next].binding.spec.priority))
         next = i;
     }
-    if (next == entries.size() || next_release_ns_[next] > end_ns) {
-      // Nothing periodic left before the end: advance to it so a later call continues from there.
+    const bool release_due = next != entries.size() && next_release_ns_[next] <= end_ns;
+    // The earliest publication (first started on ties) goes before the releases at its instant.
+    std::size_t first = pending_.size();
+    for (std::size_t i = 0; i < pending_.size(); ++i)
+      if (first == pending_.size() || pending_[i].publish_ns < pending_[first].publish_ns) first = i;
+    if (first < pending_.size() && pending_[first].publish_ns <= end_ns &&
+        (!release_due || pending_[first].publish_ns <= next_release_ns_[next])) {
+      const TimeNs publish_ns = pending_[first].publish_ns;
+      publish(first, publish_ns);
+      if (Status s = runPendingEvents(publish_ns); !s) {
+        joinWorker();
+        return s;
+      }
+      continue;
+    }
+    if (!release_due) {
+      // Nothing left before the end: advance to it so a later call continues from there.
       if (end_ns > clock_.now()) clock_.set(end_ns);
-      return runPendingEvents(clock_.now());
+      Status s = runPendingEvents(clock_.now());
+      joinWorker();
+      return s;
     }
     const TimeNs release_ns = next_release_ns_[next];
     clock_.set(release_ns);
     runOne(next, release_ns);
     next_release_ns_[next] += entries[next].period_ns;
-    if (Status s = runPendingEvents(release_ns); !s) return s;
+    if (Status s = runPendingEvents(release_ns); !s) {
+      joinWorker();
+      return s;
+    }
   }
+  joinWorker();
+  return ok();
 }
 
 }  // namespace aerotrack::rt

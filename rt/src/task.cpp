@@ -17,6 +17,10 @@ Status validate(const TaskSpec& spec) {
     return Error{where + "budget_ms must be in (0, 10000]"};
   if (spec.priority < 0 || spec.priority > 99) return Error{where + "priority must be in [0, 99]"};
   if (spec.cpu < -1 || spec.cpu > 1023) return Error{where + "cpu must be -1 (any) or in [0, 1023]"};
+  if (!std::isfinite(spec.latency_ms) || spec.latency_ms < 0.0 || spec.latency_ms > spec.budget_ms)
+    return Error{where + "latency_ms must be in [0, budget_ms]"};
+  if (spec.periodic() && spec.latency_ms * 1e-3 * spec.rate_hz > 1.0)
+    return Error{where + "latency_ms must be at most the period"};
   return ok();
 }
 

@@ -1,6 +1,8 @@
 // The simulator on threads: the whole sim configuration on the real-time executor, one thread per
-// task, for a second and a half of wall time. Run under ThreadSanitizer by scripts/check.sh, it
-// checks that the sim devices' channels are the only state shared between task threads.
+// task, for a second and a half of wall time; and in lockstep, where the mapping task's work runs on
+// the executor's worker thread (its latency_ms) while the other tasks go on. Run under
+// ThreadSanitizer by scripts/check.sh, they check that the sim devices' channels are the only state
+// shared between threads.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -9,6 +11,7 @@
 #include <chrono>
 #include <thread>
 
+#include "aerotrack/rt/lockstep_executor.hpp"
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "app_config.hpp"
 #include "sim_report.hpp"
@@ -64,6 +67,33 @@ TEST(SimRealtime, GivenSimConfigOnThreadsThenEveryTaskRunsAndTheDroneTakesOff) {
     EXPECT_LE(static_cast<double>(t.overruns), 0.05 * static_cast<double>(t.runs)) << name;
   }
 #endif
+}
+
+/// Lockstep run of the short trial with the sim configuration: the trace hash and the drone's height.
+std::pair<std::uint64_t, double> runLockstep(const AppConfig& config) {
+  auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/tests/data/short.yaml", 1, std::nullopt);
+  EXPECT_TRUE(trial) << trial.error().message;
+  rt::ManualClock clock(0);
+  const rt::MonotonicClock wall;
+  auto system = System::build(config, &trial.value(), clock.now());
+  EXPECT_TRUE(system) << system.error().message;
+  rt::LockstepExecutor executor(clock, wall);
+  for (const auto& b : (*system)->bindings()) EXPECT_TRUE(executor.add(b));
+  EXPECT_TRUE(executor.runUntil(3 * rt::kNsPerSecond));
+  return {executor.traceHash(), (*system)->devices().simulation->truth().drone.p_W_m.z()};
+}
+
+TEST(SimLockstep, GivenMappingOverlappedOnTheWorkerThreadThenTwoRunsAreIdentical) {
+  auto config = loadAppConfig(AEROTRACK_SOURCE_DIR "/config/sim.yaml");
+  ASSERT_TRUE(config);
+  bool overlapped = false;
+  for (const rt::TaskSpec& t : config->tasks) overlapped |= t.name == "mapping" && t.latency_ms > 0.0;
+  ASSERT_TRUE(overlapped) << "config/sim.yaml no longer overlaps the mapping task";
+  const auto a = runLockstep(*config);
+  const auto b = runLockstep(*config);
+  EXPECT_EQ(a.first, b.first);
+  EXPECT_EQ(a.second, b.second);
+  EXPECT_GT(a.second, 0.3);  // climbing towards 1.5 m
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ MapperParams parseMapperParams(const rt::ConfigNode& node) {
   return p;
 }
 
-void MappingTask::step(rt::TimeNs now_ns) {
+bool MappingTask::gather(rt::TimeNs now_ns) {
   while (const auto sample = odometry_.try_pop()) mapper_.addOdometry(*sample);
 
   if (depth_.version() != depth_version_) {
@@ -38,25 +38,48 @@ void MappingTask::step(rt::TimeNs now_ns) {
     }
   }
 
-  std::size_t done = 0;
-  for (; done < pending_count_; ++done) {
-    const hal::DepthFrame& frame = *pending_[done];
+  // The frames that go in now: in order, those the pose history covers or that waited long enough.
+  std::size_t ready = 0;
+  for (; ready < pending_count_; ++ready) {
+    const hal::DepthFrame& frame = *pending_[ready];
     const bool covered = mapper_.poses().size() > 0 && mapper_.poses().newest().stamp_ns >= frame.stamp_ns;
     if (!covered && now_ns - frame.stamp_ns < max_wait_ns_) break;  // odometry still on its way
+  }
+  for (std::size_t i = 0; i < ready; ++i) ready_[i] = std::move(pending_[i]);
+  ready_count_ = ready;
+  for (std::size_t i = ready; i < pending_count_; ++i) pending_[i - ready] = std::move(pending_[i]);
+  for (std::size_t i = pending_count_ - ready; i < pending_count_; ++i) pending_[i].reset();
+  pending_count_ -= ready;
+  return ready_count_ > 0;
+}
+
+void MappingTask::work() {
+  outbox_count_ = 0;
+  for (std::size_t i = 0; i < ready_count_; ++i) {
     const rt::TimeNs begin_ns = stats_clock_.now();
-    const auto update = mapper_.insert(frame);  // a frame that cannot be placed is counted there
+    const auto update = mapper_.insert(*ready_[i]);  // a frame that cannot be placed is counted there
+    ready_[i].reset();
     if (!update) continue;
-    if (update->grid) grid_out_.write(update->grid);
     const rt::TimeNs inserted_ns = stats_clock_.now();
     insert_stats_.recordRun(inserted_ns - begin_ns);
+    Output& out = outbox_[outbox_count_++];
+    out.grid = update->grid;
     if (mapper_.octreeDue()) {
-      octree_out_.write(mapper_.octreeSnapshot());
+      out.octree = mapper_.octreeSnapshot();
       snapshot_stats_.recordRun(stats_clock_.now() - inserted_ns);
     }
   }
-  for (std::size_t i = done; i < pending_count_; ++i) pending_[i - done] = std::move(pending_[i]);
-  for (std::size_t i = pending_count_ - done; i < pending_count_; ++i) pending_[i].reset();
-  pending_count_ -= done;
+  ready_count_ = 0;
+}
+
+void MappingTask::publish(rt::TimeNs /*publish_ns*/) {
+  for (std::size_t i = 0; i < outbox_count_; ++i) {
+    Output& out = outbox_[i];
+    if (out.grid) grid_out_.write(std::move(out.grid));
+    if (out.octree) octree_out_.write(std::move(out.octree));
+    out = Output{};
+  }
+  outbox_count_ = 0;
 }
 
 }  // namespace aerotrack::mapping

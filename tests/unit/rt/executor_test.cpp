@@ -64,6 +64,17 @@ TEST(TaskSpecValidation, RejectsInconsistentRows) {
   TaskSpec bad_priority = periodic("a", 10, 100);
   EXPECT_FALSE(validate(bad_priority));
   EXPECT_FALSE(validate(std::vector<TaskSpec>{periodic("a", 10), periodic("a", 20)}));
+  TaskSpec late = periodic("a", 10);
+  late.budget_ms = 50.0;
+  late.latency_ms = 50.0;
+  EXPECT_TRUE(validate(late));
+  late.latency_ms = 60.0;  // beyond its budget
+  EXPECT_FALSE(validate(late));
+  late.budget_ms = 200.0;
+  late.latency_ms = 150.0;  // beyond its 100 ms period
+  EXPECT_FALSE(validate(late));
+  late.latency_ms = -1.0;
+  EXPECT_FALSE(validate(late));
 }
 
 TEST(LockstepExecutor, GivenPeriodicTaskWhenRunOneSecondThenReleasedAtEveryPeriodIncludingEnd) {
@@ -259,6 +270,111 @@ TEST(LockstepExecutor, GivenSameSeedWhenRunTwiceThenIdenticalTraceAndOutputs) {
   const auto c = runPipeline(8);
   EXPECT_EQ(a.first, c.first);    // the schedule does not depend on the data
   EXPECT_NE(a.second, c.second);  // the outputs do
+}
+
+struct Result {
+  TimeNs release_ns;
+  std::uint64_t value;
+};
+
+/// Overlapped: gather() takes the release time, work() computes from it (slowly, and for a random
+/// while, so the worker finishes at unpredictable wall times), publish() writes the result.
+class SlowSquareTask final : public OverlappedTask {
+ public:
+  SlowSquareTask(LatestSlot<Result>& out, unsigned seed) : out_(out), rng_(seed) {}
+  bool gather(TimeNs now_ns) override {
+    input_ns_ = now_ns;
+    return true;
+  }
+  void work() override {
+    std::this_thread::sleep_for(std::chrono::microseconds(rng_() % 2000));
+    std::uint64_t x = static_cast<std::uint64_t>(input_ns_);
+    for (int i = 0; i < 1000; ++i) x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+    result_ = x;
+  }
+  void publish(TimeNs publish_ns) override {
+    out_.write({input_ns_, result_});
+    publish_times.push_back(publish_ns);
+  }
+  std::vector<TimeNs> publish_times;
+
+ private:
+  LatestSlot<Result>& out_;
+  std::mt19937 rng_;
+  TimeNs input_ns_ = 0;
+  std::uint64_t result_ = 0;
+};
+
+/// Every millisecond: which release's result it sees.
+class WatcherTask final : public Task {
+ public:
+  explicit WatcherTask(const LatestSlot<Result>& in) : in_(in) {}
+  void step(TimeNs now_ns) override {
+    const auto v = in_.read();
+    seen.push_back({now_ns, v ? v->release_ns : -1});
+    results += v ? v->value : 0;
+  }
+  std::vector<std::pair<TimeNs, TimeNs>> seen;  // (when, the release whose result it saw)
+  std::uint64_t results = 0;
+
+ private:
+  const LatestSlot<Result>& in_;
+};
+
+struct OverlapRun {
+  std::uint64_t trace;
+  std::vector<std::pair<TimeNs, TimeNs>> seen;
+  std::uint64_t results;
+  std::vector<TimeNs> publish_times;
+};
+
+OverlapRun runOverlapped(double latency_ms, unsigned seed) {
+  ManualClock clock(0);
+  MonotonicClock stats;
+  LockstepExecutor ex(clock, stats);
+  LatestSlot<Result> slot;
+  SlowSquareTask mapper(slot, seed);
+  WatcherTask watcher(slot);
+  TaskSpec spec = periodic("mapper", 10, 50);
+  spec.budget_ms = 40.0;
+  spec.latency_ms = latency_ms;
+  EXPECT_TRUE(ex.add({spec, &mapper, nullptr}));
+  EXPECT_TRUE(ex.add({periodic("watcher", 1000, 10), &watcher, nullptr}));
+  EXPECT_TRUE(ex.runUntil(kNsPerSecond / 2));
+  EXPECT_TRUE(ex.runUntil(kNsPerSecond));  // in two calls: a publication due after the first end waits
+  return {ex.traceHash(), watcher.seen, watcher.results, mapper.publish_times};
+}
+
+TEST(LockstepExecutor, GivenAnOverlappedTaskThenItsResultsAppearExactlyItsLatencyAfterTheRelease) {
+  const OverlapRun run = runOverlapped(30.0, 1);
+  ASSERT_EQ(run.publish_times.size(), 10U);  // releases at 0, 100, ..., 900 ms (1000's is due after the end)
+  for (std::size_t i = 0; i < run.publish_times.size(); ++i)
+    EXPECT_EQ(run.publish_times[i], static_cast<TimeNs>(i) * 100 * kNsPerMillisecond + 30 * kNsPerMillisecond);
+  for (const auto& [when_ns, release_ns] : run.seen) {
+    // At when, the newest release at least 30 ms old is what the watcher sees (a publication goes before
+    // the releases of its instant), none before the first.
+    const TimeNs age_ns = when_ns - 30 * kNsPerMillisecond;
+    const TimeNs expected =
+        age_ns < 0 ? -1 : std::min<TimeNs>(age_ns / (100 * kNsPerMillisecond), 9) * 100 * kNsPerMillisecond;
+    ASSERT_EQ(release_ns, expected) << "at " << when_ns;
+  }
+}
+
+TEST(LockstepExecutor, GivenAnOverlappedTaskWhenItsWorkTakesRandomTimesThenRunsAreIdentical) {
+  const OverlapRun a = runOverlapped(30.0, 1);
+  const OverlapRun b = runOverlapped(30.0, 2);  // other work durations
+  EXPECT_EQ(a.trace, b.trace);
+  EXPECT_EQ(a.seen, b.seen);
+  EXPECT_EQ(a.results, b.results);
+}
+
+TEST(LockstepExecutor, GivenNoLatencyThenAnOverlappedTaskRunsInlineLikeAnyTask) {
+  const OverlapRun run = runOverlapped(0.0, 1);
+  EXPECT_EQ(run.publish_times.size(), 11U);  // at each release, 1000 ms included
+  for (std::size_t i = 0; i < run.publish_times.size(); ++i)
+    EXPECT_EQ(run.publish_times[i], static_cast<TimeNs>(i) * 100 * kNsPerMillisecond);
+  for (const auto& [when_ns, release_ns] : run.seen)  // the mapper has the higher priority: first
+    ASSERT_EQ(release_ns, (when_ns / (100 * kNsPerMillisecond)) * 100 * kNsPerMillisecond) << "at " << when_ns;
 }
 
 class CountingTask final : public Task {

@@ -6,10 +6,18 @@
 // Order: periodic releases by time, ties by priority (higher first) then table order. After each
 // step, event-triggered tasks whose doorbell rang run at the same simulated time, in table order,
 // until none is pending.
+//
+// Overlap: an OverlappedTask with a latency (TaskSpec::latency_ms > 0) has its gather() run at the
+// release, its work() on the executor's one worker thread while the other tasks go on, and its
+// publish() at release + latency, before the releases due at that instant (then the event tasks
+// its outputs woke). So a second core shortens the wall time while the simulated run stays the
+// same, bit for bit, however fast the work ran. A task released again before its outputs appeared
+// publishes them first; runUntil() returns only with the worker idle.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "aerotrack/rt/clock.hpp"
@@ -23,6 +31,9 @@ class LockstepExecutor {
   /// sim_clock: the clock the executor moves (devices and tasks read it).
   /// stats_clock: measures execution time for statistics only (normally a MonotonicClock).
   LockstepExecutor(ManualClock& sim_clock, const Clock& stats_clock);
+  ~LockstepExecutor();
+  LockstepExecutor(const LockstepExecutor&) = delete;
+  LockstepExecutor& operator=(const LockstepExecutor&) = delete;
 
   /// Adds a task (see TaskSet::add). Tasks added between runs start at the clock's time.
   Status add(const TaskBinding& binding) { return tasks_.add(binding); }
@@ -31,20 +42,38 @@ class LockstepExecutor {
   /// becomes true (checked between steps). May be called again to continue.
   Status runUntil(TimeNs end_ns, const std::atomic<bool>* stop = nullptr);
 
-  /// FNV-1a hash over every (task index, release time) step so far.
+  /// FNV-1a hash over every (task index, release time) step so far, and every (task index + number of
+  /// tasks, publish time) publication of an overlapped task.
   std::uint64_t traceHash() const { return trace_hash_; }
   std::uint64_t steps() const { return steps_; }
 
   std::vector<TaskSet::NamedStats> stats() const { return tasks_.stats(); }
 
  private:
+  class Worker;
+  struct Publication {
+    std::size_t index;
+    TimeNs publish_ns;
+  };
+
   void runOne(std::size_t index, TimeNs now_ns);
+  /// gather() now, work() on the worker, publication scheduled; false if the task is not overlapped.
+  bool startOverlapped(std::size_t index, TimeNs now_ns);
+  /// Waits for the worker's job, if any, and books its time to its task's statistics.
+  void joinWorker();
+  /// Publishes pending_[i] at its time (or at now_ns if that is later) and removes it.
+  void publish(std::size_t i, TimeNs now_ns);
   Status runPendingEvents(TimeNs now_ns);
 
   ManualClock& clock_;
   const Clock& stats_clock_;
   TaskSet tasks_;
   std::vector<TimeNs> next_release_ns_;  // per task, in table order
+  std::vector<Publication> pending_;     // at most one per overlapped task, in start order
+  std::unique_ptr<Worker> worker_;       // started with the first overlapped step
+  std::size_t in_flight_ = 0;            // task whose work the worker has (if busy)
+  bool busy_ = false;
+  DurationNs in_flight_gather_ns_ = 0;
   std::uint64_t trace_hash_ = 1469598103934665603ULL;
   std::uint64_t steps_ = 0;
 };

@@ -21,6 +21,10 @@ struct TaskSpec {
   double budget_ms = 0.0;  ///< Execution-time budget per run; a longer run counts as an overrun.
   int priority = 0;        ///< SCHED_FIFO priority 1..99 on the real-time executor; 0: normal.
   int cpu = -1;            ///< CPU to pin the task's thread to; -1: any.
+  /// Lockstep only, for an OverlappedTask: its outputs appear this long after its release, and its
+  /// work runs on a second thread meanwhile. 0: it runs inline, outputs at the release. At most the
+  /// period (a task delivers before it is released again) and at most budget_ms (the contract).
+  double latency_ms = 0.0;
 
   bool periodic() const { return rate_hz > 0.0; }
 };
@@ -38,6 +42,29 @@ class Task {
   /// Runs one step. now_ns is the executor clock's time at the release of this step: the
   /// scheduled release in lockstep, the wake-up time on the real-time executor.
   virtual void step(TimeNs now_ns) = 0;
+};
+
+/// A task whose work can overlap the other tasks' in lockstep simulation, deterministically. One step
+/// is split in three: gather() takes the step's inputs from the channels at the release, work() does
+/// the computing on nothing but the task's own state and what gather took (no channel is touched),
+/// publish() writes the results to the channels. The real-time executor runs the three in a row on the
+/// task's thread (step()). The lockstep executor, for a task with a latency (TaskSpec::latency_ms),
+/// runs work() on a worker thread while the other tasks go on, and publish() on its own thread at
+/// release + latency: what the other tasks see, and when, does not depend on how fast work() ran.
+class OverlappedTask : public Task {
+ public:
+  /// At the release, on the executor's thread. False: nothing to do this step (no work, no publish).
+  virtual bool gather(TimeNs now_ns) = 0;
+  /// Anywhere, after gather() returned true. Publishes nothing.
+  virtual void work() = 0;
+  /// On the executor's thread, after work(): the results appear at publish_ns.
+  virtual void publish(TimeNs publish_ns) = 0;
+
+  void step(TimeNs now_ns) final {
+    if (!gather(now_ns)) return;
+    work();
+    publish(now_ns);
+  }
 };
 
 /// A task bound to its row of the table and, if event-triggered, to the doorbell of its input.

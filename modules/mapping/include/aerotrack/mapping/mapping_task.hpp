@@ -4,6 +4,10 @@
 // dropped; frames that cannot get a pose are skipped and counted. Insertion time is measured per
 // inserted frame with a stats clock passed in (as the executors measure tasks), apart from the
 // time the octree snapshots take, so that map_insert_ms is the cost of a frame, not of a run.
+//
+// An rt::OverlappedTask: gather() drains the odometry and takes the frames that are ready, work()
+// inserts them (the lockstep executor runs it on a second thread when the task has a latency),
+// publish() writes the grid and octree snapshots.
 #pragma once
 
 #include <array>
@@ -22,7 +26,7 @@ namespace aerotrack::mapping {
 /// Reads the `mapping:` config section (throws rt::ConfigError naming the key).
 MapperParams parseMapperParams(const rt::ConfigNode& node);
 
-class MappingTask final : public rt::Task {
+class MappingTask final : public rt::OverlappedTask {
  public:
   MappingTask(Mapper mapper, rt::SpscQueue<hal::OdometrySample>& odometry, const rt::SharedSlot<hal::DepthFrame>& depth,
               rt::SharedSlot<LocalGrid>& grid_out, rt::SharedSlot<octomap::OcTree>& octree_out,
@@ -35,7 +39,9 @@ class MappingTask final : public rt::Task {
         octree_out_(octree_out),
         max_wait_ns_(max_wait_ns) {}
 
-  void step(rt::TimeNs now_ns) override;
+  bool gather(rt::TimeNs now_ns) override;
+  void work() override;
+  void publish(rt::TimeNs publish_ns) override;
   const Mapper& mapper() const { return mapper_; }
   std::uint64_t framesDroppedWaiting() const { return dropped_waiting_; }
   /// Per inserted frame: insertion, grid update and grid snapshot (octree snapshots excluded).
@@ -57,6 +63,16 @@ class MappingTask final : public rt::Task {
   std::array<rt::SharedSlot<hal::DepthFrame>::Handle, 8> pending_{};  // waiting for odometry, oldest first
   std::size_t pending_count_ = 0;
   std::uint64_t dropped_waiting_ = 0;
+  // Between gather() and work(): the frames to insert, in order.
+  std::array<rt::SharedSlot<hal::DepthFrame>::Handle, 8> ready_{};
+  std::size_t ready_count_ = 0;
+  // Between work() and publish(): per inserted frame, its grid and (when due) the octree snapshot.
+  struct Output {
+    std::shared_ptr<const LocalGrid> grid;
+    std::shared_ptr<const octomap::OcTree> octree;
+  };
+  std::array<Output, 8> outbox_{};
+  std::size_t outbox_count_ = 0;
 };
 
 }  // namespace aerotrack::mapping
