@@ -250,7 +250,9 @@ std::string toYaml(const AppConfig& c) {
       out << YAML::Key << "trigger" << YAML::Value << t.trigger;
     out << YAML::Key << "budget_ms" << YAML::Value << t.budget_ms;
     out << YAML::Key << "priority" << YAML::Value << t.priority;
-    out << YAML::Key << "cpu" << YAML::Value << t.cpu << YAML::EndMap;
+    out << YAML::Key << "cpu" << YAML::Value << t.cpu;
+    if (t.latency_ms > 0.0) out << YAML::Key << "latency_ms" << YAML::Value << t.latency_ms;
+    out << YAML::EndMap;
   }
   out << YAML::EndSeq << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

@@ -45,6 +45,8 @@ struct AppConfig {
   /// `--record DIR` (run, sim): record what the devices deliver and are told into a dataset there
   /// (hal/replay/README.md). Empty: no recording.
   std::string record_dir;
+  /// The run is on the lockstep executor: the recorder waits for the disk instead of dropping records.
+  bool record_lossless = false;
   VehicleConfig vehicle;
   hal::HalConfig hal;
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.

@@ -39,6 +39,18 @@ std::vector<CommandSpec> commandTable() {
         {"record", "DIR", false, "record what the devices deliver and are told into a dataset in DIR"},
         {"config", "FILE", false, "configuration YAML (default config/sim.yaml)"}},
        ""},
+      {"replay",
+       "re-run the modules on a recorded dataset (lockstep unless --realtime)",
+       "DIR",
+       {{"compare", "", false,
+         "record the replay (OUT/replayed) and compare its outputs with the recording's, record by record"},
+        {"config", "FILE", false, "configuration YAML (default DIR/config.yaml, the recorded run's)"},
+        {"out", "DIR", false, "where --compare writes the replay's recording (default out/replay-<name>)"},
+        {"offset-s", "S", false, "start this far into the recording"},
+        {"mode", "proposed|baseline", false, "as sim --mode: what the recorded run flew (default proposed)"},
+        {"strict", "", false, "a bad row or a missing frame stops the start (default: skipped and counted)"},
+        {"realtime", "", false, "replay at 1x on the real-time executor"}},
+       ""},
       {"bench",
        "seeds 1..N of a scenario in parallel processes; bench.json and a table",
        "",
@@ -154,7 +166,8 @@ std::string usage(const std::vector<CommandSpec>& table) {
     if (!c.landed_in.empty()) out << "  [not yet available: " << c.landed_in << "]";
     out << "\n";
   }
-  out << "\nexit status: 0 success, 1 bad input or failure, 2 capability not available yet\n";
+  out << "\nexit status: 0 success, 1 bad input or failure, 2 capability not available yet, 3 replay --compare "
+         "found differences\n";
   return out.str();
 }
 

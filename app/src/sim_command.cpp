@@ -12,11 +12,10 @@
 #include <fstream>
 #include <thread>
 
-#include "aerotrack/rt/lockstep_executor.hpp"
-#include "aerotrack/rt/realtime_executor.hpp"
 #include "commands.hpp"
 #include "paths.hpp"
 #include "report.hpp"
+#include "run_executors.hpp"
 #include "signals.hpp"
 #include "sim_report.hpp"
 #include "system.hpp"
@@ -27,44 +26,6 @@ namespace {
 int fail(const std::string& message) {
   std::fprintf(stderr, "aerotrack sim: %s\n", message.c_str());
   return 1;
-}
-
-rt::Status addAll(const System& system, auto& executor) {
-  for (const rt::TaskBinding& b : system.bindings())
-    if (rt::Status s = executor.add(b); !s) return s;
-  return rt::ok();
-}
-
-rt::Status runLockstep(System& system, rt::ManualClock& clock, rt::TimeNs end_ns, const std::atomic<bool>& stop,
-                       RunInfo& info) {
-  const rt::MonotonicClock wall;
-  rt::LockstepExecutor executor(clock, wall);
-  if (rt::Status s = addAll(system, executor); !s) return s;
-  const rt::TimeNs wall_start = wall.now();
-  if (rt::Status s = executor.runUntil(end_ns, &stop); !s) return s;
-  info.wall_time_s = rt::nsToSeconds(wall.now() - wall_start);
-  info.sim_time_s = rt::nsToSeconds(clock.now());
-  info.timings = snapshotTimings(executor.stats());
-  char hash[32];
-  std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(executor.traceHash()));
-  info.trace_hash = hash;
-  return rt::ok();
-}
-
-rt::Status runRealtime(System& system, const rt::MonotonicClock& clock, rt::TimeNs start_ns, rt::TimeNs end_ns,
-                       const std::atomic<bool>& stop, RunInfo& info) {
-  rt::RealtimeExecutor executor(clock, system.realtimeOptions());
-  if (rt::Status s = addAll(system, executor); !s) return s;
-  const auto warnings = executor.start();
-  if (!warnings) return warnings.error();
-  for (const std::string& w : *warnings) std::fprintf(stderr, "aerotrack sim: warning: %s\n", w.c_str());
-  while (!stop.load() && clock.now() < end_ns) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  executor.requestStop();
-  executor.join();
-  info.sim_time_s = rt::nsToSeconds(clock.now() - start_ns);
-  info.wall_time_s = info.sim_time_s;
-  info.timings = snapshotTimings(executor.stats());
-  return rt::ok();
 }
 
 }  // namespace
@@ -104,6 +65,7 @@ int simCommand(const ParsedArgs& args) {
   if (ec) return fail(out_dir + ": cannot create directory: " + ec.message());
 
   const bool realtime = args.flags.count("realtime") != 0;
+  config->record_lossless = !realtime;
   rt::ManualClock sim_clock(0);
   const rt::MonotonicClock mono_clock;
   const rt::TimeNs start_ns = realtime ? mono_clock.now() : 0;
@@ -118,7 +80,7 @@ int simCommand(const ParsedArgs& args) {
                     : config->baseline_mode ? "baseline (Fast-Tracker 1.0: fixed camera, no occlusion term)"
                                             : "proposed";
   const rt::TimeNs end_ns = start_ns + rt::secondsToNs(trial->duration_s);
-  const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info)
+  const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info, "sim")
                                   : runLockstep(**system, sim_clock, end_ns, stop, info);
   if (!ran) return fail(ran.error().message);
   info.interrupted = stop.load();

@@ -2,6 +2,7 @@
 #include "system.hpp"
 
 #include <cmath>
+#include <fstream>
 
 #include "aerotrack/gimbal_control/gimbal_control_task.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
@@ -31,13 +32,22 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
     hal::replay::RecorderOptions options;
     options.dir = config.record_dir;
     options.software_version = "aerotrack (" + config.source + ")";
-    options.source = config.hal.usesSim() ? "sim" : "real";
+    options.source = config.hal.usesSim() ? "sim" : config.hal.usesReplay() ? "replay" : "real";
+    options.lossless = config.record_lossless;
     auto recorder = hal::replay::DatasetRecorder::start(options, start_ns);
     if (!recorder) return recorder.error();
     system->recorder_ = std::move(recorder.value());
+    // The effective configuration, so that `aerotrack replay` re-runs the modules as they ran.
+    const std::string config_path = config.record_dir + "/config.yaml";
+    std::ofstream config_file(config_path);
+    config_file << "# the configuration of the recorded run (aerotrack replay reads it)\n" << toYaml(config);
+    config_file.close();
+    if (!config_file) return rt::Error{"record: " + config_path + ": write failed"};
     hal::Devices& d = system->devices_;
     hal::replay::DatasetRecorder& r = *system->recorder_;
     d.odometry = std::make_unique<hal::replay::RecordingOdometry>(std::move(d.odometry), r);
+    d.gimbal_camera = std::make_unique<hal::replay::RecordingGimbalCamera>(std::move(d.gimbal_camera), r);
+    d.depth_camera = std::make_unique<hal::replay::RecordingDepthCamera>(std::move(d.depth_camera), r);
     d.gimbal = std::make_unique<hal::replay::RecordingGimbal>(std::move(d.gimbal), r);
     d.vehicle_link = std::make_unique<hal::replay::RecordingVehicleLink>(std::move(d.vehicle_link), r);
   }
@@ -50,6 +60,19 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
   if (system->devices_.simulation && !has_world_task)
     return rt::Error{config.source +
                      ": tasks: sim backends are configured but no 'sim_world' task steps the simulation"};
+  if (system->recorder_) {
+    // The modules' outputs beside the devices' streams: a background task, after every table row.
+    auto outputs = OutputRecorderTask::create(config.record_dir, system->channels_.newest_detection,
+                                              system->channels_.target, system->channels_.trajectories);
+    if (!outputs) return outputs.error();
+    system->output_recorder_ = outputs->get();
+    system->tasks_.push_back(std::move(outputs.value()));
+    rt::TaskSpec spec;
+    spec.name = "record_outputs";
+    spec.rate_hz = kOutputRecordRateHz;
+    spec.budget_ms = 2.0;
+    system->bindings_.push_back({spec, system->tasks_.back().get(), nullptr});
+  }
   return system;
 }
 
@@ -104,6 +127,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
     if (!detector) return rt::Error{config_.source + ": perception: " + detector.error().message};
     auto detection_task = std::make_unique<perception::DetectionTask>(std::move(detector.value()), channels_.images,
                                                                       channels_.detections, stats_clock_);
+    detection_task->publishNewestTo(channels_.newest_detection);
     detection_task_ = detection_task.get();
     task = std::move(detection_task);
   } else if (spec.name == "target") {
@@ -197,19 +221,17 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
 
 rt::Expected<std::string> System::finishRecording() {
   if (!recorder_) return std::string();
-  const rt::Status status = recorder_->stop();
-  using hal::replay::RecordedStream;
-  std::uint64_t dropped = 0;
-  for (const RecordedStream s : {RecordedStream::kOdometry, RecordedStream::kGimbal, RecordedStream::kGimbalCommands,
-                                 RecordedStream::kSetpoints})
-    dropped += recorder_->dropped(s);
-  if (!status) return status.error();
-  return "recorded " + recorder_->dir() + ": odometry " +
-         std::to_string(recorder_->written(RecordedStream::kOdometry)) + ", gimbal " +
-         std::to_string(recorder_->written(RecordedStream::kGimbal)) + ", gimbal commands " +
-         std::to_string(recorder_->written(RecordedStream::kGimbalCommands)) + ", setpoints " +
-         std::to_string(recorder_->written(RecordedStream::kSetpoints)) + " records; " + std::to_string(dropped) +
-         " dropped (disk too slow)";
+  const rt::Status devices = recorder_->stop();
+  const rt::Status outputs = output_recorder_ != nullptr ? output_recorder_->finish() : rt::ok();
+  if (!devices) return devices.error();
+  if (!outputs) return outputs.error();
+  std::string line = "recorded " + recorder_->dir() + ": " + recorder_->summary();
+  if (output_recorder_ != nullptr) {
+    line += ", detector outputs " + std::to_string(output_recorder_->detectionsWritten()) + ", estimates " +
+            std::to_string(output_recorder_->estimatesWritten()) + ", trajectories " +
+            std::to_string(output_recorder_->trajectoriesWritten());
+  }
+  return line + " records; " + std::to_string(recorder_->droppedTotal()) + " dropped (disk too slow)";
 }
 
 }  // namespace aerotrack::app

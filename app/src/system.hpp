@@ -24,10 +24,15 @@
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "app_config.hpp"
 #include "camera_strip.hpp"
+#include "output_recorder.hpp"
 
 namespace aerotrack::app {
 
 class TargetTruthCheckTask;
+
+/// With --record, the modules' outputs are polled this often (above the target task's 50 Hz, so every
+/// estimate is seen).
+inline constexpr double kOutputRecordRateHz = 100.0;
 
 /// Every channel of the process. Names here are the names a task's `trigger` may use.
 struct Channels {
@@ -115,8 +120,9 @@ class System {
   const supervisor::SupervisorTask* supervisor_task_ = nullptr;
   const trajectory_server::TrajectoryServerTask* server_task_ = nullptr;
   const CameraStripTask* camera_strip_task_ = nullptr;
-  rt::TimeNs start_ns_ = 0;         ///< The executor clock's time at start.
-  rt::MonotonicClock stats_clock_;  ///< Measures work inside tasks for statistics only.
+  OutputRecorderTask* output_recorder_ = nullptr;  // with --record
+  rt::TimeNs start_ns_ = 0;                        ///< The executor clock's time at start.
+  rt::MonotonicClock stats_clock_;                 ///< Measures work inside tasks for statistics only.
 };
 
 }  // namespace aerotrack::app

@@ -21,9 +21,8 @@ bool HalConfig::usesReplay() const {
 
 HalConfig parseHalConfig(const rt::ConfigNode& node) {
   HalConfig c;
-  c.gimbal_camera = node.getEnum("gimbal_camera", {"null", "sim"});
-  c.depth_camera = node.getEnum("depth_camera", {"null", "sim"});
-  // Replay serves the numeric streams so far; the cameras' image streams are still to come.
+  c.gimbal_camera = node.getEnum("gimbal_camera", {"null", "sim", "replay"});
+  c.depth_camera = node.getEnum("depth_camera", {"null", "sim", "replay"});
   c.gimbal = node.getEnum("gimbal", {"null", "sim", "replay"});
   c.odometry = node.getEnum("odometry", {"null", "sim", "replay"});
   c.vehicle_link = node.getEnum("vehicle_link", {"null", "sim", "replay"});
@@ -123,21 +122,28 @@ rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioIn
     if (!opened) return rt::Error{"hal: replay: " + opened.error().message};
     recording = std::move(opened.value());
     // A replayed device whose stream was not recorded would be silent: say so at start, not in flight.
-    const std::pair<const std::string*, const char*> needs[] = {{&config.odometry, "odometry"},
-                                                                {&config.gimbal, "gimbal"}};
+    const std::pair<const std::string*, const char*> needs[] = {
+        {&config.odometry, "odometry"}, {&config.gimbal, "gimbal"}, {&config.depth_camera, "depth_camera"}};
     for (const auto& [backend, device] : needs) {
       if (*backend == "replay" && recording->manifest().stream(device) == nullptr) {
         return rt::Error{"hal: replay: " + config.replay.dir + " has no " + device + " stream"};
       }
     }
+    if (config.gimbal_camera == "replay" && recording->manifest().stream("gimbal_camera") == nullptr &&
+        recording->manifest().stream("detections") == nullptr) {
+      return rt::Error{"hal: replay: " + config.replay.dir + " has no gimbal_camera (images) or detections stream"};
+    }
   }
-  const bool sim_camera = config.gimbal_camera == "sim";
-  if (sim_camera)
+  if (config.gimbal_camera == "sim")
     d.gimbal_camera = std::make_unique<sim::SimGimbalCamera>(d.simulation);
+  else if (config.gimbal_camera == "replay")
+    d.gimbal_camera = std::make_unique<replay::ReplayGimbalCamera>(recording);
   else
     d.gimbal_camera = std::make_unique<null::NullGimbalCamera>();
   if (config.depth_camera == "sim")
     d.depth_camera = std::make_unique<sim::SimDepthCamera>(d.simulation);
+  else if (config.depth_camera == "replay")
+    d.depth_camera = std::make_unique<replay::ReplayDepthCamera>(recording);
   else
     d.depth_camera = std::make_unique<null::NullDepthCamera>();
   if (config.gimbal == "sim")

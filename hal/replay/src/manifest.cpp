@@ -3,8 +3,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <fstream>
 #include <set>
+#include <system_error>
 
 #include "aerotrack/rt/config_node.hpp"
 
@@ -12,8 +14,8 @@ namespace aerotrack::hal::replay {
 namespace {
 
 const std::set<std::string>& knownDevices() {
-  static const std::set<std::string> kDevices = {
-      "odometry", "gimbal", "gimbal_commands", "setpoints", "gimbal_camera", "depth_camera", "can"};
+  static const std::set<std::string> kDevices = {"odometry",      "gimbal",     "gimbal_commands", "setpoints",
+                                                 "gimbal_camera", "detections", "depth_camera",    "can"};
   return kDevices;
 }
 
@@ -29,6 +31,13 @@ RecordedCamera parseCamera(const rt::ConfigNode& node) {
   for (std::size_t i = 0; i < 5; ++i) c.intrinsics.distortion[i] = d[i];
   const std::vector<double> mount = node.getDoubleList("mount_m", 3, -10.0, 10.0);
   c.mount_B_m = Eigen::Vector3d(mount[0], mount[1], mount[2]);
+  if (node.has("rotation_B_C")) {
+    const std::vector<double> r = node.getDoubleList("rotation_B_C", 9, -1.5, 1.5);
+    for (int i = 0; i < 9; ++i) c.R_BC(i / 3, i % 3) = r[static_cast<std::size_t>(i)];
+    if (!(c.R_BC * c.R_BC.transpose()).isIdentity(1e-6) || c.R_BC.determinant() < 0.0)
+      node.fail("rotation_B_C", "is not a rotation matrix");
+  }
+  if (node.has("image_format")) c.image_format = node.getEnum("image_format", {"png", "jpg"});
   node.finish();
   return c;
 }
@@ -46,6 +55,10 @@ void emitCamera(YAML::Emitter& out, const char* key, const RecordedCamera& c) {
   out << YAML::EndSeq;
   out << YAML::Key << "mount_m" << YAML::Value << YAML::Flow << YAML::BeginSeq << c.mount_B_m.x() << c.mount_B_m.y()
       << c.mount_B_m.z() << YAML::EndSeq;
+  out << YAML::Key << "rotation_B_C" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 9; ++i) out << c.R_BC(i / 3, i % 3);
+  out << YAML::EndSeq;
+  out << YAML::Key << "image_format" << YAML::Value << c.image_format;
   out << YAML::EndMap;
 }
 
@@ -71,7 +84,7 @@ rt::Expected<DatasetManifest> readManifest(const std::string& path) {
     }
     m.software_version = root->getString("software_version");
     m.start_ns = static_cast<rt::TimeNs>(root->getUint64("start_ns"));
-    m.source = root->getEnum("source", {"sim", "real", "import"});
+    m.source = root->getEnum("source", {"sim", "real", "replay", "import"});
     for (const rt::ConfigNode& s : root->childList("streams")) {
       StreamEntry entry{s.getString("device"), s.getString("file")};
       if (knownDevices().count(entry.device) == 0) s.fail("device", "unknown device '" + entry.device + "'");
@@ -109,10 +122,16 @@ rt::Status writeManifest(const DatasetManifest& m, const std::string& path) {
   if (m.gimbal_camera) emitCamera(out, "gimbal_camera", *m.gimbal_camera);
   if (m.depth_camera) emitCamera(out, "depth_camera", *m.depth_camera);
   out << YAML::EndMap;
-  std::ofstream file(path, std::ios::trunc);
+  // Written whole, then renamed into place: the recorder rewrites it when a camera's first frame
+  // tells its intrinsics, and a recording cut at that moment must still have a readable manifest.
+  const std::string part = path + ".part";
+  std::ofstream file(part, std::ios::trunc);
   file << "# aerotrack recorded dataset (hal/replay/README.md)\n" << out.c_str() << "\n";
   file.close();
   if (!file) return rt::Error{path + ": write failed"};
+  std::error_code ec;
+  std::filesystem::rename(part, path, ec);
+  if (ec) return rt::Error{path + ": cannot rename " + part + ": " + ec.message()};
   return rt::ok();
 }
 

@@ -5,7 +5,7 @@
 #include <system_error>
 #include <utility>
 
-#include "aerotrack/hal/replay/stream_codecs.hpp"
+#include "aerotrack/hal/replay/frame_files.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {
@@ -13,16 +13,33 @@ namespace {
 constexpr rt::DurationNs kIdleWaitNs = 20 * rt::kNsPerMillisecond;
 
 struct StreamFile {
+  RecordedStream stream;
   const char* device;
   const char* file;
   const std::vector<std::string>& columns;
 };
 
 std::array<StreamFile, kRecordedStreams> streamFiles() {
-  return {StreamFile{"odometry", "odometry.csv", OdometryCodec::columns()},
-          StreamFile{"gimbal", "gimbal.csv", GimbalStateCodec::columns()},
-          StreamFile{"gimbal_commands", "gimbal_commands.csv", GimbalCommandCodec::columns()},
-          StreamFile{"setpoints", "setpoints.csv", SetpointCodec::columns()}};
+  return {StreamFile{RecordedStream::kOdometry, "odometry", "odometry.csv", DeliveredOdometryCodec::columns()},
+          StreamFile{RecordedStream::kGimbal, "gimbal", "gimbal.csv", DeliveredGimbalStateCodec::columns()},
+          StreamFile{RecordedStream::kGimbalCommands, "gimbal_commands", "gimbal_commands.csv",
+                     GimbalCommandCodec::columns()},
+          StreamFile{RecordedStream::kSetpoints, "setpoints", "setpoints.csv", SetpointCodec::columns()},
+          StreamFile{RecordedStream::kDetections, "detections", "gimbal_camera/detections.csv",
+                     DeliveredDetectionCodec::columns()},
+          StreamFile{RecordedStream::kDepthFrames, "depth_camera", "depth_camera/frames.csv",
+                     DeliveredFrameIndexCodec::columns()},
+          StreamFile{RecordedStream::kImages, "gimbal_camera", "gimbal_camera/frames.csv",
+                     DeliveredFrameIndexCodec::columns()}};
+}
+
+template <class T>
+rt::TimeNs stampOf(const T& item) {
+  return item.stamp_ns;
+}
+template <class T>
+rt::TimeNs stampOf(const Delivered<T>& item) {
+  return item.sample.stamp_ns;
 }
 
 template <class T, class Codec>
@@ -33,7 +50,7 @@ bool drain(rt::SpscQueue<T>& queue, CsvStreamWriter& writer, std::atomic<std::ui
   while (queue.try_pop(item)) {
     any = true;
     if (!first_error) continue;  // the disk failed: keep draining, stop writing
-    if (rt::Status s = writer.write(item.stamp_ns, Codec::encode(item)); !s) {
+    if (rt::Status s = writer.write(stampOf(item), Codec::encode(item)); !s) {
       first_error = s;
       continue;
     }
@@ -43,6 +60,26 @@ bool drain(rt::SpscQueue<T>& queue, CsvStreamWriter& writer, std::atomic<std::ui
 }
 
 }  // namespace
+
+const char* toString(RecordedStream stream) {
+  switch (stream) {
+    case RecordedStream::kOdometry:
+      return "odometry";
+    case RecordedStream::kGimbal:
+      return "gimbal";
+    case RecordedStream::kGimbalCommands:
+      return "gimbal commands";
+    case RecordedStream::kSetpoints:
+      return "setpoints";
+    case RecordedStream::kDetections:
+      return "detections";
+    case RecordedStream::kDepthFrames:
+      return "depth frames";
+    case RecordedStream::kImages:
+      return "images";
+  }
+  return "?";
+}
 
 rt::Expected<std::unique_ptr<DatasetRecorder>> DatasetRecorder::start(const RecorderOptions& options,
                                                                       rt::TimeNs start_ns) {
@@ -54,6 +91,10 @@ rt::Expected<std::unique_ptr<DatasetRecorder>> DatasetRecorder::start(const Reco
   if (fs::exists(manifest_path)) {
     return rt::Error{"record: " + options.dir + " already holds a recording (manifest.yaml); choose a new folder"};
   }
+  for (const char* folder : {"gimbal_camera", "depth_camera"}) {
+    fs::create_directories(fs::path(options.dir) / folder, ec);
+    if (ec) return rt::Error{"record: " + options.dir + "/" + folder + ": cannot create: " + ec.message()};
+  }
   DatasetManifest manifest;
   manifest.software_version = options.software_version;
   manifest.start_ns = start_ns;
@@ -63,38 +104,105 @@ rt::Expected<std::unique_ptr<DatasetRecorder>> DatasetRecorder::start(const Reco
     auto writer = CsvStreamWriter::create((fs::path(options.dir) / f.file).string(), f.columns);
     if (!writer) return rt::Error{"record: " + writer.error().message};
     opened.push_back(std::move(writer.value()));
-    manifest.streams.push_back({f.device, f.file});
+    // The camera streams are listed once their first frame has given the camera's intrinsics.
+    if (f.stream != RecordedStream::kDepthFrames && f.stream != RecordedStream::kImages)
+      manifest.streams.push_back({f.device, f.file});
   }
   if (rt::Status s = writeManifest(manifest, manifest_path.string()); !s)
     return rt::Error{"record: " + s.error().message};
-  std::unique_ptr<DatasetRecorder> recorder(new DatasetRecorder(
-      options, {std::move(opened[0]), std::move(opened[1]), std::move(opened[2]), std::move(opened[3])}));
+  std::unique_ptr<DatasetRecorder> recorder(new DatasetRecorder(options, std::move(manifest), std::move(opened)));
   recorder->thread_ = std::thread([r = recorder.get()] { r->run(); });
   return recorder;
 }
 
-DatasetRecorder::DatasetRecorder(RecorderOptions options, std::array<CsvStreamWriter, kRecordedStreams> writers)
+DatasetRecorder::DatasetRecorder(RecorderOptions options, DatasetManifest manifest,
+                                 std::vector<CsvStreamWriter> writers)
     : options_(std::move(options)),
+      manifest_(std::move(manifest)),
       writers_(std::move(writers)),
       odometry_(options_.queue_capacity, rt::OverflowPolicy::kDropNewest),
       gimbal_(options_.queue_capacity, rt::OverflowPolicy::kDropNewest),
       commands_(options_.queue_capacity, rt::OverflowPolicy::kDropNewest),
-      setpoints_(options_.queue_capacity, rt::OverflowPolicy::kDropNewest) {}
+      setpoints_(options_.queue_capacity, rt::OverflowPolicy::kDropNewest),
+      detections_(options_.queue_capacity, rt::OverflowPolicy::kDropNewest),
+      depth_(options_.frame_queue_capacity, rt::OverflowPolicy::kDropNewest),
+      images_(options_.frame_queue_capacity, rt::OverflowPolicy::kDropNewest) {}
 
 DatasetRecorder::~DatasetRecorder() {
   (void)stop();
 }
 
+rt::Status DatasetRecorder::writeFrame(const FrameRecord<DepthFrame>& record, std::uint64_t file_index) {
+  const DepthFrame& f = *record.frame;
+  if (!manifest_.depth_camera) {
+    RecordedCamera camera;
+    camera.intrinsics = f.intrinsics;
+    camera.mount_B_m = f.T_BC.translation();
+    camera.R_BC = f.T_BC.linear();
+    manifest_.depth_camera = camera;
+    manifest_.streams.push_back({"depth_camera", "depth_camera/frames.csv"});
+    const std::string path = (std::filesystem::path(options_.dir) / "manifest.yaml").string();
+    if (rt::Status s = writeManifest(manifest_, path); !s) return s;
+  }
+  const std::string file = (std::filesystem::path(options_.dir) / "depth_camera" / frameFileName(file_index, "png"));
+  return writeDepthPng(file, f.depth_m);
+}
+
+rt::Status DatasetRecorder::writeFrame(const FrameRecord<ImageFrame>& record, std::uint64_t file_index) {
+  const ImageFrame& f = *record.frame;
+  if (!manifest_.gimbal_camera) {
+    RecordedCamera camera;  // the mount is the estimator's configuration, not the camera's: left at 0
+    camera.intrinsics = f.intrinsics;
+    camera.image_format = "png";  // lossless: a replay detects on the very pixels the run did
+    manifest_.gimbal_camera = camera;
+    manifest_.streams.push_back({"gimbal_camera", "gimbal_camera/frames.csv"});
+    const std::string path = (std::filesystem::path(options_.dir) / "manifest.yaml").string();
+    if (rt::Status s = writeManifest(manifest_, path); !s) return s;
+  }
+  const std::string file = (std::filesystem::path(options_.dir) / "gimbal_camera" / frameFileName(file_index, "png"));
+  return writeImage(file, f.bgr);
+}
+
+template <class Frame>
+bool DatasetRecorder::drainFrames(rt::SpscQueue<FrameRecord<Frame>>& queue, RecordedStream stream) {
+  bool any = false;
+  FrameRecord<Frame> record;
+  while (queue.try_pop(record)) {
+    any = true;
+    if (!first_error_) continue;
+    const std::uint64_t file_index = written_[index(stream)].load(std::memory_order_relaxed) + 1;
+    // The image first, then its index row: a recording cut in between lists only whole frames.
+    rt::Status s = writeFrame(record, file_index);
+    if (s) {
+      const FrameIndexRow row{record.frame->sequence, file_index, record.frame->stamp_ns};
+      s = writers_[index(stream)].write(row.stamp_ns, DeliveredFrameIndexCodec::encode({row, record.delay_ns}));
+    }
+    record.frame.reset();  // the producer's pool may reuse it
+    if (!s) {
+      first_error_ = s;
+      continue;
+    }
+    written_[index(stream)].fetch_add(1, std::memory_order_relaxed);
+  }
+  return any;
+}
+
 bool DatasetRecorder::drainOnce() {
   bool any = false;
-  any |= drain<OdometrySample, OdometryCodec>(odometry_, writers_[index(RecordedStream::kOdometry)],
-                                              written_[index(RecordedStream::kOdometry)], first_error_);
-  any |= drain<GimbalState, GimbalStateCodec>(gimbal_, writers_[index(RecordedStream::kGimbal)],
-                                              written_[index(RecordedStream::kGimbal)], first_error_);
-  any |= drain<GimbalCommand, GimbalCommandCodec>(commands_, writers_[index(RecordedStream::kGimbalCommands)],
-                                                  written_[index(RecordedStream::kGimbalCommands)], first_error_);
-  any |= drain<Setpoint, SetpointCodec>(setpoints_, writers_[index(RecordedStream::kSetpoints)],
-                                        written_[index(RecordedStream::kSetpoints)], first_error_);
+  const auto writer = [this](RecordedStream s) -> CsvStreamWriter& { return writers_[index(s)]; };
+  const auto count = [this](RecordedStream s) -> std::atomic<std::uint64_t>& { return written_[index(s)]; };
+  using S = RecordedStream;
+  any |= drain<Delivered<OdometrySample>, DeliveredOdometryCodec>(odometry_, writer(S::kOdometry), count(S::kOdometry),
+                                                                  first_error_);
+  any |= drain<Delivered<GimbalState>, DeliveredGimbalStateCodec>(gimbal_, writer(S::kGimbal), count(S::kGimbal),
+                                                                  first_error_);
+  any |= drain<GimbalCommand, GimbalCommandCodec>(commands_, writer(S::kGimbalCommands), count(S::kGimbalCommands),
+                                                  first_error_);
+  any |= drain<Setpoint, SetpointCodec>(setpoints_, writer(S::kSetpoints), count(S::kSetpoints), first_error_);
+  any |= drain<Delivered<DetectionFrame>, DeliveredDetectionCodec>(detections_, writer(S::kDetections),
+                                                                   count(S::kDetections), first_error_);
+  any |= drainFrames(depth_, S::kDepthFrames);
+  any |= drainFrames(images_, S::kImages);
   return any;
 }
 
@@ -128,17 +236,57 @@ std::uint64_t DatasetRecorder::dropped(RecordedStream s) const {
       return commands_.dropped();
     case RecordedStream::kSetpoints:
       return setpoints_.dropped();
+    case RecordedStream::kDetections:
+      return detections_.dropped();
+    case RecordedStream::kDepthFrames:
+      return depth_.dropped();
+    case RecordedStream::kImages:
+      return images_.dropped();
   }
   return 0;
+}
+
+std::string DatasetRecorder::summary() const {
+  std::string out;
+  for (std::size_t i = 0; i < kRecordedStreams; ++i) {
+    const auto s = static_cast<RecordedStream>(i);
+    if (written(s) == 0 && dropped(s) == 0) continue;
+    out += (out.empty() ? "" : ", ") + std::string(toString(s)) + " " + std::to_string(written(s));
+  }
+  return out;
+}
+
+std::uint64_t DatasetRecorder::droppedTotal() const {
+  std::uint64_t total = 0;
+  for (std::size_t i = 0; i < kRecordedStreams; ++i) total += dropped(static_cast<RecordedStream>(i));
+  return total;
 }
 
 std::optional<OdometrySample> RecordingOdometry::read(rt::TimeNs now_ns) {
   std::optional<OdometrySample> sample = inner_->read(now_ns);
   if (sample && sample->stamp_ns > last_stamp_ns_) {  // devices may repeat their newest sample
     last_stamp_ns_ = sample->stamp_ns;
-    recorder_.record(*sample);
+    recorder_.record(Delivered<OdometrySample>{*sample, now_ns - sample->stamp_ns});
   }
   return sample;
+}
+
+ImageFrameHandle RecordingGimbalCamera::grab(rt::TimeNs now_ns) {
+  ImageFrameHandle frame = inner_->grab(now_ns);
+  if (frame) recorder_.record(FrameRecord<ImageFrame>{frame, now_ns - frame->stamp_ns});
+  return frame;
+}
+
+std::optional<DetectionFrame> RecordingGimbalCamera::grabDetections(rt::TimeNs now_ns) {
+  std::optional<DetectionFrame> frame = inner_->grabDetections(now_ns);
+  if (frame) recorder_.record(Delivered<DetectionFrame>{*frame, now_ns - frame->stamp_ns});
+  return frame;
+}
+
+DepthFrameHandle RecordingDepthCamera::grab(rt::TimeNs now_ns) {
+  DepthFrameHandle frame = inner_->grab(now_ns);
+  if (frame) recorder_.record(FrameRecord<DepthFrame>{frame, now_ns - frame->stamp_ns});
+  return frame;
 }
 
 void RecordingGimbal::command(const GimbalCommand& command) {
@@ -150,7 +298,7 @@ std::optional<GimbalState> RecordingGimbal::read(rt::TimeNs now_ns) {
   std::optional<GimbalState> state = inner_->read(now_ns);
   if (state && state->stamp_ns > last_stamp_ns_) {
     last_stamp_ns_ = state->stamp_ns;
-    recorder_.record(*state);
+    recorder_.record(Delivered<GimbalState>{*state, now_ns - state->stamp_ns});
   }
   return state;
 }

@@ -4,13 +4,26 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <system_error>
+#include <utility>
 
+#include "aerotrack/hal/replay/frame_files.hpp"
 #include "aerotrack/hal/replay/stream_codecs.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {
 
-template <class Codec, class Sample>
+/// A codec's decoded record: Delivered<Sample> for delivered streams.
+template <class Codec>
+struct Record {
+  using Type = typename Codec::Sample;
+};
+template <class Codec>
+struct Record<DeliveredCodec<Codec>> {
+  using Type = Delivered<typename Codec::Sample>;
+};
+
+template <class Codec, class Sample = typename Record<Codec>::Type>
 rt::Expected<LoadedStream<Sample>> load(const std::string& dir, const StreamEntry& entry, BadRowPolicy policy) {
   LoadedStream<Sample> out;
   out.path = (std::filesystem::path(dir) / entry.file).string();
@@ -34,9 +47,49 @@ rt::Expected<LoadedStream<Sample>> load(const std::string& dir, const StreamEntr
   return out;
 }
 
+/// Drops (skip) or refuses (strict) the index rows whose frame file is missing.
+rt::Status checkFrameFiles(LoadedStream<Delivered<FrameIndexRow>>& stream, const std::string& extension,
+                           BadRowPolicy policy) {
+  const std::filesystem::path folder = std::filesystem::path(stream.path).parent_path();
+  std::vector<Delivered<FrameIndexRow>> kept;
+  kept.reserve(stream.samples.size());
+  for (const Delivered<FrameIndexRow>& row : stream.samples) {
+    const std::string file = (folder / frameFileName(row.sample.file_index, extension)).string();
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(file, ec)) {
+      kept.push_back(row);
+      continue;
+    }
+    const std::string message =
+        stream.path + ": frame " + std::to_string(row.sample.sequence) + ": " + file + " is missing";
+    if (policy == BadRowPolicy::kStrict) return rt::Error{message};
+    if (stream.skipped_rows++ == 0 && stream.first_skip_message.empty()) stream.first_skip_message = message;
+  }
+  stream.samples = std::move(kept);
+  return rt::ok();
+}
+
 template <class Sample>
-void restamp(Sample& sample, rt::TimeNs stamp_ns) {
-  sample.stamp_ns = stamp_ns;
+void restamp(Sample& sample, rt::DurationNs shift_ns) {
+  sample.stamp_ns += shift_ns;
+}
+
+void restamp(DetectionFrame& frame, rt::DurationNs shift_ns) {
+  frame.stamp_ns += shift_ns;
+  frame.result_ns += shift_ns;
+}
+
+template <class Sample>
+rt::TimeNs deliveredNs(const Delivered<Sample>& d) {
+  return d.sample.stamp_ns + d.delay_ns;
+}
+
+DeviceHealth unreadableHealth(DeviceHealth h, std::uint64_t unreadable, const std::string& first) {
+  if (unreadable == 0 || h.state == DeviceHealth::State::kFailed) return h;
+  h.state = DeviceHealth::State::kDegraded;
+  h.error_count += unreadable;
+  h.detail = "replay: " + std::to_string(unreadable) + " unreadable frames skipped, the first: " + first;
+  return h;
 }
 
 }  // namespace
@@ -69,62 +122,103 @@ rt::Expected<std::shared_ptr<ReplayDataset>> ReplayDataset::open(const ReplayOpt
   if (!(options.offset_s >= 0.0)) return rt::Error{"replay: offset_s must be >= 0"};
   auto manifest = readManifest((std::filesystem::path(options.dir) / "manifest.yaml").string());
   if (!manifest) return manifest.error();
-  std::optional<LoadedStream<OdometrySample>> odometry;
-  std::optional<LoadedStream<GimbalState>> gimbal;
-  std::optional<LoadedStream<Setpoint>> setpoints;
-  std::optional<LoadedStream<GimbalCommand>> commands;
+  // Built with a provisional timeline; the real one needs the streams' end.
+  std::shared_ptr<ReplayDataset> d(new ReplayDataset(
+      *manifest, options.dir, ReplayTimeline(manifest->start_ns, manifest->start_ns, replay_start_ns, options),
+      options.bad_rows));
   rt::TimeNs end_ns = manifest->start_ns;
   const auto note_end = [&end_ns](const auto& stream) {
-    if (!stream.samples.empty()) end_ns = std::max(end_ns, stream.samples.back().stamp_ns);
+    for (const auto& record : stream.samples) end_ns = std::max(end_ns, deliveredNs(record));
   };
-  if (const StreamEntry* e = manifest->stream("odometry")) {
-    auto s = load<OdometryCodec, OdometrySample>(options.dir, *e, options.bad_rows);
+  const auto read = [&](const char* device, auto codec, auto& into) -> rt::Status {
+    const StreamEntry* e = manifest->stream(device);
+    if (e == nullptr) return rt::ok();
+    auto s = load<decltype(codec)>(options.dir, *e, options.bad_rows);
     if (!s) return s.error();
-    note_end(*s);
-    odometry = std::move(s.value());
+    into = std::move(s.value());
+    return rt::ok();
+  };
+  if (rt::Status s = read("odometry", DeliveredOdometryCodec{}, d->odometry_); !s) return s.error();
+  if (rt::Status s = read("gimbal", DeliveredGimbalStateCodec{}, d->gimbal_); !s) return s.error();
+  if (rt::Status s = read("detections", DeliveredDetectionCodec{}, d->detections_); !s) return s.error();
+  if (rt::Status s = read("depth_camera", DeliveredFrameIndexCodec{}, d->depth_frames_); !s) return s.error();
+  if (rt::Status s = read("gimbal_camera", DeliveredFrameIndexCodec{}, d->images_); !s) return s.error();
+  if (rt::Status s = read("setpoints", SetpointCodec{}, d->setpoints_); !s) return s.error();
+  if (rt::Status s = read("gimbal_commands", GimbalCommandCodec{}, d->gimbal_commands_); !s) return s.error();
+  if (d->depth_frames_) {
+    if (!manifest->depth_camera) return rt::Error{options.dir + "/manifest.yaml: a depth stream needs depth_camera:"};
+    if (rt::Status s = checkFrameFiles(*d->depth_frames_, "png", options.bad_rows); !s) return s.error();
   }
-  if (const StreamEntry* e = manifest->stream("gimbal")) {
-    auto s = load<GimbalStateCodec, GimbalState>(options.dir, *e, options.bad_rows);
-    if (!s) return s.error();
-    note_end(*s);
-    gimbal = std::move(s.value());
+  if (d->images_) {
+    if (!manifest->gimbal_camera)
+      return rt::Error{options.dir + "/manifest.yaml: a gimbal camera stream needs gimbal_camera:"};
+    if (rt::Status s = checkFrameFiles(*d->images_, manifest->gimbal_camera->image_format, options.bad_rows); !s)
+      return s.error();
   }
-  if (const StreamEntry* e = manifest->stream("setpoints")) {
-    auto s = load<SetpointCodec, Setpoint>(options.dir, *e, options.bad_rows);
-    if (!s) return s.error();
-    setpoints = std::move(s.value());
+  if (d->odometry_) note_end(*d->odometry_);
+  if (d->gimbal_) note_end(*d->gimbal_);
+  if (d->detections_) note_end(*d->detections_);
+  if (d->depth_frames_) note_end(*d->depth_frames_);
+  if (d->images_) note_end(*d->images_);
+  // What the actuators were told counts too: a replay runs until the recorded run's last command.
+  if (d->setpoints_ && !d->setpoints_->samples.empty())
+    end_ns = std::max(end_ns, d->setpoints_->samples.back().stamp_ns);
+  if (d->gimbal_commands_ && !d->gimbal_commands_->samples.empty())
+    end_ns = std::max(end_ns, d->gimbal_commands_->samples.back().stamp_ns);
+  d->timeline_ = ReplayTimeline(manifest->start_ns, end_ns, replay_start_ns, options);
+  return d;
+}
+
+template <class Sample>
+rt::TimeNs StreamCursor<Sample>::sync(rt::TimeNs now_ns) {
+  std::int64_t lap = 0;
+  const rt::TimeNs rec_ns = dataset_->timeline().toRecording(now_ns, lap);
+  if (lap != lap_ || !lap_started_) {  // a new lap: start the stream again
+    lap_ = lap;
+    lap_started_ = true;
+    next_ = 0;
+    // A queue shows nothing delivered before the lap's first instant (the offset).
+    const auto& records = stream_->samples;
+    served_ = 0;
+    while (served_ < records.size() && deliveredNs(records[served_]) < dataset_->timeline().firstNs()) ++served_;
   }
-  if (const StreamEntry* e = manifest->stream("gimbal_commands")) {
-    auto s = load<GimbalCommandCodec, GimbalCommand>(options.dir, *e, options.bad_rows);
-    if (!s) return s.error();
-    commands = std::move(s.value());
-  }
-  const ReplayTimeline timeline(manifest->start_ns, end_ns, replay_start_ns, options);
-  std::shared_ptr<ReplayDataset> dataset(new ReplayDataset(std::move(manifest.value()), timeline));
-  dataset->odometry_ = std::move(odometry);
-  dataset->gimbal_ = std::move(gimbal);
-  dataset->setpoints_ = std::move(setpoints);
-  dataset->gimbal_commands_ = std::move(commands);
-  return dataset;
+  // Records delivered before the offset are never shown: the first one shown is the newest at the start.
+  const auto& records = stream_->samples;
+  while (next_ < records.size() && deliveredNs(records[next_]) <= rec_ns) ++next_;
+  return rec_ns;
+}
+
+template <class Sample>
+Sample StreamCursor<Sample>::shown(std::size_t i) {
+  Sample out = stream_->samples[i].sample;
+  restamp(out, dataset_->timeline().toExecutor(out.stamp_ns, lap_) - out.stamp_ns);
+  last_served_ns_ = out.stamp_ns;
+  return out;
 }
 
 template <class Sample>
 std::optional<Sample> StreamCursor<Sample>::newestAt(rt::TimeNs now_ns) {
   if (stream_ == nullptr || stream_->samples.empty()) return std::nullopt;
-  const std::vector<Sample>& samples = stream_->samples;
-  std::int64_t lap = 0;
-  const rt::TimeNs rec_ns = dataset_->timeline().toRecording(now_ns, lap);
-  if (lap != lap_) {  // a new lap: start the stream again
-    lap_ = lap;
-    next_ = 0;
-  }
-  // Samples before the offset are never shown: the first one shown is the newest at the start instant.
-  while (next_ < samples.size() && samples[next_].stamp_ns <= rec_ns) ++next_;
+  sync(now_ns);
   if (next_ == 0) return std::nullopt;
-  Sample out = samples[next_ - 1];
-  restamp(out, dataset_->timeline().toExecutor(out.stamp_ns, lap_));
-  last_served_ns_ = out.stamp_ns;
-  return out;
+  return shown(next_ - 1);
+}
+
+template <class Sample>
+std::optional<Sample> StreamCursor<Sample>::newestUnseenAt(rt::TimeNs now_ns) {
+  if (stream_ == nullptr || stream_->samples.empty()) return std::nullopt;
+  sync(now_ns);
+  if (next_ == served_) return std::nullopt;
+  served_ = next_;
+  return shown(next_ - 1);
+}
+
+template <class Sample>
+std::optional<Sample> StreamCursor<Sample>::nextAt(rt::TimeNs now_ns) {
+  if (stream_ == nullptr || stream_->samples.empty()) return std::nullopt;
+  sync(now_ns);
+  if (served_ >= next_) return std::nullopt;
+  return shown(served_++);
 }
 
 template <class Sample>
@@ -154,6 +248,76 @@ DeviceHealth StreamCursor<Sample>::health(rt::TimeNs now_ns) const {
 
 template class StreamCursor<OdometrySample>;
 template class StreamCursor<GimbalState>;
+template class StreamCursor<DetectionFrame>;
+template class StreamCursor<FrameIndexRow>;
+
+DeviceHealth ReplayGimbalCamera::health(rt::TimeNs now_ns) const {
+  const bool images = images_.dataset().images() != nullptr;
+  return unreadableHealth(images ? images_.health(now_ns) : detections_.health(now_ns), unreadable_, first_unreadable_);
+}
+
+ImageFrameHandle ReplayGimbalCamera::grab(rt::TimeNs now_ns) {
+  const ReplayDataset& dataset = images_.dataset();
+  if (dataset.images() == nullptr) return {};
+  const auto row = images_.newestUnseenAt(now_ns);
+  if (!row) return {};
+  const RecordedCamera& camera = *dataset.manifest().gimbal_camera;
+  const std::string file = (std::filesystem::path(dataset.images()->path).parent_path() /
+                            frameFileName(row->file_index, camera.image_format))
+                               .string();
+  auto bgr = readImage(file);
+  std::string problem = bgr ? std::string() : bgr.error().message;
+  if (bgr && (bgr->cols != camera.intrinsics.width_px || bgr->rows != camera.intrinsics.height_px))
+    problem = file + ": the image's size differs from the manifest's gimbal_camera";
+  if (!problem.empty()) {
+    if (unreadable_++ == 0) first_unreadable_ = problem;
+    return {};
+  }
+  auto frame = std::make_shared<ImageFrame>();
+  frame->stamp_ns = row->stamp_ns;
+  frame->sequence = row->sequence;
+  frame->bgr = std::move(*bgr);
+  frame->intrinsics = camera.intrinsics;
+  return frame;
+}
+
+ReplayDepthCamera::ReplayDepthCamera(const std::shared_ptr<const ReplayDataset>& dataset)
+    : cursor_(dataset, dataset->depthFrames()) {
+  if (const auto& camera = dataset->manifest().depth_camera) {
+    intrinsics_ = camera->intrinsics;
+    T_BC_.linear() = camera->R_BC;
+    T_BC_.translation() = camera->mount_B_m;
+  }
+}
+
+DeviceHealth ReplayDepthCamera::health(rt::TimeNs now_ns) const {
+  return unreadableHealth(cursor_.health(now_ns), unreadable_, first_unreadable_);
+}
+
+DepthFrameHandle ReplayDepthCamera::grab(rt::TimeNs now_ns) {
+  const ReplayDataset& dataset = cursor_.dataset();
+  if (dataset.depthFrames() == nullptr) return {};
+  const auto row = cursor_.newestUnseenAt(now_ns);
+  if (!row) return {};
+  const std::string file =
+      (std::filesystem::path(dataset.depthFrames()->path).parent_path() / frameFileName(row->file_index, "png"))
+          .string();
+  auto depth = readDepthPng(file);
+  std::string problem = depth ? std::string() : depth.error().message;
+  if (depth && (depth->cols != intrinsics_.width_px || depth->rows != intrinsics_.height_px))
+    problem = file + ": the frame's size differs from the manifest's depth_camera";
+  if (!problem.empty()) {
+    if (unreadable_++ == 0) first_unreadable_ = problem;
+    return {};
+  }
+  auto frame = std::make_shared<DepthFrame>();
+  frame->stamp_ns = row->stamp_ns;
+  frame->sequence = row->sequence;
+  frame->depth_m = std::move(*depth);
+  frame->intrinsics = intrinsics_;
+  frame->T_BC = T_BC_;
+  return frame;
+}
 
 DeviceHealth ReplayVehicleLink::health(rt::TimeNs now_ns) const {
   DeviceHealth h;

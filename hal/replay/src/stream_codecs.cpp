@@ -18,7 +18,17 @@ void put(std::vector<double>& out, const Eigen::Vector3d& v) {
   out.insert(out.end(), {v.x(), v.y(), v.z()});
 }
 
+constexpr double kMaxWhole = 9007199254740992.0;  // 2^53: every whole number up to it is exact in a double
+
 }  // namespace
+
+rt::Expected<std::int64_t> wholeNumber(const CsvRecord& record, std::size_t at, const std::string& path,
+                                       const char* column) {
+  const double x = record.values[at];
+  if (!(x >= 0.0 && x <= kMaxWhole && x == std::floor(x)))
+    return badValue(record, path, std::string(column) + " is not a whole number >= 0");
+  return static_cast<std::int64_t>(x);
+}
 
 const std::vector<std::string>& OdometryCodec::columns() {
   static const std::vector<std::string> kColumns = {
@@ -126,6 +136,118 @@ rt::Expected<Setpoint> SetpointCodec::decode(const CsvRecord& r, const std::stri
   s.yaw_rad = r.values[9];
   s.yaw_rate_radps = r.values[10];
   return s;
+}
+
+namespace {
+
+// DetectionCodec's layout: the frame's fields, then kPersonColumns per person.
+constexpr std::size_t kFrameColumns = 15;
+constexpr std::size_t kPersonColumns = 5 + 3 * kNumKeypoints;
+
+}  // namespace
+
+const std::vector<std::string>& DetectionCodec::columns() {
+  static const std::vector<std::string> kColumns = [] {
+    std::vector<std::string> c = {
+        "result_delay_ns", "sequence", "width_px", "height_px", "fx_px", "fy_px", "cx_px",
+        "cy_px",           "k1",       "k2",       "p1",        "p2",    "k3",    "person_count",
+        "target_index"};
+    for (std::size_t p = 0; p < kMaxPersons; ++p) {
+      const std::string person = "p" + std::to_string(p) + "_";
+      for (const char* field : {"score", "bbox_u_px", "bbox_v_px", "bbox_w_px", "bbox_h_px"})
+        c.push_back(person + field);
+      for (std::size_t k = 0; k < kNumKeypoints; ++k) {
+        const std::string keypoint = person + "k" + std::to_string(k) + "_";
+        for (const char* field : {"u_px", "v_px", "score"}) c.push_back(keypoint + field);
+      }
+    }
+    return c;
+  }();
+  return kColumns;
+}
+
+std::vector<double> DetectionCodec::encode(const DetectionFrame& f) {
+  const CameraIntrinsics& k = f.intrinsics;
+  std::vector<double> out = {static_cast<double>(f.result_ns - f.stamp_ns),
+                             static_cast<double>(f.sequence),
+                             static_cast<double>(k.width_px),
+                             static_cast<double>(k.height_px),
+                             k.fx_px,
+                             k.fy_px,
+                             k.cx_px,
+                             k.cy_px};
+  out.insert(out.end(), k.distortion.begin(), k.distortion.end());
+  out.push_back(static_cast<double>(f.person_count));
+  out.push_back(static_cast<double>(f.target_index));
+  for (const PersonDetection& p : f.persons) {
+    out.insert(out.end(), {p.score, p.bbox_u_px, p.bbox_v_px, p.bbox_w_px, p.bbox_h_px});
+    for (const Keypoint2D& kp : p.keypoints) out.insert(out.end(), {kp.u_px, kp.v_px, kp.score});
+  }
+  return out;
+}
+
+rt::Expected<DetectionFrame> DetectionCodec::decode(const CsvRecord& r, const std::string& path) {
+  const std::vector<double>& v = r.values;
+  for (const double x : v) {
+    if (!std::isfinite(x)) return badValue(r, path, "detections: a value is not finite");
+  }
+  DetectionFrame f;
+  f.stamp_ns = r.stamp_ns;
+  auto delay_ns = wholeNumber(r, 0, path, "result_delay_ns");
+  if (!delay_ns) return delay_ns.error();
+  f.result_ns = r.stamp_ns + *delay_ns;
+  auto sequence = wholeNumber(r, 1, path, "sequence");
+  if (!sequence) return sequence.error();
+  f.sequence = static_cast<std::uint64_t>(*sequence);
+  auto width = wholeNumber(r, 2, path, "width_px");
+  auto height = wholeNumber(r, 3, path, "height_px");
+  if (!width || !height || *width > 100000 || *height > 100000)
+    return badValue(r, path, "detections: the image size is not whole pixels in [0, 100000]");
+  CameraIntrinsics& k = f.intrinsics;
+  k.width_px = static_cast<int>(*width);
+  k.height_px = static_cast<int>(*height);
+  k.fx_px = v[4];
+  k.fy_px = v[5];
+  k.cx_px = v[6];
+  k.cy_px = v[7];
+  for (std::size_t i = 0; i < 5; ++i) k.distortion[i] = v[8 + i];
+  auto count = wholeNumber(r, 13, path, "person_count");
+  if (!count || *count > static_cast<std::int64_t>(kMaxPersons))
+    return badValue(r, path,
+                    "detections: person_count must be a whole number in [0, " + std::to_string(kMaxPersons) + "]");
+  f.person_count = static_cast<std::size_t>(*count);
+  const double target = v[14];
+  if (target != std::floor(target) || target < -1.0 || target >= static_cast<double>(f.person_count))
+    return badValue(r, path, "detections: target_index must be -1 or a listed person");
+  f.target_index = static_cast<int>(target);
+  for (std::size_t p = 0; p < kMaxPersons; ++p) {
+    const double* x = v.data() + kFrameColumns + p * kPersonColumns;
+    PersonDetection& person = f.persons[p];
+    person.score = x[0];
+    person.bbox_u_px = x[1];
+    person.bbox_v_px = x[2];
+    person.bbox_w_px = x[3];
+    person.bbox_h_px = x[4];
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) person.keypoints[i] = {x[5 + 3 * i], x[6 + 3 * i], x[7 + 3 * i]};
+  }
+  return f;
+}
+
+const std::vector<std::string>& FrameIndexCodec::columns() {
+  static const std::vector<std::string> kColumns = {"sequence", "file_index"};
+  return kColumns;
+}
+
+std::vector<double> FrameIndexCodec::encode(const FrameIndexRow& row) {
+  return {static_cast<double>(row.sequence), static_cast<double>(row.file_index)};
+}
+
+rt::Expected<FrameIndexRow> FrameIndexCodec::decode(const CsvRecord& r, const std::string& path) {
+  auto sequence = wholeNumber(r, 0, path, "sequence");
+  if (!sequence) return sequence.error();
+  auto file_index = wholeNumber(r, 1, path, "file_index");
+  if (!file_index) return file_index.error();
+  return FrameIndexRow{static_cast<std::uint64_t>(*sequence), static_cast<std::uint64_t>(*file_index), r.stamp_ns};
 }
 
 }  // namespace aerotrack::hal::replay

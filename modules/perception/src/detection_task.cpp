@@ -52,7 +52,9 @@ void DetectionTask::step(rt::TimeNs now_ns) {
   }
   ++frames_detected_;
   if (output->target) ++frames_with_target_;
-  out_.try_push(toDetectionFrame(*output, *image, now_ns));
+  const hal::DetectionFrame frame = toDetectionFrame(*output, *image, now_ns);
+  out_.try_push(frame);
+  if (newest_ != nullptr) newest_->write(frame);
 }
 
 }  // namespace aerotrack::perception

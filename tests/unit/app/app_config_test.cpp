@@ -69,6 +69,22 @@ TEST(AppConfig, PrintedConfigParsesBackToTheSameConfig) {
   const auto again = parseAppConfig(printed, "printed.yaml");
   ASSERT_TRUE(again) << again.error().message << "\n" << printed;
   EXPECT_EQ(toYaml(*again), printed);
+  // Every task field survives (a replay re-runs the recorded run from its printed configuration).
+  ASSERT_EQ(again->tasks.size(), c->tasks.size());
+  bool overlapped = false;
+  for (std::size_t i = 0; i < c->tasks.size(); ++i) {
+    const rt::TaskSpec& a = c->tasks[i];
+    const rt::TaskSpec& b = again->tasks[i];
+    EXPECT_EQ(b.name, a.name);
+    EXPECT_EQ(b.rate_hz, a.rate_hz) << a.name;
+    EXPECT_EQ(b.trigger, a.trigger) << a.name;
+    EXPECT_EQ(b.budget_ms, a.budget_ms) << a.name;
+    EXPECT_EQ(b.priority, a.priority) << a.name;
+    EXPECT_EQ(b.cpu, a.cpu) << a.name;
+    EXPECT_EQ(b.latency_ms, a.latency_ms) << a.name;
+    overlapped = overlapped || a.latency_ms > 0.0;
+  }
+  EXPECT_TRUE(overlapped);  // sim.yaml overlaps the mapping: the field is exercised
 }
 
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {

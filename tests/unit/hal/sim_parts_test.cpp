@@ -208,12 +208,13 @@ TEST(DeviceFactory, GivenReplayBackendsThenTheyServeTheRecordingOrSayWhatIsMissi
   m.streams = {{"odometry", "odometry.csv"}};
   ASSERT_TRUE(replay::writeManifest(m, (dir / "manifest.yaml").string()));
   {
-    auto w = replay::CsvStreamWriter::create((dir / "odometry.csv").string(), replay::OdometryCodec::columns());
+    auto w =
+        replay::CsvStreamWriter::create((dir / "odometry.csv").string(), replay::DeliveredOdometryCodec::columns());
     ASSERT_TRUE(w);
     OdometrySample o;
     o.stamp_ns = m.start_ns;
     o.p_WB_m = {1, 2, 3};
-    ASSERT_TRUE(w->write(o.stamp_ns, replay::OdometryCodec::encode(o)));
+    ASSERT_TRUE(w->write(o.stamp_ns, replay::DeliveredOdometryCodec::encode({o, 0})));
   }
   const auto root = rt::ConfigNode::fromString(
       base + "replay:\n  dir: " + dir.string() + "\n  offset_s: 0\n  loop: false\n  bad_rows: strict\n", "hal.yaml");

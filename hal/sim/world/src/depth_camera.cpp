@@ -15,6 +15,8 @@
 #include <numbers>
 #include <string>
 
+#include "aerotrack/hal/depth_units.hpp"
+
 namespace aerotrack::hal::sim {
 namespace {
 
@@ -200,7 +202,7 @@ void renderDepth(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, cons
         } else {
           --keep;
           if (noise) z_m += params.noise_coeff_per_m * z_m * z_m * normal(rng);
-          if (z_m > 0.0) out = static_cast<float>(z_m);
+          out = depthFromZ16(depthToZ16(z_m));  // the D435's Z16 output: whole millimetres
         }
       }
       row[u] = out;

@@ -240,5 +240,83 @@ TEST(StreamCodecs, ValuesOutOfTheirDomainAreErrorsNamingTheLine) {
   EXPECT_NE(mode.error().message.find("gimbal_commands.csv:3: gimbal command: mode must be 0"), std::string::npos);
 }
 
+TEST(StreamCodecs, DeliveredDetectionFramesSurviveAWriteAndAReadBitForBit) {
+  TempDir dir;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1e3, 1e3);
+  std::vector<Delivered<DetectionFrame>> frames(20);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    DetectionFrame& f = frames[i].sample;
+    frames[i].delay_ns = 40'000'000 + static_cast<rt::DurationNs>(i);
+    f.stamp_ns = 5'000'000'000 + static_cast<rt::TimeNs>(i) * 33'333'333;
+    f.result_ns = f.stamp_ns + 35'000'000;
+    f.sequence = 1000 + i;
+    f.intrinsics = {640, 480, u(rng), u(rng), u(rng), u(rng), {u(rng), 0.0, -0.0, 1e-9, 1.0 / 3.0}};
+    f.person_count = i % (kMaxPersons + 1);
+    f.target_index = f.person_count > 0 ? static_cast<int>(i % f.person_count) : -1;
+    for (PersonDetection& p : f.persons) {  // unused entries too: a replay must restore the whole frame
+      p.score = u(rng);
+      p.bbox_u_px = u(rng);
+      p.bbox_v_px = u(rng);
+      p.bbox_w_px = u(rng);
+      p.bbox_h_px = u(rng);
+      for (Keypoint2D& k : p.keypoints) k = {u(rng), u(rng) * 1e-7, u(rng)};
+    }
+  }
+  {
+    auto writer = CsvStreamWriter::create(dir.file("detections.csv"), DeliveredDetectionCodec::columns());
+    ASSERT_TRUE(writer);
+    for (const auto& f : frames) ASSERT_TRUE(writer->write(f.sample.stamp_ns, DeliveredDetectionCodec::encode(f)));
+  }
+  auto reader = CsvStreamReader::open(dir.file("detections.csv"), DeliveredDetectionCodec::columns());
+  ASSERT_TRUE(reader);
+  for (const auto& expected : frames) {
+    auto record = reader->next();
+    ASSERT_TRUE(record && record->has_value());
+    auto back = DeliveredDetectionCodec::decode(**record, "detections.csv");
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(back->delay_ns, expected.delay_ns);
+    const DetectionFrame& a = back->sample;
+    const DetectionFrame& b = expected.sample;
+    EXPECT_EQ(a.stamp_ns, b.stamp_ns);
+    EXPECT_EQ(a.result_ns, b.result_ns);
+    EXPECT_EQ(a.sequence, b.sequence);
+    EXPECT_EQ(a.person_count, b.person_count);
+    EXPECT_EQ(a.target_index, b.target_index);
+    EXPECT_EQ(std::memcmp(&a.intrinsics, &b.intrinsics, sizeof(CameraIntrinsics)), 0);
+    EXPECT_EQ(std::memcmp(a.persons.data(), b.persons.data(), sizeof(a.persons)), 0);
+  }
+}
+
+TEST(StreamCodecs, BadDetectionAndFrameIndexFieldsAreErrorsNamingTheLine) {
+  CsvRecord r;
+  r.line = 4;
+  r.values.assign(DetectionCodec::columns().size(), 0.0);
+  r.values[13] = 2.0;  // two persons
+  r.values[14] = 2.0;  // the target is the third of two
+  auto bad_target = DetectionCodec::decode(r, "detections.csv");
+  ASSERT_FALSE(bad_target);
+  EXPECT_NE(bad_target.error().message.find("detections.csv:4: detections: target_index"), std::string::npos);
+  r.values[14] = -1.0;
+  r.values[13] = 7.0;  // more than kMaxPersons
+  EXPECT_FALSE(DetectionCodec::decode(r, "detections.csv"));
+  r.values[13] = 0.0;
+  r.values[1] = 1.5;  // a fractional sequence number
+  auto bad_sequence = DetectionCodec::decode(r, "detections.csv");
+  ASSERT_FALSE(bad_sequence);
+  EXPECT_NE(bad_sequence.error().message.find("detections.csv:4: sequence is not a whole number"), std::string::npos);
+  CsvRecord row;
+  row.line = 2;
+  row.values = {-3.0, 1.0, 1.0};  // a negative delay
+  auto delay = DeliveredFrameIndexCodec::decode(row, "frames.csv");
+  ASSERT_FALSE(delay);
+  EXPECT_NE(delay.error().message.find("frames.csv:2: delay_ns is not a whole number"), std::string::npos);
+  row.values = {0.0, 3.0, 4.0};
+  auto ok = DeliveredFrameIndexCodec::decode(row, "frames.csv");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->sample.sequence, 3U);
+  EXPECT_EQ(ok->sample.file_index, 4U);
+}
+
 }  // namespace
 }  // namespace aerotrack::hal::replay

@@ -29,7 +29,7 @@ TEST(Recorder, AKilledRecorderLeavesADatasetThatReplaysStrictly) {
     for (rt::TimeNs t = 0;; t += rt::kNsPerMillisecond) {
       OdometrySample s;
       s.stamp_ns = t;
-      (*recorder)->record(s);
+      (*recorder)->record(Delivered<OdometrySample>{s, 0});
       if (t % (100 * rt::kNsPerMillisecond) == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   }

@@ -30,16 +30,18 @@ class Recording {
     m.streams = {{"odometry", "odometry.csv"}, {"gimbal", "gimbal.csv"}};
     EXPECT_TRUE(writeManifest(m, (dir_ / "manifest.yaml").string()));
     // Odometry at 100 Hz for 1 s, x = t; the gimbal at 50 Hz, angle = t.
-    auto odometry = CsvStreamWriter::create((dir_ / "odometry.csv").string(), OdometryCodec::columns());
-    auto gimbal = CsvStreamWriter::create((dir_ / "gimbal.csv").string(), GimbalStateCodec::columns());
+    auto odometry = CsvStreamWriter::create((dir_ / "odometry.csv").string(), DeliveredOdometryCodec::columns());
+    auto gimbal = CsvStreamWriter::create((dir_ / "gimbal.csv").string(), DeliveredGimbalStateCodec::columns());
     EXPECT_TRUE(odometry && gimbal);
     for (int k = 0; k <= 100; ++k) {
       OdometrySample s;
       s.stamp_ns = kStart + k * 10 * kMs;
       s.p_WB_m.x() = 0.01 * k;
-      EXPECT_TRUE(odometry->write(s.stamp_ns, OdometryCodec::encode(s)));
+      EXPECT_TRUE(odometry->write(s.stamp_ns, DeliveredOdometryCodec::encode({s, 0})));
       if (k % 2 == 0) {
-        EXPECT_TRUE(gimbal->write(s.stamp_ns, GimbalStateCodec::encode({s.stamp_ns, 0.01 * k, 1.0})));
+        // The encoder's readings arrive 3 ms after they were taken.
+        EXPECT_TRUE(
+            gimbal->write(s.stamp_ns, DeliveredGimbalStateCodec::encode({{s.stamp_ns, 0.01 * k, 1.0}, 3 * kMs})));
       }
     }
   }
@@ -70,6 +72,9 @@ TEST(ReplayDevices, ServesSamplesByExecutorTimeRestampedOntoItsClock) {
   auto g = gimbal.read(255 * kMs);
   ASSERT_TRUE(g.has_value());
   EXPECT_EQ(g->stamp_ns, 240 * kMs);
+  // Each record is shown from the instant it was delivered: the 260 ms reading at 263 ms, not before.
+  EXPECT_EQ(gimbal.read(262 * kMs)->stamp_ns, 240 * kMs);
+  EXPECT_EQ(gimbal.read(263 * kMs)->stamp_ns, 260 * kMs);
   EXPECT_EQ(odometry.health(255 * kMs).state, DeviceHealth::State::kOk);
   // After the end: the last sample stays, and the health says the recording has ended.
   EXPECT_EQ(odometry.read(2000 * kMs)->stamp_ns, 1000 * kMs);
@@ -89,7 +94,8 @@ TEST(ReplayDevices, OffsetAndLoop) {
   ASSERT_TRUE(s.has_value());
   EXPECT_DOUBLE_EQ(s->p_WB_m.x(), 0.5);
   EXPECT_EQ(s->stamp_ns, 7 * kMs);
-  // 0.5 s of recording per lap (plus the 1 ns closing it): lap 2 shows the recording's 0.5 s again.
+  // A lap runs from 0.5 s to the recording's last delivery (the gimbal's 1 s reading, at 1.003 s), plus
+  // the 1 ns closing it: lap 2 shows the recording's 0.5 s again.
   rt::TimeNs previous = s->stamp_ns;
   for (rt::TimeNs t = 7 * kMs; t < 7 * kMs + 1200 * kMs; t += 5 * kMs) {
     auto r = odometry.read(t);
@@ -99,7 +105,7 @@ TEST(ReplayDevices, OffsetAndLoop) {
     previous = r->stamp_ns;
   }
   ReplayOdometry fresh(*dataset);  // executor time only moves forward: a new reader for an earlier instant
-  auto lap2 = fresh.read(7 * kMs + 1000 * kMs + 2);
+  auto lap2 = fresh.read(7 * kMs + 2 * (503 * kMs + 1));
   ASSERT_TRUE(lap2.has_value());
   EXPECT_DOUBLE_EQ(lap2->p_WB_m.x(), 0.5);
   EXPECT_EQ(odometry.health(7 * kMs + 5000 * kMs).state, DeviceHealth::State::kOk);  // looping never ends
@@ -124,7 +130,7 @@ TEST(ReplayDevices, ActuatorCommandsAreKeptNotObeyed) {
   ASSERT_EQ(gimbal.commands().size(), 1U);
   EXPECT_EQ(gimbal.commands()[0].rate_radps, 3.0);
   ASSERT_EQ(link.sent().size(), 1U);
-  EXPECT_DOUBLE_EQ(gimbal.read(100 * kMs)->angle_rad, 0.1);  // what was recorded, whatever was commanded
+  EXPECT_DOUBLE_EQ(gimbal.read(103 * kMs)->angle_rad, 0.1);  // what was recorded, whatever was commanded
   EXPECT_EQ(link.status(100 * kMs).mode, FlightMode::kOffboard);
 }
 
@@ -132,9 +138,9 @@ TEST(ReplayDevices, BadRowsAreSkippedAndReportedOrStopTheStartWhenStrict) {
   const Recording rec;
   {
     std::ofstream out(rec.file("gimbal.csv"), std::ios::app);
-    out << "1000000000000000,abc,0\n";  // a bad field, at the end of the recording
-    out << "1000500000000,0.5,1\n";     // back in time
-    out << "1001200000000,1.2,1\n";     // fine
+    out << "1000000000000000,0,abc,0\n";  // a bad field, at the end of the recording
+    out << "1000500000000,0,0.5,1\n";     // back in time
+    out << "1001200000000,0,1.2,1\n";     // fine
   }
   ReplayOptions options;
   options.dir = rec.dir();
@@ -171,14 +177,14 @@ TEST(ReplayDevices, ARecordingCutMidRecordReplaysToItsLastCompleteRecord) {
   const Recording rec;
   {
     std::ofstream out(rec.file("odometry.csv"), std::ios::app);
-    out << "1001010000000,1.01,0,0,1,0";  // the record a killed recorder was writing
+    out << "1001010000000,0,1.01,0,0,1,0";  // the record a killed recorder was writing
   }
   ReplayOptions options;
   options.dir = rec.dir();
   options.bad_rows = BadRowPolicy::kStrict;
   auto dataset = ReplayDataset::open(options, 0);
   ASSERT_TRUE(dataset) << dataset.error().message;
-  const LoadedStream<OdometrySample>* stream = (*dataset)->odometry();
+  const LoadedStream<Delivered<OdometrySample>>* stream = (*dataset)->odometry();
   ASSERT_NE(stream, nullptr);
   const bool truncated = stream != nullptr && stream->truncated_tail;
   const std::size_t count = stream != nullptr ? stream->samples.size() : 0;

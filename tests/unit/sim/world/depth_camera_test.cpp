@@ -11,10 +11,14 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "aerotrack/hal/depth_units.hpp"
 #include "aerotrack/hal/sim/depth_camera.hpp"
 
 namespace aerotrack::hal::sim {
 namespace {
+
+// Depths are whole millimetres (Z16): within half a millimetre of the exact value, plus float rounding.
+constexpr double kZ16Tol = 0.5e-3 + 1e-5;
 
 ObstacleWorld makeWorld(std::vector<Box> boxes, std::vector<Cylinder> cylinders) {
   auto world = ObstacleWorld::create(std::move(boxes), std::move(cylinders));
@@ -118,6 +122,24 @@ TEST(DepthIntrinsics, GivenFieldsOfViewThenFocalLengthsFromHalfAngles) {
   EXPECT_EQ(k.cy_px, 60.0);
 }
 
+TEST(RenderDepth, GivenAnyPoseThenEveryValueIsAWholeNumberOfMillimetresAsTheD435Delivers) {
+  DepthCameraParams params = ideal();
+  params.noise_coeff_per_m = 0.0015;  // noisy values are rounded too
+  const ObstacleWorld world = makeWorld({}, {Cylinder{Eigen::Vector2d(4.0, 0.3), 0.4, 0.0, 100.0}});
+  std::mt19937_64 rng(3);
+  cv::Mat depth_m;
+  renderDepth(world, lookAlongX({0, 0, 1.2}), params, rng, depth_m);
+  int valid = 0;
+  for (int v = 0; v < depth_m.rows; ++v) {
+    for (int u = 0; u < depth_m.cols; ++u) {
+      const float z = depth_m.at<float>(v, u);
+      ASSERT_EQ(z, depthFromZ16(depthToZ16(z))) << u << ", " << v;  // a Z16 value, read back exactly
+      valid += z > 0.0F ? 1 : 0;
+    }
+  }
+  EXPECT_GT(valid, depth_m.rows * depth_m.cols / 4);
+}
+
 TEST(RenderDepth, GivenWallFacingTheCameraAtDThenEveryPixelIsD) {
   for (const double d_m : {0.5, 4.0, 9.5}) {
     std::mt19937_64 rng(1);
@@ -129,8 +151,8 @@ TEST(RenderDepth, GivenWallFacingTheCameraAtDThenEveryPixelIsD) {
     double min_m = 0.0;
     double max_m = 0.0;
     cv::minMaxLoc(depth_m, &min_m, &max_m);
-    EXPECT_NEAR(min_m, d_m, 1e-5 * d_m);  // float rounding
-    EXPECT_NEAR(max_m, d_m, 1e-5 * d_m);
+    EXPECT_NEAR(min_m, d_m, kZ16Tol);
+    EXPECT_NEAR(max_m, d_m, kZ16Tol);
   }
 }
 
@@ -150,7 +172,7 @@ TEST(RenderDepth, GivenCylinderStraightAheadThenCentreColumnIsDistanceMinusRadiu
   for (int v = 0; v < params.height_px; ++v) {
     const double y_c = (v + 0.5 - k.cy_px) / k.fy_px;
     const double expected = y_c * (d_m - r_m) <= h_m ? d_m - r_m : h_m / y_c;
-    EXPECT_NEAR(depth_m.at<float>(v, 80), expected, 1e-5) << "row " << v;
+    EXPECT_NEAR(depth_m.at<float>(v, 80), expected, kZ16Tol) << "row " << v;
   }
   // Centre row, other columns: line (s z, z) meets the circle around (0, d):
   // (1 + s^2) z^2 - 2 d z + d^2 - r^2 = 0; no hit (and no ground at the horizon) reads 0.
@@ -159,7 +181,7 @@ TEST(RenderDepth, GivenCylinderStraightAheadThenCentreColumnIsDistanceMinusRadiu
     const double s = (u + 0.5 - k.cx_px) / k.fx_px;
     const double disc = d_m * d_m - (1 + s * s) * (d_m * d_m - r_m * r_m);
     const double expected = disc >= 0.0 ? (d_m - std::sqrt(disc)) / (1 + s * s) : 0.0;
-    EXPECT_NEAR(depth_m.at<float>(60, u), expected, 1e-5) << "column " << u;
+    EXPECT_NEAR(depth_m.at<float>(60, u), expected, kZ16Tol) << "column " << u;
     hit_columns += disc >= 0.0 ? 1 : 0;
   }
   EXPECT_GE(hit_columns, 5);
@@ -181,7 +203,7 @@ TEST(RenderDepth, GivenGroundOnlyThenRowsBeyondMaxRangeAndAboveHorizonAreZero) {
     if (std::abs(z - params.max_range_m) < 1e-6) continue;  // exactly at the limit: either
     ground_rows += expected > 0.0 ? 1 : 0;
     for (int u = 0; u < params.width_px; ++u) {
-      ASSERT_NEAR(depth_m.at<float>(v, u), expected, 1e-5) << "pixel " << u << ", " << v;
+      ASSERT_NEAR(depth_m.at<float>(v, u), expected, kZ16Tol) << "pixel " << u << ", " << v;
     }
   }
   EXPECT_GT(ground_rows, 30);
@@ -280,8 +302,7 @@ TEST(RenderDepth, GivenRandomPosesInAForestThenEveryPixelEqualsItsRaycast) {
             world.raycast(T_WC.translation(), T_WC.linear() * (ray_C / norm), params.max_range_m * norm, true);
         const double z_m = t_m ? *t_m / norm : 0.0;
         const double expected = z_m >= params.min_range_m && z_m <= params.max_range_m ? z_m : 0.0;
-        ASSERT_NEAR(depth_m.at<float>(v, u), expected, 1e-5 * (1.0 + expected))
-            << "pose " << i << " pixel " << u << ", " << v;
+        ASSERT_NEAR(depth_m.at<float>(v, u), expected, kZ16Tol) << "pose " << i << " pixel " << u << ", " << v;
         nonzero += expected > 0.0 ? 1 : 0;
       }
     }

@@ -10,6 +10,7 @@
 #include "aerotrack/perception/detector.hpp"
 #include "aerotrack/rt/clock.hpp"
 #include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
 #include "aerotrack/rt/task.hpp"
@@ -31,6 +32,8 @@ class DetectionTask final : public rt::Task {
       : detector_(std::move(detector)), images_(images), out_(out), stats_clock_(stats_clock) {}
 
   void step(rt::TimeNs now_ns) override;
+  /// Also publish every result on `newest` (for pictures and the recorder), besides the stream.
+  void publishNewestTo(rt::LatestSlot<hal::DetectionFrame>& newest) { newest_ = &newest; }
 
   std::uint64_t framesDetected() const { return frames_detected_; }
   std::uint64_t framesWithTarget() const { return frames_with_target_; }
@@ -42,6 +45,7 @@ class DetectionTask final : public rt::Task {
   Detector detector_;
   const rt::SharedSlot<hal::ImageFrame>& images_;
   rt::SpscQueue<hal::DetectionFrame>& out_;
+  rt::LatestSlot<hal::DetectionFrame>* newest_ = nullptr;
   const rt::Clock& stats_clock_;
   rt::TimingStats detect_stats_;
   std::uint64_t image_version_ = 0;

@@ -24,10 +24,15 @@ inline constexpr int kDatasetFormatVersion = 1;
 struct RecordedCamera {
   CameraIntrinsics intrinsics;
   Eigen::Vector3d mount_B_m = Eigen::Vector3d::Zero();  ///< Camera (gimbal axis for the gimbal camera) in B.
+  /// Rotates camera-frame vectors into B (the depth camera's T_BC rotation; identity for the gimbal
+  /// camera, whose pose follows the gimbal). YAML: `rotation_B_C`, 9 numbers row by row (optional).
+  Eigen::Matrix3d R_BC = Eigen::Matrix3d::Identity();
+  std::string image_format = "png";  ///< The frame files: "png" or "jpg" (gimbal camera only).
 };
 
 /// One device stream: the device ("odometry", "gimbal", "gimbal_commands", "setpoints",
-/// "gimbal_camera", "depth_camera", "can") and its file, relative to the manifest's folder.
+/// "gimbal_camera" (images), "detections" (a keypoint-mode camera's output), "depth_camera", "can") and its file,
+/// relative to the manifest's folder.
 struct StreamEntry {
   std::string device;
   std::string file;
@@ -48,7 +53,7 @@ struct DatasetManifest {
 
 /// Reads `path` (…/manifest.yaml). Errors name the file, line and key.
 rt::Expected<DatasetManifest> readManifest(const std::string& path);
-/// Writes `manifest` to `path` as YAML (replacing it).
+/// Writes `manifest` to `path` as YAML, replacing it atomically (path.part, then rename).
 rt::Status writeManifest(const DatasetManifest& manifest, const std::string& path);
 
 }  // namespace aerotrack::hal::replay

@@ -1,19 +1,22 @@
-// The replay backend for the numeric devices (issue 10 item 2): odometry, gimbal encoder and vehicle
-// link served from a recorded dataset (hal/replay/README.md).
+// The replay backend (issue 10 item 2): every device served from a recorded dataset
+// (hal/replay/README.md): odometry, gimbal encoder, vehicle link, the gimbal camera (images or a
+// keypoint-mode camera's detections) and the depth camera.
 //
 // Time: the recording is laid onto the executor's clock. Executor time `now` shows recording time
 // start + offset + (now - replay_start); stamps of served samples are moved the other way, so the
 // modules see a recording exactly as they would see the live devices, under either executor
-// (lockstep: as fast as the tasks run, deterministic; real-time: at 1x). With `loop`, the recording
-// starts again after its end, stamps still increasing.
+// (lockstep: as fast as the tasks run, deterministic; real-time: at 1x). A record is shown from the
+// instant its device delivered it (its stamp plus the recorded delay), so a lockstep replay of a
+// lockstep recording feeds the modules exactly what they saw. With `loop`, the recording starts again
+// after its end, stamps still increasing.
 //
 // Actuators: commands sent to the replayed gimbal and setpoints sent to the replayed vehicle link are
 // kept (for comparison with the recorded ones), not obeyed.
 //
-// Streams are read, decoded and checked whole when the dataset is opened: a strict error stops the
-// start with one line naming the file and line; with the skip policy, bad rows are dropped and each
-// device's health says how many. A recording ended by a kill -9 replays up to its last complete
-// record.
+// Streams are read, decoded and checked whole when the dataset is opened (camera frame files are
+// checked to exist then, and decoded when served): a strict error stops the start with one line naming
+// the file and line; with the skip policy, bad rows are dropped and each device's health says how many. A recording
+// ended by a kill -9 replays up to its last complete record.
 #pragma once
 
 #include <memory>
@@ -24,6 +27,7 @@
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/hal/replay/csv_stream.hpp"
 #include "aerotrack/hal/replay/manifest.hpp"
+#include "aerotrack/hal/replay/stream_codecs.hpp"
 
 namespace aerotrack::hal::replay {
 
@@ -49,6 +53,10 @@ class ReplayTimeline {
   rt::TimeNs toExecutor(rt::TimeNs rec_ns, std::int64_t lap) const;
   /// True once a non-looping replay has shown its last instant.
   bool ended(rt::TimeNs now_ns) const;
+  /// The first recording instant shown (start + offset).
+  rt::TimeNs firstNs() const { return first_ns_; }
+  /// The recording's last instant: its last record of any stream.
+  rt::TimeNs endNs() const { return end_ns_; }
 
  private:
   rt::TimeNs first_ns_;  // recording start + offset
@@ -57,12 +65,12 @@ class ReplayTimeline {
   bool loop_;
 };
 
-/// A decoded stream: its samples in time order, and what reading it found.
-template <class Sample>
+/// A decoded stream: its records in time order, and what reading it found.
+template <class Item>
 struct LoadedStream {
-  std::vector<Sample> samples;
+  std::vector<Item> samples;
   std::string path;
-  std::uint64_t skipped_rows = 0;
+  std::uint64_t skipped_rows = 0;  ///< Bad rows, and index rows whose frame file is missing.
   std::string first_skip_message;
   bool truncated_tail = false;
 };
@@ -73,37 +81,65 @@ class ReplayDataset {
   static rt::Expected<std::shared_ptr<ReplayDataset>> open(const ReplayOptions& options, rt::TimeNs replay_start_ns);
 
   const DatasetManifest& manifest() const { return manifest_; }
+  const std::string& dir() const { return dir_; }
   const ReplayTimeline& timeline() const { return timeline_; }
-  const LoadedStream<OdometrySample>* odometry() const { return odometry_ ? &*odometry_ : nullptr; }
-  const LoadedStream<GimbalState>* gimbal() const { return gimbal_ ? &*gimbal_ : nullptr; }
-  const LoadedStream<Setpoint>* setpoints() const { return setpoints_ ? &*setpoints_ : nullptr; }
-  const LoadedStream<GimbalCommand>* gimbalCommands() const { return gimbal_commands_ ? &*gimbal_commands_ : nullptr; }
+  BadRowPolicy badRowPolicy() const { return policy_; }
+  const LoadedStream<Delivered<OdometrySample>>* odometry() const { return get(odometry_); }
+  const LoadedStream<Delivered<GimbalState>>* gimbal() const { return get(gimbal_); }
+  const LoadedStream<Delivered<DetectionFrame>>* detections() const { return get(detections_); }
+  const LoadedStream<Delivered<FrameIndexRow>>* depthFrames() const { return get(depth_frames_); }
+  const LoadedStream<Delivered<FrameIndexRow>>* images() const { return get(images_); }
+  const LoadedStream<Setpoint>* setpoints() const { return get(setpoints_); }
+  const LoadedStream<GimbalCommand>* gimbalCommands() const { return get(gimbal_commands_); }
 
  private:
-  ReplayDataset(DatasetManifest manifest, ReplayTimeline timeline)
-      : manifest_(std::move(manifest)), timeline_(timeline) {}
+  ReplayDataset(DatasetManifest manifest, std::string dir, ReplayTimeline timeline, BadRowPolicy policy)
+      : manifest_(std::move(manifest)), dir_(std::move(dir)), timeline_(timeline), policy_(policy) {}
+  template <class T>
+  static const T* get(const std::optional<T>& stream) {
+    return stream ? &*stream : nullptr;
+  }
   DatasetManifest manifest_;
+  std::string dir_;
   ReplayTimeline timeline_;
-  std::optional<LoadedStream<OdometrySample>> odometry_;
-  std::optional<LoadedStream<GimbalState>> gimbal_;
+  BadRowPolicy policy_;
+  std::optional<LoadedStream<Delivered<OdometrySample>>> odometry_;
+  std::optional<LoadedStream<Delivered<GimbalState>>> gimbal_;
+  std::optional<LoadedStream<Delivered<DetectionFrame>>> detections_;
+  std::optional<LoadedStream<Delivered<FrameIndexRow>>> depth_frames_;
+  std::optional<LoadedStream<Delivered<FrameIndexRow>>> images_;
   std::optional<LoadedStream<Setpoint>> setpoints_;
   std::optional<LoadedStream<GimbalCommand>> gimbal_commands_;
 };
 
-/// Serves a loaded stream by executor time: the newest sample at or before now, restamped.
+/// Serves a loaded stream by executor time. A record is shown from the instant the device delivered
+/// it (stamp + delay) and restamped onto the executor's clock.
 template <class Sample>
 class StreamCursor {
  public:
-  StreamCursor(std::shared_ptr<const ReplayDataset> dataset, const LoadedStream<Sample>* stream)
+  StreamCursor(std::shared_ptr<const ReplayDataset> dataset, const LoadedStream<Delivered<Sample>>* stream)
       : dataset_(std::move(dataset)), stream_(stream) {}
+  /// The newest sample delivered at or before now (repeated until a newer one is delivered).
   std::optional<Sample> newestAt(rt::TimeNs now_ns);
+  /// The newest sample delivered at or before now if not returned before; older ones are skipped (a
+  /// camera's newest-frame grab).
+  std::optional<Sample> newestUnseenAt(rt::TimeNs now_ns);
+  /// The oldest sample delivered at or before now and not returned before (a queue).
+  std::optional<Sample> nextAt(rt::TimeNs now_ns);
   DeviceHealth health(rt::TimeNs now_ns) const;
+  const ReplayDataset& dataset() const { return *dataset_; }
 
  private:
+  /// Moves to now's lap; returns the recording instant shown at now.
+  rt::TimeNs sync(rt::TimeNs now_ns);
+  Sample shown(std::size_t i);
+
   std::shared_ptr<const ReplayDataset> dataset_;
-  const LoadedStream<Sample>* stream_;
-  std::size_t next_ = 0;  // first sample not yet shown in this lap
+  const LoadedStream<Delivered<Sample>>* stream_;
+  std::size_t next_ = 0;    // first record not yet delivered in this lap
+  std::size_t served_ = 0;  // first record not yet returned in this lap (newestUnseenAt, nextAt)
   std::int64_t lap_ = 0;
+  bool lap_started_ = false;
   rt::TimeNs last_served_ns_ = 0;
 };
 
@@ -134,6 +170,43 @@ class ReplayGimbal final : public Gimbal {
  private:
   StreamCursor<GimbalState> cursor_;
   std::vector<GimbalCommand> commands_;
+};
+
+/// The gimbal camera from a recording: its images (gimbal_camera/frames.csv and the image files, read
+/// when served), and a keypoint-mode camera's detections (gimbal_camera/detections.csv), each in the
+/// order and at the instants they were delivered. A frame file that cannot be read when its turn
+/// comes is skipped and counted in the health.
+class ReplayGimbalCamera final : public GimbalCamera {
+ public:
+  explicit ReplayGimbalCamera(const std::shared_ptr<const ReplayDataset>& dataset)
+      : images_(dataset, dataset->images()), detections_(dataset, dataset->detections()) {}
+  std::string_view backend() const override { return "replay"; }
+  DeviceHealth health(rt::TimeNs now_ns) const override;
+  ImageFrameHandle grab(rt::TimeNs now_ns) override;
+  std::optional<DetectionFrame> grabDetections(rt::TimeNs now_ns) override { return detections_.nextAt(now_ns); }
+
+ private:
+  StreamCursor<FrameIndexRow> images_;
+  StreamCursor<DetectionFrame> detections_;
+  std::uint64_t unreadable_ = 0;
+  std::string first_unreadable_;
+};
+
+/// The depth camera from a recording (depth_camera/frames.csv and its 16-bit PNGs, read when served),
+/// with the manifest's intrinsics and mount. Unreadable frames are skipped and counted in the health.
+class ReplayDepthCamera final : public DepthCamera {
+ public:
+  explicit ReplayDepthCamera(const std::shared_ptr<const ReplayDataset>& dataset);
+  std::string_view backend() const override { return "replay"; }
+  DeviceHealth health(rt::TimeNs now_ns) const override;
+  DepthFrameHandle grab(rt::TimeNs now_ns) override;
+
+ private:
+  StreamCursor<FrameIndexRow> cursor_;
+  CameraIntrinsics intrinsics_;
+  Eigen::Isometry3d T_BC_ = Eigen::Isometry3d::Identity();
+  std::uint64_t unreadable_ = 0;
+  std::string first_unreadable_;
 };
 
 class ReplayVehicleLink final : public VehicleLink {

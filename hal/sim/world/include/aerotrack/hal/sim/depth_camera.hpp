@@ -7,7 +7,8 @@
 // 2018): RMS error = z^2 * subpixel / (focal_px * baseline); with the D435's 50 mm baseline,
 // focal ~ 640 px at 1280 x 720 and subpixel ~ 0.05, k ~ 0.0015 per metre (about 6 mm at 2 m,
 // consistent with Intel's "< 2 % at 2 m" specification). Invalid pixels (no hit, out of range,
-// random dropout) are 0, as on the real sensor.
+// random dropout) are 0, as on the real sensor. Depths are whole millimetres, the D435's Z16 unit
+// (hal/depth_units.hpp).
 #pragma once
 
 #include <random>
@@ -63,9 +64,9 @@ bool projectBoxToPixels(const Box& box, const Eigen::Matrix3d& R_CW, const Eigen
 /// obstacle or ground hit through the pixel centre, plus N(0, (k z^2)^2) noise; 0 when nothing is
 /// hit, when the true z is outside [min_range_m, max_range_m], or on dropout. The range test uses
 /// the true z, so a noisy value may stray slightly past the limits; a value the noise would
-/// push to <= 0 reads 0. Randomness only from rng, in row-major pixel order: dropout takes one
-/// geometric draw per dropped pixel (the run of valid pixels kept before it; one more at the
-/// start when 0 < dropout_probability < 1), noise one normal draw per kept valid pixel (when
+/// push to <= 0 reads 0. Values are rounded to whole millimetres (depthToZ16, depthFromZ16). Randomness only from rng,
+/// in row-major pixel order: dropout takes one geometric draw per dropped pixel (the run of valid pixels kept before
+/// it; one more at the start when 0 < dropout_probability < 1), noise one normal draw per kept valid pixel (when
 /// noise_coeff_per_m > 0). Same seed, same image (for one standard library).
 /// The result equals ObstacleWorld::raycast through each pixel centre (ground on), but it is
 /// rendered without the grid, using the shared origin of the rays: the ground analytically per

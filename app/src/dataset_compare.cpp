@@ -1,0 +1,132 @@
+// Dataset comparison: see dataset_compare.hpp.
+#include "dataset_compare.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <sstream>
+
+#include "aerotrack/hal/replay/csv_stream.hpp"
+#include "aerotrack/hal/replay/stream_codecs.hpp"
+#include "output_recorder.hpp"
+
+namespace aerotrack::app {
+namespace {
+
+using hal::replay::CsvRecord;
+using hal::replay::CsvStreamReader;
+
+struct ComparedStream {
+  const char* file;
+  const std::vector<std::string>& columns;
+};
+
+std::vector<ComparedStream> comparedStreams() {
+  using namespace hal::replay;  // NOLINT(google-build-using-namespace): the codecs, in this function only
+  return {                      // What the devices delivered: the replay must have fed all of it.
+          {"odometry.csv", DeliveredOdometryCodec::columns()},
+          {"gimbal.csv", DeliveredGimbalStateCodec::columns()},
+          {"depth_camera/frames.csv", DeliveredFrameIndexCodec::columns()},
+          {"gimbal_camera/frames.csv", DeliveredFrameIndexCodec::columns()},
+          // What the modules decided and the actuators were told.
+          {"setpoints.csv", hal::replay::SetpointCodec::columns()},
+          {"gimbal_commands.csv", hal::replay::GimbalCommandCodec::columns()},
+          {"gimbal_camera/detections.csv", hal::replay::DeliveredDetectionCodec::columns()},
+          {"outputs/detections.csv", hal::replay::DetectionCodec::columns()},
+          {"outputs/estimates.csv", EstimateCodec::columns()},
+          {"outputs/trajectories.csv", TrajectoryCodec::columns()}};
+}
+
+bool sameBits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof(double)) == 0;
+}
+
+std::string number(double x) {
+  std::ostringstream out;
+  out.precision(17);
+  out << x;
+  return out.str();
+}
+
+rt::Expected<std::vector<CsvRecord>> readAll(const std::string& path, const std::vector<std::string>& columns) {
+  auto reader = CsvStreamReader::open(path, columns, hal::replay::BadRowPolicy::kStrict);
+  if (!reader) return reader.error();
+  std::vector<CsvRecord> out;
+  for (;;) {
+    auto record = reader->next();
+    if (!record) return record.error();
+    if (!record->has_value()) return out;
+    out.push_back(std::move(**record));
+  }
+}
+
+}  // namespace
+
+rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
+                                                            const std::string& replayed_dir) {
+  namespace fs = std::filesystem;
+  std::vector<StreamComparison> out;
+  for (const ComparedStream& stream : comparedStreams()) {
+    const std::string a_path = (fs::path(recorded_dir) / stream.file).string();
+    const std::string b_path = (fs::path(replayed_dir) / stream.file).string();
+    std::error_code ec;
+    if (!fs::exists(a_path, ec) || !fs::exists(b_path, ec)) continue;
+    auto a = readAll(a_path, stream.columns);
+    if (!a) return a.error();
+    auto b = readAll(b_path, stream.columns);
+    if (!b) return b.error();
+    if (a->empty() && b->empty()) continue;
+    StreamComparison c;
+    c.file = stream.file;
+    c.recorded = a->size();
+    c.replayed = b->size();
+    const std::size_t n = std::min(a->size(), b->size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const CsvRecord& x = (*a)[i];
+      const CsvRecord& y = (*b)[i];
+      bool same = x.stamp_ns == y.stamp_ns;
+      c.max_abs_difference = std::max(c.max_abs_difference, std::abs(static_cast<double>(x.stamp_ns - y.stamp_ns)));
+      std::optional<std::size_t> column;
+      for (std::size_t k = 0; k < x.values.size(); ++k) {
+        if (sameBits(x.values[k], y.values[k])) continue;
+        same = false;
+        if (!column) column = k;
+        c.max_abs_difference = std::max(c.max_abs_difference, std::abs(x.values[k] - y.values[k]));
+      }
+      if (same) {
+        ++c.identical;
+        continue;
+      }
+      if (c.first_difference.empty()) {
+        c.first_difference = a_path + ":" + std::to_string(x.line) + ": ";
+        c.first_difference += x.stamp_ns != y.stamp_ns ? "stamp_ns " + std::to_string(x.stamp_ns) + " recorded, " +
+                                                             std::to_string(y.stamp_ns) + " replayed"
+                                                       : stream.columns[*column] + " " + number(x.values[*column]) +
+                                                             " recorded, " + number(y.values[*column]) + " replayed";
+      }
+    }
+    if (c.first_difference.empty() && a->size() != b->size()) {
+      c.first_difference =
+          a_path + ": " + std::to_string(a->size()) + " records recorded, " + std::to_string(b->size()) + " replayed";
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::string formatComparison(const std::vector<StreamComparison>& comparisons) {
+  std::ostringstream out;
+  for (const StreamComparison& c : comparisons) {
+    out << "  " << c.file << ": " << c.identical << " of " << c.recorded << " recorded records replayed identically";
+    if (c.same()) {
+      out << " (bit for bit)\n";
+    } else {
+      out << "; " << c.replayed << " replayed, largest difference " << number(c.max_abs_difference)
+          << "; first: " << c.first_difference << "\n";
+    }
+  }
+  return out.str();
+}
+
+}  // namespace aerotrack::app

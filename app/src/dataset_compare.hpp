@@ -1,0 +1,33 @@
+// `aerotrack replay --compare`: the recorded run's outputs against the replay's, record by record
+// (issue 10 item 5). For each stream that both recordings hold (what the devices delivered, what the
+// actuators were told, the detections, the target estimates, the planned trajectories), the records are
+// compared bit for bit, stamps included; the report gives the counts, the first difference (file,
+// line, column, both values) and the largest absolute difference per stream.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "aerotrack/rt/expected.hpp"
+
+namespace aerotrack::app {
+
+struct StreamComparison {
+  std::string file;  ///< Relative to the dataset folder.
+  std::uint64_t recorded = 0;
+  std::uint64_t replayed = 0;
+  std::uint64_t identical = 0;      ///< Records equal bit for bit, in order, stamps included.
+  double max_abs_difference = 0.0;  ///< Over the values of records at the same index (stamps included).
+  std::string first_difference;     ///< "" when the two streams are the same.
+  bool same() const { return first_difference.empty(); }
+};
+
+/// Compares the streams both folders hold. Error: a stream that cannot be read (one line naming it).
+rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
+                                                            const std::string& replayed_dir);
+
+/// One line per stream, for a person.
+std::string formatComparison(const std::vector<StreamComparison>& comparisons);
+
+}  // namespace aerotrack::app

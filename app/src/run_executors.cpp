@@ -1,0 +1,56 @@
+// Executor runners: see run_executors.hpp.
+#include "run_executors.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "aerotrack/rt/lockstep_executor.hpp"
+#include "aerotrack/rt/realtime_executor.hpp"
+#include "report.hpp"
+
+namespace aerotrack::app {
+namespace {
+
+rt::Status addAll(const System& system, auto& executor) {
+  for (const rt::TaskBinding& b : system.bindings())
+    if (rt::Status s = executor.add(b); !s) return s;
+  return rt::ok();
+}
+
+}  // namespace
+
+rt::Status runLockstep(System& system, rt::ManualClock& clock, rt::TimeNs end_ns, const std::atomic<bool>& stop,
+                       RunInfo& info) {
+  const rt::MonotonicClock wall;
+  rt::LockstepExecutor executor(clock, wall);
+  if (rt::Status s = addAll(system, executor); !s) return s;
+  const rt::TimeNs wall_start = wall.now();
+  const rt::TimeNs sim_start = clock.now();
+  if (rt::Status s = executor.runUntil(end_ns, &stop); !s) return s;
+  info.wall_time_s = rt::nsToSeconds(wall.now() - wall_start);
+  info.sim_time_s = rt::nsToSeconds(clock.now() - sim_start);
+  info.timings = snapshotTimings(executor.stats());
+  char hash[32];
+  std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(executor.traceHash()));
+  info.trace_hash = hash;
+  return rt::ok();
+}
+
+rt::Status runRealtime(System& system, const rt::MonotonicClock& clock, rt::TimeNs start_ns, rt::TimeNs end_ns,
+                       const std::atomic<bool>& stop, RunInfo& info, const char* command) {
+  rt::RealtimeExecutor executor(clock, system.realtimeOptions());
+  if (rt::Status s = addAll(system, executor); !s) return s;
+  const auto warnings = executor.start();
+  if (!warnings) return warnings.error();
+  for (const std::string& w : *warnings) std::fprintf(stderr, "aerotrack %s: warning: %s\n", command, w.c_str());
+  while (!stop.load() && clock.now() < end_ns) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  executor.requestStop();
+  executor.join();
+  info.sim_time_s = rt::nsToSeconds(clock.now() - start_ns);
+  info.wall_time_s = info.sim_time_s;
+  info.timings = snapshotTimings(executor.stats());
+  return rt::ok();
+}
+
+}  // namespace aerotrack::app
