@@ -20,22 +20,23 @@ using hal::replay::CsvStreamReader;
 struct ComparedStream {
   const char* file;
   const std::vector<std::string>& columns;
+  bool input;  ///< What a device delivered (not what the system produced).
 };
 
 std::vector<ComparedStream> comparedStreams() {
   using namespace hal::replay;  // NOLINT(google-build-using-namespace): the codecs, in this function only
   return {                      // What the devices delivered: the replay must have fed all of it.
-          {"odometry.csv", DeliveredOdometryCodec::columns()},
-          {"gimbal.csv", DeliveredGimbalStateCodec::columns()},
-          {"depth_camera/frames.csv", DeliveredFrameIndexCodec::columns()},
-          {"gimbal_camera/frames.csv", DeliveredFrameIndexCodec::columns()},
+          {"odometry.csv", DeliveredOdometryCodec::columns(), true},
+          {"gimbal.csv", DeliveredGimbalStateCodec::columns(), true},
+          {"depth_camera/frames.csv", DeliveredFrameIndexCodec::columns(), true},
+          {"gimbal_camera/frames.csv", DeliveredFrameIndexCodec::columns(), true},
+          {"gimbal_camera/detections.csv", DeliveredDetectionCodec::columns(), true},
           // What the modules decided and the actuators were told.
-          {"setpoints.csv", hal::replay::SetpointCodec::columns()},
-          {"gimbal_commands.csv", hal::replay::GimbalCommandCodec::columns()},
-          {"gimbal_camera/detections.csv", hal::replay::DeliveredDetectionCodec::columns()},
-          {"outputs/detections.csv", hal::replay::DetectionCodec::columns()},
-          {"outputs/estimates.csv", EstimateCodec::columns()},
-          {"outputs/trajectories.csv", TrajectoryCodec::columns()}};
+          {"setpoints.csv", SetpointCodec::columns(), false},
+          {"gimbal_commands.csv", GimbalCommandCodec::columns(), false},
+          {"outputs/detections.csv", DetectionCodec::columns(), false},
+          {"outputs/estimates.csv", EstimateCodec::columns(), false},
+          {"outputs/trajectories.csv", TrajectoryCodec::columns(), false}};
 }
 
 bool sameBits(double a, double b) {
@@ -64,10 +65,11 @@ rt::Expected<std::vector<CsvRecord>> readAll(const std::string& path, const std:
 }  // namespace
 
 rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
-                                                            const std::string& replayed_dir) {
+                                                            const std::string& replayed_dir, bool inputs) {
   namespace fs = std::filesystem;
   std::vector<StreamComparison> out;
   for (const ComparedStream& stream : comparedStreams()) {
+    if (stream.input && !inputs) continue;
     const std::string a_path = (fs::path(recorded_dir) / stream.file).string();
     const std::string b_path = (fs::path(replayed_dir) / stream.file).string();
     std::error_code ec;

@@ -23,9 +23,10 @@ struct StreamComparison {
   bool same() const { return first_difference.empty(); }
 };
 
-/// Compares the streams both folders hold. Error: a stream that cannot be read (one line naming it).
+/// Compares the streams both folders hold; with inputs false, only what the modules and actuators
+/// produced (not what the devices delivered). Error: a stream that cannot be read (one line naming it).
 rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
-                                                            const std::string& replayed_dir);
+                                                            const std::string& replayed_dir, bool inputs = true);
 
 /// One line per stream, for a person.
 std::string formatComparison(const std::vector<StreamComparison>& comparisons);

@@ -7,6 +7,7 @@
 // flight controller were told, the detections, the target estimates, the planned trajectories, and
 // what the devices delivered -- are compared with the recorded ones record by record; the exit status
 // is 3 if any differs.
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
@@ -101,11 +102,14 @@ int replayCommand(const ParsedArgs& args) {
   const bool compare = args.flags.count("compare") != 0;
   const std::string out_dir = args.valueOr("out", "out/replay-" + fs::path(dir).filename().string());
   const bool realtime = args.flags.count("realtime") != 0;
+  if (compare && args.has("record")) return fail("--record: --compare records the replay itself (OUT/replayed)");
   if (compare) {
     config->record_dir = (fs::path(out_dir) / "replayed").string();
-    config->record_lossless = !realtime;
     if (rt::Status s = clearPreviousReplay(config->record_dir); !s) return fail(s.error().message);
+  } else {
+    config->record_dir = args.valueOr("record", "");
   }
+  config->record_lossless = !realtime;
 
   const rt::MonotonicClock mono_clock;
   rt::ManualClock replay_clock(manifest->start_ns);  // lockstep: on the recording's own clock
@@ -118,7 +122,13 @@ int replayCommand(const ParsedArgs& args) {
   auto timeline = hal::replay::ReplayDataset::open(config->hal.replay, start_ns);
   if (!timeline) return fail(timeline.error().message);
   const hal::replay::ReplayTimeline& t = (*timeline)->timeline();
-  const rt::TimeNs end_ns = t.toExecutor(t.endNs(), 0) + 1;
+  // As long as the recorded run, if its manifest says; else (a kill -9, an import) one longest task
+  // period after the last record, so that every task is released after it was shown.
+  rt::DurationNs longest_period_ns = 0;
+  for (const rt::TaskSpec& spec : config->tasks)
+    if (spec.periodic()) longest_period_ns = std::max(longest_period_ns, rt::periodFromRateHz(spec.rate_hz));
+  const rt::TimeNs end_ns = manifest->end_ns ? t.toExecutor(*manifest->end_ns, 0)
+                                             : t.toExecutor(t.endNs(), 0) + longest_period_ns;
   if (!left_out.empty()) std::printf("replay: left out the simulator's tasks: %s\n", left_out.c_str());
 
   RunInfo info;
@@ -130,13 +140,21 @@ int replayCommand(const ParsedArgs& args) {
               manifest->source.c_str(), manifest->software_version.c_str(), info.sim_time_s, info.wall_time_s,
               info.executor.c_str());
   std::fputs(timingTable(info.timings).c_str(), stdout);
+  if (const perception::DetectionTask* detection = (*system)->detectionTask();
+      detection != nullptr && detection->framesDetected() + detection->failures() > 0) {
+    std::printf("detector: %llu frames, the followed person locked on in %llu, %llu failures\n",
+                static_cast<unsigned long long>(detection->framesDetected()),
+                static_cast<unsigned long long>(detection->framesWithTarget()),
+                static_cast<unsigned long long>(detection->failures()));
+  }
   std::fputs(deviceHealthReport((*system)->devices(), end_ns - 1).c_str(), stdout);
-  auto recorded = (*system)->finishRecording();
+  auto recorded = (*system)->finishRecording(realtime ? mono_clock.now() : replay_clock.now());
   if (!recorded) return fail(recorded.error().message);
   if (!recorded->empty()) std::printf("%s\n", recorded->c_str());
   if (stop.load()) return 130;
   if (!compare) return 0;
-  auto comparison = compareDatasets(dir, config->record_dir);
+  // An imported video has no delivery times to compare with: only what the modules produced is.
+  auto comparison = compareDatasets(dir, config->record_dir, /*inputs=*/manifest->source != "import");
   if (!comparison) return fail(comparison.error().message);
   std::printf("compare with the recording:\n%s", formatComparison(*comparison).c_str());
   if (comparison->empty()) return fail(dir + ": nothing to compare (no outputs recorded)");

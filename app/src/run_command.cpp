@@ -75,7 +75,7 @@ int runCommand(const ParsedArgs& args) {
 
   std::fputs(timingTable(snapshotTimings(executor.stats())).c_str(), stdout);
   std::fputs(deviceHealthReport((*system)->devices(), clock.now()).c_str(), stdout);
-  if (auto recorded = (*system)->finishRecording(); !recorded) {
+  if (auto recorded = (*system)->finishRecording(clock.now()); !recorded) {
     std::fprintf(stderr, "aerotrack run: %s\n", recorded.error().message.c_str());
   } else if (!recorded->empty()) {
     std::printf("%s\n", recorded->c_str());

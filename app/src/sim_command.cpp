@@ -138,7 +138,7 @@ int simCommand(const ParsedArgs& args) {
                 cycle.p99_ms);
   }
   std::fputs(timingTable(info.timings).c_str(), stdout);
-  if (auto recorded = (*system)->finishRecording(); !recorded) {
+  if (auto recorded = (*system)->finishRecording(realtime ? mono_clock.now() : sim_clock.now()); !recorded) {
     std::fprintf(stderr, "aerotrack sim: %s\n", recorded.error().message.c_str());
   } else if (!recorded->empty()) {
     std::printf("%s\n", recorded->c_str());

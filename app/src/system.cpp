@@ -219,9 +219,9 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   return rt::ok();
 }
 
-rt::Expected<std::string> System::finishRecording() {
+rt::Expected<std::string> System::finishRecording(rt::TimeNs end_ns) {
   if (!recorder_) return std::string();
-  const rt::Status devices = recorder_->stop();
+  const rt::Status devices = recorder_->stop(end_ns);
   const rt::Status outputs = output_recorder_ != nullptr ? output_recorder_->finish() : rt::ok();
   if (!devices) return devices.error();
   if (!outputs) return outputs.error();

@@ -72,7 +72,8 @@ class System {
   hal::Devices& devices() { return devices_; }
   /// After the executor has stopped: ends the recording (if any) and says what it holds, in one line
   /// ("" without --record). The Error is a write failure; what was written before it stays readable.
-  rt::Expected<std::string> finishRecording();
+  /// end_ns: the run's last instant (into the manifest, so a replay runs as long).
+  rt::Expected<std::string> finishRecording(rt::TimeNs end_ns);
   const AppConfig& config() const { return config_; }
   /// The real-time executor's options from the config, reporting missed deadlines to the supervisor.
   rt::RealtimeOptions realtimeOptions() {

@@ -84,6 +84,10 @@ rt::Expected<DatasetManifest> readManifest(const std::string& path) {
     }
     m.software_version = root->getString("software_version");
     m.start_ns = static_cast<rt::TimeNs>(root->getUint64("start_ns"));
+    if (root->has("end_ns")) {
+      m.end_ns = static_cast<rt::TimeNs>(root->getUint64("end_ns"));
+      if (*m.end_ns < m.start_ns) root->fail("end_ns", "is before start_ns");
+    }
     m.source = root->getEnum("source", {"sim", "real", "replay", "import"});
     for (const rt::ConfigNode& s : root->childList("streams")) {
       StreamEntry entry{s.getString("device"), s.getString("file")};
@@ -112,6 +116,7 @@ rt::Status writeManifest(const DatasetManifest& m, const std::string& path) {
   out << YAML::Key << "format_version" << YAML::Value << m.format_version;
   out << YAML::Key << "software_version" << YAML::Value << m.software_version;
   out << YAML::Key << "start_ns" << YAML::Value << m.start_ns;
+  if (m.end_ns) out << YAML::Key << "end_ns" << YAML::Value << *m.end_ns;
   out << YAML::Key << "source" << YAML::Value << m.source;
   out << YAML::Key << "streams" << YAML::Value << YAML::BeginSeq;
   for (const StreamEntry& s : m.streams) {

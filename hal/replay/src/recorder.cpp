@@ -1,6 +1,7 @@
 // The recorder: see recorder.hpp.
 #include "aerotrack/hal/replay/recorder.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <system_error>
 #include <utility>
@@ -214,7 +215,7 @@ void DatasetRecorder::run() {
   drainOnce();  // what the producers pushed before stop()
 }
 
-rt::Status DatasetRecorder::stop() {
+rt::Status DatasetRecorder::stop(std::optional<rt::TimeNs> end_ns) {
   if (stopped_) return first_error_;
   stopped_ = true;
   stop_.store(true, std::memory_order_release);
@@ -222,6 +223,10 @@ rt::Status DatasetRecorder::stop() {
   if (thread_.joinable()) thread_.join();
   for (CsvStreamWriter& w : writers_) {
     if (rt::Status s = w.close(); !s && first_error_) first_error_ = s;
+  }
+  if (end_ns && first_error_) {  // the writer thread has stopped: the manifest is this thread's now
+    manifest_.end_ns = std::max(*end_ns, manifest_.start_ns);
+    first_error_ = writeManifest(manifest_, (std::filesystem::path(options_.dir) / "manifest.yaml").string());
   }
   return first_error_;
 }

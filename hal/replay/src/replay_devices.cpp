@@ -145,6 +145,11 @@ rt::Expected<std::shared_ptr<ReplayDataset>> ReplayDataset::open(const ReplayOpt
   if (rt::Status s = read("gimbal_camera", DeliveredFrameIndexCodec{}, d->images_); !s) return s.error();
   if (rt::Status s = read("setpoints", SetpointCodec{}, d->setpoints_); !s) return s.error();
   if (rt::Status s = read("gimbal_commands", GimbalCommandCodec{}, d->gimbal_commands_); !s) return s.error();
+  if (const StreamEntry* e = manifest->stream("can")) {
+    auto log = loadCandump((std::filesystem::path(options.dir) / e->file).string(), options.bad_rows);
+    if (!log) return log.error();
+    d->can_log_ = std::move(log.value());
+  }
   if (d->depth_frames_) {
     if (!manifest->depth_camera) return rt::Error{options.dir + "/manifest.yaml: a depth stream needs depth_camera:"};
     if (rt::Status s = checkFrameFiles(*d->depth_frames_, "png", options.bad_rows); !s) return s.error();

@@ -188,5 +188,25 @@ TEST(ReplayCameras, AMissingFrameStopsAStrictStartOrIsSkippedAndAnUnreadableOneI
   EXPECT_EQ(depth.grab(kStart + 140 * kMs)->sequence, 4U);  // and the stream goes on
 }
 
+TEST(ReplayCameras, ARecordedCanLogIsCheckedWhenTheDatasetOpens) {
+  const CameraRecording rec;
+  auto manifest = readManifest(rec.file("manifest.yaml"));
+  ASSERT_TRUE(manifest);
+  manifest->streams.push_back({"can", "can.log"});
+  ASSERT_TRUE(writeManifest(*manifest, rec.file("manifest.yaml")));
+  std::ofstream(rec.file("can.log")) << "(2.000000) can0 141#A200000010270000\n(2.000500) can0 241#A2\n";
+  const auto dataset = open(rec);
+  ASSERT_NE(dataset, nullptr);
+  const LoadedCanLog* log = dataset->canLog();
+  EXPECT_EQ(log != nullptr ? log->frames.size() : 0U, 2U);
+  std::ofstream(rec.file("can.log"), std::ios::app) << "(2.001000) can0 141#XYZ\n";
+  ReplayOptions options;
+  options.dir = rec.dir();
+  options.bad_rows = BadRowPolicy::kStrict;
+  const auto strict = ReplayDataset::open(options, kStart);
+  ASSERT_FALSE(strict);
+  EXPECT_NE(strict.error().message.find("can.log:3: "), std::string::npos) << strict.error().message;
+}
+
 }  // namespace
 }  // namespace aerotrack::hal::replay

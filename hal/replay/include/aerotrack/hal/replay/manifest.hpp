@@ -42,6 +42,9 @@ struct DatasetManifest {
   int format_version = kDatasetFormatVersion;
   std::string software_version;  ///< What wrote it (the aerotrack version, git describe).
   rt::TimeNs start_ns = 0;       ///< The recording's first instant, on its one clock.
+  /// The recorded run's last instant (YAML `end_ns`, optional): written when the recording is closed,
+  /// so a replay runs exactly as long; absent after a kill -9 or in an import.
+  std::optional<rt::TimeNs> end_ns;
   std::string source;            ///< The backend recorded: "sim", "real", "import" (a video turned into a stream).
   std::vector<StreamEntry> streams;
   std::optional<RecordedCamera> gimbal_camera;

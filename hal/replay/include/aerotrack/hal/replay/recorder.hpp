@@ -15,6 +15,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -79,9 +80,10 @@ class DatasetRecorder {
   void record(const FrameRecord<DepthFrame>& frame) { push(depth_, frame); }
   void record(const FrameRecord<ImageFrame>& frame) { push(images_, frame); }
 
-  /// Drains the queues, stops the writer thread and closes the files. Idempotent. The first write
-  /// error of the run, if any (the recording stopped growing there; the run went on).
-  rt::Status stop();
+  /// Drains the queues, stops the writer thread and closes the files; with end_ns (the run's last
+  /// instant), writes it into the manifest. Idempotent. The first write error of the run, if any (the
+  /// recording stopped growing there; the run went on).
+  rt::Status stop(std::optional<rt::TimeNs> end_ns = std::nullopt);
 
   std::uint64_t written(RecordedStream s) const { return written_[index(s)].load(std::memory_order_relaxed); }
   std::uint64_t dropped(RecordedStream s) const;

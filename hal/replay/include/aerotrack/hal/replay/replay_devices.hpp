@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "aerotrack/hal/devices.hpp"
+#include "aerotrack/hal/replay/candump.hpp"
 #include "aerotrack/hal/replay/csv_stream.hpp"
 #include "aerotrack/hal/replay/manifest.hpp"
 #include "aerotrack/hal/replay/stream_codecs.hpp"
@@ -91,6 +92,9 @@ class ReplayDataset {
   const LoadedStream<Delivered<FrameIndexRow>>* images() const { return get(images_); }
   const LoadedStream<Setpoint>* setpoints() const { return get(setpoints_); }
   const LoadedStream<GimbalCommand>* gimbalCommands() const { return get(gimbal_commands_); }
+  /// The raw CAN traffic (can.log), when recorded: checked on open, for diagnosis; the gimbal is
+  /// replayed from its encoder stream, not by re-parsing the motor's frames.
+  const LoadedCanLog* canLog() const { return get(can_log_); }
 
  private:
   ReplayDataset(DatasetManifest manifest, std::string dir, ReplayTimeline timeline, BadRowPolicy policy)
@@ -110,6 +114,7 @@ class ReplayDataset {
   std::optional<LoadedStream<Delivered<FrameIndexRow>>> images_;
   std::optional<LoadedStream<Setpoint>> setpoints_;
   std::optional<LoadedStream<GimbalCommand>> gimbal_commands_;
+  std::optional<LoadedCanLog> can_log_;
 };
 
 /// Serves a loaded stream by executor time. A record is shown from the instant the device delivered
