@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Runs a command and checks its exit status and that its output (stdout+stderr) matches a regex.
-# usage: expect.sh EXPECTED_STATUS REGEX COMMAND [ARGS...]
+# usage: expect.sh EXPECTED_STATUS REGEX COMMAND [ARGS...]   (EXPECT_TIMEOUT_S: limit, default 60 s)
 set -u
 expected=$1 pattern=$2
 shift 2
-output=$(timeout 60 "$@" 2>&1 </dev/null)
+output=$(timeout "${EXPECT_TIMEOUT_S:-60}" "$@" 2>&1 </dev/null)
 status=$?
 if [[ $status -ne $expected ]]; then
   printf 'expected exit status %s, got %s\noutput:\n%s\n' "$expected" "$status" "$output"
