@@ -1,13 +1,15 @@
 // Dataset comparison: see dataset_compare.hpp.
 #include "dataset_compare.hpp"
 
+#include <bit>
 #include <cmath>
-#include <cstring>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <sstream>
 
 #include "aerotrack/hal/replay/csv_stream.hpp"
+#include "aerotrack/hal/replay/manifest.hpp"
 #include "aerotrack/hal/replay/stream_codecs.hpp"
 #include "output_recorder.hpp"
 
@@ -40,7 +42,7 @@ std::vector<ComparedStream> comparedStreams() {
 }
 
 bool sameBits(double a, double b) {
-  return std::memcmp(&a, &b, sizeof(double)) == 0;
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);  // -0.0 differs from 0.0, NaN == NaN
 }
 
 std::string number(double x) {
@@ -67,6 +69,13 @@ rt::Expected<std::vector<CsvRecord>> readAll(const std::string& path, const std:
 rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
                                                             const std::string& replayed_dir, bool inputs) {
   namespace fs = std::filesystem;
+  // Stamps are compared from each recording's start: a replay on another clock (real time) lines up.
+  const auto a_manifest = hal::replay::readManifest((fs::path(recorded_dir) / "manifest.yaml").string());
+  if (!a_manifest) return a_manifest.error();
+  const auto b_manifest = hal::replay::readManifest((fs::path(replayed_dir) / "manifest.yaml").string());
+  if (!b_manifest) return b_manifest.error();
+  const rt::TimeNs a_start_ns = a_manifest->start_ns;
+  const rt::TimeNs b_start_ns = b_manifest->start_ns;
   std::vector<StreamComparison> out;
   for (const ComparedStream& stream : comparedStreams()) {
     if (stream.input && !inputs) continue;
@@ -87,8 +96,10 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
     for (std::size_t i = 0; i < n; ++i) {
       const CsvRecord& x = (*a)[i];
       const CsvRecord& y = (*b)[i];
-      bool same = x.stamp_ns == y.stamp_ns;
-      c.max_abs_difference = std::max(c.max_abs_difference, std::abs(static_cast<double>(x.stamp_ns - y.stamp_ns)));
+      const rt::TimeNs x_ns = x.stamp_ns - a_start_ns;
+      const rt::TimeNs y_ns = y.stamp_ns - b_start_ns;
+      bool same = x_ns == y_ns;
+      c.max_abs_difference = std::max(c.max_abs_difference, std::abs(static_cast<double>(x_ns - y_ns)));
       std::optional<std::size_t> column;
       for (std::size_t k = 0; k < x.values.size(); ++k) {
         if (sameBits(x.values[k], y.values[k])) continue;
@@ -102,10 +113,10 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
       }
       if (c.first_difference.empty()) {
         c.first_difference = a_path + ":" + std::to_string(x.line) + ": ";
-        c.first_difference += x.stamp_ns != y.stamp_ns ? "stamp_ns " + std::to_string(x.stamp_ns) + " recorded, " +
-                                                             std::to_string(y.stamp_ns) + " replayed"
-                                                       : stream.columns[*column] + " " + number(x.values[*column]) +
-                                                             " recorded, " + number(y.values[*column]) + " replayed";
+        c.first_difference += x_ns != y_ns ? "time from the start " + std::to_string(x_ns) + " ns recorded, " +
+                                                 std::to_string(y_ns) + " ns replayed"
+                                           : stream.columns[*column] + " " + number(x.values[*column]) + " recorded, " +
+                                                 number(y.values[*column]) + " replayed";
       }
     }
     if (c.first_difference.empty() && a->size() != b->size()) {

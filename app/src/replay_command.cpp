@@ -86,6 +86,7 @@ int replayCommand(const ParsedArgs& args) {
   hal.replay.dir = dir;
   hal.replay.offset_s = offset_s;
   hal.replay.loop = false;
+  hal.replay.start_at_first_use = args.flags.count("realtime") != 0;
   hal.replay.bad_rows =
       args.flags.count("strict") != 0 ? hal::replay::BadRowPolicy::kStrict : hal::replay::BadRowPolicy::kSkip;
   std::vector<rt::TaskSpec> tasks;
@@ -127,8 +128,10 @@ int replayCommand(const ParsedArgs& args) {
   rt::DurationNs longest_period_ns = 0;
   for (const rt::TaskSpec& spec : config->tasks)
     if (spec.periodic()) longest_period_ns = std::max(longest_period_ns, rt::periodFromRateHz(spec.rate_hz));
-  const rt::TimeNs end_ns = manifest->end_ns ? t.toExecutor(*manifest->end_ns, 0)
-                                             : t.toExecutor(t.endNs(), 0) + longest_period_ns;
+  const rt::DurationNs duration_ns =
+      (manifest->end_ns ? *manifest->end_ns : t.endNs() + longest_period_ns) - t.firstNs();
+  // Real time: the devices' replay starts when the tasks first ask (start_at_first_use), just below.
+  const rt::TimeNs end_ns = (realtime ? mono_clock.now() : start_ns) + duration_ns;
   if (!left_out.empty()) std::printf("replay: left out the simulator's tasks: %s\n", left_out.c_str());
 
   RunInfo info;

@@ -15,7 +15,10 @@ namespace aerotrack::app {
 
 int runCommand(const ParsedArgs& args) {
   auto config = loadAppConfig(args.values.at("config"));
-  if (config) config->record_dir = args.valueOr("record", "");
+  if (config) {
+    config->record_dir = args.valueOr("record", "");
+    config->hal.replay.start_at_first_use = true;  // a replayed device starts with the tasks, not at build
+  }
   if (!config) {
     std::fprintf(stderr, "aerotrack run: %s\n", config.error().message.c_str());
     return 1;

@@ -156,7 +156,9 @@ rt::Expected<LoadedCanLog> loadCandump(const std::string& path, BadRowPolicy pol
       problem = "time goes back";
     }
     if (!problem.empty()) {
-      const std::string message = path + ":" + std::to_string(line_number) + ": " + problem;
+      std::string message = path;
+      message += ":" + std::to_string(line_number) + ": ";
+      message += problem;
       if (policy == BadRowPolicy::kStrict) return rt::Error{message};
       if (out.skipped_lines++ == 0) out.first_skip_message = message;
       continue;

@@ -98,18 +98,43 @@ ReplayTimeline::ReplayTimeline(rt::TimeNs recording_start_ns, rt::TimeNs recordi
                                const ReplayOptions& options)
     : first_ns_(recording_start_ns + rt::secondsToNs(options.offset_s)),
       end_ns_(std::max(recording_end_ns, recording_start_ns + rt::secondsToNs(options.offset_s))),
-      replay_start_ns_(replay_start_ns),
+      replay_start_ns_(options.start_at_first_use ? kUnanchored : replay_start_ns),
       loop_(options.loop) {}
 
+ReplayTimeline::ReplayTimeline(const ReplayTimeline& other)
+    : first_ns_(other.first_ns_),
+      end_ns_(other.end_ns_),
+      replay_start_ns_(other.replay_start_ns_.load(std::memory_order_acquire)),
+      loop_(other.loop_) {}
+
+ReplayTimeline& ReplayTimeline::operator=(const ReplayTimeline& other) {
+  first_ns_ = other.first_ns_;
+  end_ns_ = other.end_ns_;
+  replay_start_ns_.store(other.replay_start_ns_.load(std::memory_order_acquire), std::memory_order_release);
+  loop_ = other.loop_;
+  return *this;
+}
+
+rt::TimeNs ReplayTimeline::replayStart(rt::TimeNs now_ns) const {
+  rt::TimeNs start_ns = replay_start_ns_.load(std::memory_order_acquire);
+  if (start_ns != kUnanchored) return start_ns;
+  // The first device asked anchors the replay; a concurrent first ask from another thread loses the
+  // exchange and takes the winner's instant.
+  if (replay_start_ns_.compare_exchange_strong(start_ns, now_ns, std::memory_order_acq_rel)) return now_ns;
+  return start_ns;
+}
+
 rt::TimeNs ReplayTimeline::toRecording(rt::TimeNs now_ns, std::int64_t& lap) const {
-  const rt::TimeNs elapsed_ns = now_ns - replay_start_ns_;
+  const rt::TimeNs elapsed_ns = now_ns - replayStart(now_ns);
   const rt::TimeNs period_ns = end_ns_ - first_ns_ + 1;  // the end instant is shown, then the start again
   lap = loop_ && elapsed_ns >= 0 ? elapsed_ns / period_ns : 0;
   return first_ns_ + elapsed_ns - lap * period_ns;
 }
 
 rt::TimeNs ReplayTimeline::toExecutor(rt::TimeNs rec_ns, std::int64_t lap) const {
-  return replay_start_ns_ + (rec_ns - first_ns_) + lap * (end_ns_ - first_ns_ + 1);
+  const rt::TimeNs start_ns = replay_start_ns_.load(std::memory_order_acquire);
+  // Unanchored (nothing asked yet): as if the replay started now-ish; only toRecording's callers ask.
+  return (start_ns == kUnanchored ? 0 : start_ns) + (rec_ns - first_ns_) + lap * (end_ns_ - first_ns_ + 1);
 }
 
 bool ReplayTimeline::ended(rt::TimeNs now_ns) const {

@@ -96,15 +96,15 @@ TEST(SpscQueue, GivenItemsPushedWhenPoppedThenFifoOrder) {
 TEST(SpscQueue, GivenFullDropNewestQueueWhenPushThenNewItemRejectedAndCounted) {
   SpscQueue<int> q(4, OverflowPolicy::kDropNewest);
   for (int i = 0; i < 4; ++i) {
-    EXPECT_TRUE(q.can_push());
+    EXPECT_TRUE(q.canPush());
     EXPECT_TRUE(q.try_push(i));
   }
-  EXPECT_FALSE(q.can_push());
+  EXPECT_FALSE(q.canPush());
   EXPECT_FALSE(q.try_push(99));
   EXPECT_FALSE(q.try_push(100));
   EXPECT_EQ(q.dropped(), 2U);
   EXPECT_EQ(q.try_pop(), 0);
-  EXPECT_TRUE(q.can_push());                              // one slot freed
+  EXPECT_TRUE(q.canPush());                               // one slot freed
   for (int i = 1; i < 4; ++i) EXPECT_EQ(q.try_pop(), i);  // the old items survive, in order
   EXPECT_FALSE(q.try_pop().has_value());
 }

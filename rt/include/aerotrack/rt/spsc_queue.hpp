@@ -76,7 +76,7 @@ class SpscQueue {
 
   /// Producer thread only. True if try_push would store without dropping: the consumer has freed the
   /// slot (and only this thread fills it, so it stays free until the next push).
-  bool can_push() const { return slots_[tail_ & mask_].seq.load(std::memory_order_acquire) == tail_; }
+  bool canPush() const { return slots_[tail_ & mask_].seq.load(std::memory_order_acquire) == tail_; }
 
   /// Consumer thread only. Moves the oldest item into out; false if empty.
   bool try_pop(T& out) {

@@ -111,6 +111,23 @@ TEST(ReplayDevices, OffsetAndLoop) {
   EXPECT_EQ(odometry.health(7 * kMs + 5000 * kMs).state, DeviceHealth::State::kOk);  // looping never ends
 }
 
+TEST(ReplayDevices, OnTheRealTimeExecutorTheReplayStartsWhenTheTasksFirstAsk) {
+  const Recording rec;
+  ReplayOptions options;
+  options.dir = rec.dir();
+  options.start_at_first_use = true;
+  auto dataset = ReplayDataset::open(options, 0);  // built at 0; the tasks start 700 ms later
+  ASSERT_TRUE(dataset);
+  ReplayOdometry odometry(*dataset);
+  ReplayGimbal gimbal(*dataset);
+  auto first = odometry.read(700 * kMs);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_EQ(first->p_WB_m.x(), 0.0);  // the recording's first sample, not the one at 0.7 s
+  EXPECT_EQ(first->stamp_ns, 700 * kMs);
+  EXPECT_EQ(gimbal.read(710 * kMs)->stamp_ns, 700 * kMs);  // the other devices share the start
+  EXPECT_DOUBLE_EQ(odometry.read(950 * kMs)->p_WB_m.x(), 0.25);
+}
+
 TEST(ReplayDevices, ActuatorCommandsAreKeptNotObeyed) {
   const Recording rec;
   ReplayOptions options;

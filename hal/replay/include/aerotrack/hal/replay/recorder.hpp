@@ -98,7 +98,7 @@ class DatasetRecorder {
   template <class T>
   void push(rt::SpscQueue<T>& queue, const T& item) {
     if (options_.lossless) {
-      while (!queue.can_push()) {
+      while (!queue.canPush()) {
         doorbell_.ring();
         std::this_thread::sleep_for(std::chrono::microseconds(100));
       }

@@ -19,6 +19,7 @@
 // ended by a kill -9 replays up to its last complete record.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <optional>
 #include <string>
@@ -41,13 +42,19 @@ struct ReplayOptions {
   double offset_s = 0.0;  ///< Start this far into the recording; >= 0.
   bool loop = false;      ///< After the end, start again from the offset.
   BadRowPolicy bad_rows = BadRowPolicy::kSkip;
+  /// Real-time executor: the replay starts at the first instant any device is asked (when the tasks
+  /// start), not at the replay start given to open() -- building the system takes time, and the
+  /// recording's first moments would go by unseen. Not a config key: the commands set it.
+  bool start_at_first_use = false;
 };
 
-/// Recording time <-> executor time.
+/// Recording time <-> executor time. Thread-safe: devices polled from several task threads share it.
 class ReplayTimeline {
  public:
   ReplayTimeline(rt::TimeNs recording_start_ns, rt::TimeNs recording_end_ns, rt::TimeNs replay_start_ns,
                  const ReplayOptions& options);
+  ReplayTimeline(const ReplayTimeline& other);
+  ReplayTimeline& operator=(const ReplayTimeline& other);
   /// The recording instant shown at executor time now_ns; `lap` counts loops (0: first pass).
   rt::TimeNs toRecording(rt::TimeNs now_ns, std::int64_t& lap) const;
   /// The executor time at which recording instant rec_ns is shown in lap `lap`.
@@ -60,9 +67,13 @@ class ReplayTimeline {
   rt::TimeNs endNs() const { return end_ns_; }
 
  private:
+  static constexpr rt::TimeNs kUnanchored = INT64_MIN;
+  /// The executor time the replay started at (anchoring it at now_ns if it starts at first use).
+  rt::TimeNs replayStart(rt::TimeNs now_ns) const;
+
   rt::TimeNs first_ns_;  // recording start + offset
   rt::TimeNs end_ns_;    // recording end
-  rt::TimeNs replay_start_ns_;
+  mutable std::atomic<rt::TimeNs> replay_start_ns_;
   bool loop_;
 };
 
@@ -97,7 +108,7 @@ class ReplayDataset {
   const LoadedCanLog* canLog() const { return get(can_log_); }
 
  private:
-  ReplayDataset(DatasetManifest manifest, std::string dir, ReplayTimeline timeline, BadRowPolicy policy)
+  ReplayDataset(DatasetManifest manifest, std::string dir, const ReplayTimeline& timeline, BadRowPolicy policy)
       : manifest_(std::move(manifest)), dir_(std::move(dir)), timeline_(timeline), policy_(policy) {}
   template <class T>
   static const T* get(const std::optional<T>& stream) {
