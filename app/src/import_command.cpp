@@ -45,12 +45,11 @@ int importVideoCommand(const ParsedArgs& args) {
   const auto report = hal::replay::importVideo(options);
   if (!report) return fail(report.error().message);
   const hal::CameraIntrinsics& k = report->intrinsics;
-  std::printf("imported %s into %s: %llu frames at %.3g fps, %d x %d px, fx = fy = %.1f px (%.0f deg across)%s\n",
-              options.video.c_str(), options.dir.c_str(), static_cast<unsigned long long>(report->frames), report->fps,
-              k.width_px, k.height_px, k.fx_px, options.hfov_deg,
-              report->unreadable > 0
-                  ? (", " + std::to_string(report->unreadable) + " unusable frames skipped").c_str()
-                  : "");
+  std::printf(
+      "imported %s into %s: %llu frames at %.3g fps, %d x %d px, fx = fy = %.1f px (%.0f deg across)%s\n",
+      options.video.c_str(), options.dir.c_str(), static_cast<unsigned long long>(report->frames), report->fps,
+      k.width_px, k.height_px, k.fx_px, options.hfov_deg,
+      report->unreadable > 0 ? (", " + std::to_string(report->unreadable) + " unusable frames skipped").c_str() : "");
   return 0;
 }
 

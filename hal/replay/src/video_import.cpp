@@ -93,7 +93,8 @@ rt::Expected<VideoImportReport> importVideo(const VideoImportOptions& options) {
                      (skip > 0 ? std::string(" after ") + std::to_string(options.start_s) + " s" : std::string())};
   }
   DatasetManifest manifest;
-  manifest.software_version = options.software_version + " (import of " + fs::path(options.video).filename().string() + ")";
+  manifest.software_version =
+      options.software_version + " (import of " + fs::path(options.video).filename().string() + ")";
   manifest.start_ns = 0;
   manifest.source = "import";
   manifest.streams.push_back({"gimbal_camera", "gimbal_camera/frames.csv"});
@@ -102,7 +103,8 @@ rt::Expected<VideoImportReport> importVideo(const VideoImportOptions& options) {
   camera.image_format = options.image_format;
   manifest.gimbal_camera = camera;
   // Last: a folder without a manifest is not a recording, so an import cut short is not mistaken for one.
-  if (rt::Status s = writeManifest(manifest, manifest_path.string()); !s) return rt::Error{"import: " + s.error().message};
+  if (rt::Status s = writeManifest(manifest, manifest_path.string()); !s)
+    return rt::Error{"import: " + s.error().message};
   return report;
 }
 

@@ -29,8 +29,8 @@ TEST(Candump, GoldenLinesParseToTheirFramesAndFormatBackToTheSameText) {
   EXPECT_EQ(formatCandumpLine(*f), speed);
 
   const std::pair<std::string, CanLogRecord> golden[] = {
-      {"(1436509052.249713) vcan0 044#2A366C2BBA", {1436509052249713000, "vcan0", 0x44, false, false, false, 5,
-                                                     {0x2A, 0x36, 0x6C, 0x2B, 0xBA}}},
+      {"(1436509052.249713) vcan0 044#2A366C2BBA",
+       {1436509052249713000, "vcan0", 0x44, false, false, false, 5, {0x2A, 0x36, 0x6C, 0x2B, 0xBA}}},
       {"(0.000001) can1 12345678#", {1000, "can1", 0x12345678, true, false, false, 0, {}}},
       {"(12.500000) can0 7FF#R", {12'500'000'000, "can0", 0x7FF, false, true, false, 0, {}}},
       {"(12.500001) can0 123#R8", {12'500'001'000, "can0", 0x123, false, true, false, 8, {}}},
@@ -84,8 +84,8 @@ TEST(Candump, StrictStopsAtTheFirstBadLineNamingItAndSkipCountsThem) {
   test::TempDir dir;
   const std::string path = dir.file("can.log");
   std::ofstream(path) << "(1.000000) can0 141#A2\n"
-                         "(1.000100) can0 141#ZZ\n"      // line 2: not hex
-                         "(0.500000) can0 241#A2\n"      // line 3: back in time
+                         "(1.000100) can0 141#ZZ\n"  // line 2: not hex
+                         "(0.500000) can0 241#A2\n"  // line 3: back in time
                          "(1.000300) can0 241#A200\n";
   const auto strict = loadCandump(path, BadRowPolicy::kStrict);
   ASSERT_FALSE(strict);

@@ -45,7 +45,7 @@ struct DatasetManifest {
   /// The recorded run's last instant (YAML `end_ns`, optional): written when the recording is closed,
   /// so a replay runs exactly as long; absent after a kill -9 or in an import.
   std::optional<rt::TimeNs> end_ns;
-  std::string source;            ///< The backend recorded: "sim", "real", "import" (a video turned into a stream).
+  std::string source;  ///< The backend recorded: "sim", "real", "import" (a video turned into a stream).
   std::vector<StreamEntry> streams;
   std::optional<RecordedCamera> gimbal_camera;
   std::optional<RecordedCamera> depth_camera;

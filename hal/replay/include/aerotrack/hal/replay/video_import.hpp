@@ -19,19 +19,19 @@
 namespace aerotrack::hal::replay {
 
 struct VideoImportOptions {
-  std::string video;                      ///< Any file OpenCV's videoio reads.
-  std::string dir;                        ///< The dataset's folder; must not hold a manifest.yaml already.
-  double hfov_deg = 0.0;                  ///< The camera's horizontal field of view, (0, 180).
-  double fps = 0.0;                       ///< Frame rate for the stamps; 0: the video's own.
-  double start_s = 0.0;                   ///< Skip the video's first seconds.
-  std::uint64_t max_frames = 0;           ///< 0: to the end of the video.
-  std::string image_format = "jpg";       ///< "jpg" or "png".
+  std::string video;                 ///< Any file OpenCV's videoio reads.
+  std::string dir;                   ///< The dataset's folder; must not hold a manifest.yaml already.
+  double hfov_deg = 0.0;             ///< The camera's horizontal field of view, (0, 180).
+  double fps = 0.0;                  ///< Frame rate for the stamps; 0: the video's own.
+  double start_s = 0.0;              ///< Skip the video's first seconds.
+  std::uint64_t max_frames = 0;      ///< 0: to the end of the video.
+  std::string image_format = "jpg";  ///< "jpg" or "png".
   std::string software_version = "aerotrack";
 };
 
 struct VideoImportReport {
-  std::uint64_t frames = 0;         ///< Written.
-  std::uint64_t unreadable = 0;     ///< Frames not 8-bit BGR or of another size than the first, skipped.
+  std::uint64_t frames = 0;      ///< Written.
+  std::uint64_t unreadable = 0;  ///< Frames not 8-bit BGR or of another size than the first, skipped.
   double fps = 0.0;
   CameraIntrinsics intrinsics;
 };
