@@ -40,7 +40,8 @@ for step in "${steps[@]}"; do
         hal_recorder_tests
       # GCC 12's TSan cannot map its shadow memory under a high mmap ASLR entropy (Linux >= 6.5
       # defaults): run without address randomisation.
-      TSAN_OPTIONS=halt_on_error=1 setarch "$(uname -m)" -R \
+      # Third-party false positives are suppressed by name in tests/sanitizers/tsan.supp.
+      TSAN_OPTIONS="halt_on_error=1 suppressions=$PWD/tests/sanitizers/tsan.supp" setarch "$(uname -m)" -R \
         ctest --test-dir build-tsan -j "$jobs" --output-on-failure -L concurrency
       ;;
     tidy)
