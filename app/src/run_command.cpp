@@ -1,7 +1,12 @@
 // `aerotrack run --config FILE [--print-config] [--duration-s S]`: the onboard executable. Devices
-// from config, every task on the real-time executor, until SIGINT/SIGTERM (or the duration).
+// from config, every task on the real-time executor, until SIGINT/SIGTERM (or the duration). Under
+// systemd (deploy/aerotrack.service) it reports READY=1 once the tasks run and pings the watchdog
+// only while every periodic task keeps stepping: a wedged task gets the service restarted.
+#include <unistd.h>
+
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <thread>
 
 #include "aerotrack/rt/realtime_executor.hpp"
@@ -10,6 +15,7 @@
 #include "signals.hpp"
 #include "sim_report.hpp"
 #include "system.hpp"
+#include "systemd_notify.hpp"
 
 namespace aerotrack::app {
 
@@ -70,9 +76,39 @@ int runCommand(const ParsedArgs& args) {
   std::fprintf(stderr, "aerotrack run: %zu tasks running (%s); Ctrl-C stops\n", (*system)->bindings().size(),
                config->source.c_str());
 
+  const SystemdNotifier systemd = SystemdNotifier::fromEnvironment(
+      std::getenv("NOTIFY_SOCKET"), std::getenv("WATCHDOG_USEC"), std::getenv("WATCHDOG_PID"), ::getpid());
+  const rt::DurationNs ping_period_ns = systemd.watchdogTimeoutNs() / 2;
+  // The tasks the watchdog watches: periodic ones that step at least twice between pings.
+  std::vector<const rt::TimingStats*> watched;
+  for (const rt::TaskSet::NamedStats& s : executor.stats()) {
+    for (const rt::TaskBinding& b : (*system)->bindings())
+      if (b.spec.name == s.name && b.spec.rate_hz * rt::nsToSeconds(ping_period_ns) >= 2.0) watched.push_back(s.stats);
+  }
+  TaskLiveness liveness;
+  const auto counts = [&watched] {
+    std::vector<std::uint64_t> c;
+    for (const rt::TimingStats* s : watched) c.push_back(s->execution().count());
+    return c;
+  };
+  liveness.allAdvanced(counts());
+  if (const rt::Status s = systemd.notify("READY=1\nSTATUS=tasks running"); !s)
+    std::fprintf(stderr, "aerotrack run: warning: %s\n", s.error().message.c_str());
+
   const rt::TimeNs end_ns = duration_s > 0.0 ? clock.now() + rt::secondsToNs(duration_s) : 0;
-  while (!stop.load() && (end_ns == 0 || clock.now() < end_ns))
+  rt::TimeNs next_ping_ns = clock.now() + ping_period_ns;
+  while (!stop.load() && (end_ns == 0 || clock.now() < end_ns)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (ping_period_ns > 0 && clock.now() >= next_ping_ns) {
+      next_ping_ns += ping_period_ns;
+      if (liveness.allAdvanced(counts())) {
+        (void)systemd.notify("WATCHDOG=1");  // a lost ping is what the watchdog is for
+      } else {
+        std::fprintf(stderr, "aerotrack run: a periodic task has stopped stepping: no watchdog ping\n");
+      }
+    }
+  }
+  (void)systemd.notify("STOPPING=1");
   executor.requestStop();
   executor.join();
 

@@ -158,6 +158,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
                                                   channels_.target,
                                                   channels_.planner_failures_in_a_row,
                                                   channels_.deadline_misses,
+                                                  channels_.vehicle_link_lost,
                                                   channels_.supervisor,
                                                   channels_.gimbal_search_requested};
     auto supervisor_task =
@@ -183,6 +184,7 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   } else if (spec.name == "trajectory_server") {
     auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
         config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);
+    server->reportLinkLossTo(channels_.vehicle_link_lost);
     if (config_.baseline_mode) {
       // The fixed camera looks where the body looks: face the person's estimate, carried to now.
       const rt::LatestSlot<estimation::TargetEstimate>& target = channels_.target;

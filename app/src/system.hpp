@@ -58,6 +58,7 @@ struct Channels {
   std::atomic<int> planner_failures_in_a_row{0};           ///< written by the planning task
   rt::LatestSlot<hal::DetectionFrame> newest_detection;    ///< the newest detector output (for pictures)
   std::atomic<std::uint64_t> deadline_misses{0};           ///< periods skipped, fed by the real-time executor only
+  std::atomic<bool> vehicle_link_lost{false};              ///< the vehicle link was up and is down (trajectory server)
 };
 
 class System {

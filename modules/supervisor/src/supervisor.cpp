@@ -45,6 +45,8 @@ std::string_view toString(Reason reason) {
       return "failsafe: planner failures in a row";
     case Reason::kOverrunStorm:
       return "failsafe: deadline overrun storm";
+    case Reason::kVehicleLinkLost:
+      return "failsafe: vehicle link lost";
     case Reason::kHoldTimeout:
       return "held too long";
   }
@@ -58,6 +60,7 @@ bool isFailsafe(Reason reason) {
     case Reason::kNoCameraFrames:
     case Reason::kPlannerFailures:
     case Reason::kOverrunStorm:
+    case Reason::kVehicleLinkLost:
       return true;
     default:
       return false;
@@ -126,7 +129,9 @@ bool Supervisor::failsafe(const SupervisorInputs& in, Reason& reason) {
     overrun_window_start_ns_ = in.now_ns;
     overruns_at_window_start_ = in.deadline_overruns;
   }
-  if (stale(in.odometry_stamp_ns, params_.odometry_timeout_s)) {
+  if (in.vehicle_link_lost) {  // first: with the link down, nothing else we decide reaches the vehicle
+    reason = Reason::kVehicleLinkLost;
+  } else if (stale(in.odometry_stamp_ns, params_.odometry_timeout_s)) {
     reason = Reason::kStaleOdometry;
   } else if (stale(in.depth_stamp_ns, params_.depth_timeout_s)) {
     reason = Reason::kNoDepth;

@@ -8,6 +8,7 @@
 
 #include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 #include "aerotrack/trajectory_server/trajectory_server.hpp"
+#include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 
 namespace aerotrack::trajectory_server {
 namespace {
@@ -191,6 +192,38 @@ TEST(TrajectoryServer, GivenFinishedTrajectoryThenEndIsHeldAtRest) {
   EXPECT_NEAR(s->p_W_m.x(), 2.0, 1e-12);
   EXPECT_EQ(s->v_W_mps.norm(), 0.0);
   EXPECT_EQ(s->a_W_mps2.norm(), 0.0);
+}
+
+/// A vehicle link whose state the test sets; it counts the setpoints sent.
+class ScriptedLink final : public hal::VehicleLink {
+ public:
+  std::string_view backend() const override { return "test"; }
+  hal::DeviceHealth health(rt::TimeNs /*now_ns*/) const override { return {}; }
+  void send(const hal::Setpoint& /*setpoint*/) override { ++sent; }
+  hal::VehicleStatus status(rt::TimeNs now_ns) override { return {now_ns, link_ok, true, hal::FlightMode::kOffboard}; }
+  bool link_ok = false;
+  int sent = 0;
+};
+
+TEST(TrajectoryServerTask, ReportsTheLinkLostOnlyAfterItWasUp) {
+  const rt::SharedSlot<TimedTrajectory> trajectories;
+  rt::LatestSlot<hal::Setpoint> setpoints;
+  ScriptedLink link;
+  TrajectoryServerTask task(TrajectoryServerParams{}, trajectories, link, setpoints);
+  std::atomic<bool> lost{true};
+  task.reportLinkLossTo(lost);
+  task.step(0);
+  EXPECT_FALSE(lost.load()) << "a link never up (no vehicle, or not yet connected) is not lost";
+  EXPECT_EQ(link.sent, 0) << "no trajectory yet: nothing is sent";
+  link.link_ok = true;
+  task.step(10'000'000);
+  EXPECT_FALSE(lost.load());
+  link.link_ok = false;
+  task.step(20'000'000);
+  EXPECT_TRUE(lost.load());
+  link.link_ok = true;
+  task.step(30'000'000);
+  EXPECT_FALSE(lost.load()) << "the report follows the link; the supervisor latches the hold";
 }
 
 }  // namespace

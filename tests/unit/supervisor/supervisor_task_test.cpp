@@ -16,11 +16,12 @@ struct Rig {
   rt::LatestSlot<estimation::TargetEstimate> target;
   std::atomic<int> planner_failures{0};
   std::atomic<std::uint64_t> deadline_misses{0};
+  std::atomic<bool> link_lost{false};
   rt::LatestSlot<SupervisorState> out;
   std::atomic<bool> sweep{false};
   SupervisorTask task{
       SupervisorParams{}, 0,
-      SupervisorChannels{odometry, depth, camera_ns, target, planner_failures, deadline_misses, out, sweep},
+      SupervisorChannels{odometry, depth, camera_ns, target, planner_failures, deadline_misses, link_lost, out, sweep},
       /*sweep_when_searching=*/true};
 
   // Every stream fresh at t_s, flying at 1.5 m; the person seen now when `seen`.
@@ -67,6 +68,21 @@ TEST(SupervisorTask, LostPersonAsksTheGimbalToSweepWhileRelocating) {
   for (const double end = t + 1.0; t < end; t += 0.02) rig.step(t, false);
   EXPECT_EQ(rig.out.read()->mode, Mode::kRelocate);
   EXPECT_TRUE(rig.sweep.load());
+}
+
+TEST(SupervisorTask, LostVehicleLinkHoldsAndTheHoldIsLatched) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  ASSERT_EQ(rig.out.read()->mode, Mode::kTrack);
+  rig.link_lost.store(true);
+  rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kHold);
+  EXPECT_EQ(rig.out.read()->reason, Reason::kVehicleLinkLost);
+  rig.link_lost.store(false);  // the link is back: the hold stays (a failsafe is latched)
+  for (const double end = t + 1.0; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kHold);
+  EXPECT_EQ(rig.out.read()->reason, Reason::kVehicleLinkLost);
 }
 
 }  // namespace

@@ -91,6 +91,7 @@ TEST(Supervisor, EveryFailsafeHoldsWithItsReasonAndLatches) {
        Reason::kNoCameraFrames},
       {"planner fails", [](SupervisorInputs& in) { in.planner_failures_in_a_row = 20; }, Reason::kPlannerFailures},
       {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
+      {"vehicle link lost", [](SupervisorInputs& in) { in.vehicle_link_lost = true; }, Reason::kVehicleLinkLost},
   };
   for (const Fault& fault : faults) {
     Supervisor s = tracking();

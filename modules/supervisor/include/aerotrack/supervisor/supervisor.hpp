@@ -6,8 +6,9 @@
 //   relocate --(a new measurement accepted)--> track
 //   relocate --(relocate_timeout_s without one)--> hold (reason: person not found)
 //   hold (person not found) --(a new measurement accepted)--> track
-//   any but land --(failsafe)--> hold, with the reason: stale odometry, no depth images, no camera
-//            frames, planner failures in a row, a storm of deadline overruns. A failsafe hold is latched.
+//   any but land --(failsafe)--> hold, with the reason: the flight controller's link lost, stale odometry,
+//            no depth images, no camera frames, planner failures in a row, a storm of deadline overruns.
+//            A failsafe hold is latched.
 //   hold --(hold_then_land_s, if > 0)--> land
 // In relocate the planner flies along the person's last predicted path and the gimbal sweeps (the
 // paper's strategy); in hold the drone brakes and hovers; in land it descends. Pure: the time and every
@@ -38,6 +39,7 @@ enum class Reason : std::uint8_t {
   kNoCameraFrames,
   kPlannerFailures,
   kOverrunStorm,
+  kVehicleLinkLost,
   kHoldTimeout,
 };
 std::string_view toString(Reason reason);
@@ -74,6 +76,10 @@ struct SupervisorInputs {
   rt::TimeNs person_accepted_ns = -1;  ///< Capture time of its newest accepted measurement.
   int planner_failures_in_a_row = 0;
   std::uint64_t deadline_overruns = 0;  ///< Cumulative missed deadlines of the periodic tasks (real-time only).
+  /// The vehicle link was up and is now down (issue 11: e.g. no MAVLink heartbeat from the autopilot).
+  /// Setpoints no longer reach the vehicle, whose own failsafe flies it; holding keeps the plan from
+  /// running on, so that a link that comes back resumes from a hover, not a stale trajectory.
+  bool vehicle_link_lost = false;
 };
 
 struct SupervisorState {

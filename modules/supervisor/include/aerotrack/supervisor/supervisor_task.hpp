@@ -1,8 +1,8 @@
 // Task glue for the supervisor (50 Hz in the task table): reads the health of every stream --
 // the newest odometry, depth image and gimbal-camera frame, the person estimate, the planner's failures
-// in a row, the real-time executor's missed deadlines -- updates the mode machine, publishes the mode for the planner,
-// and asks the gimbal to sweep while searching or relocating (when sweeping is enabled: the baseline mode has a fixed
-// camera).
+// in a row, the real-time executor's missed deadlines, the vehicle link's loss -- updates the mode machine, publishes
+// the mode for the planner, and asks the gimbal to sweep while searching or relocating (when sweeping is enabled: the
+// baseline mode has a fixed camera).
 #pragma once
 
 #include <array>
@@ -25,6 +25,7 @@ struct SupervisorChannels {
   const rt::LatestSlot<estimation::TargetEstimate>& target;
   const std::atomic<int>& planner_failures_in_a_row;
   const std::atomic<std::uint64_t>& deadline_misses;  ///< Periods skipped by the real-time executor (0 in lockstep).
+  const std::atomic<bool>& vehicle_link_lost;         ///< Set by the trajectory server from the link's status.
   rt::LatestSlot<SupervisorState>& out;
   std::atomic<bool>& gimbal_search_requested;
 };
@@ -50,6 +51,7 @@ class SupervisorTask final : public rt::Task {
     }
     in.planner_failures_in_a_row = channels_.planner_failures_in_a_row.load(std::memory_order_relaxed);
     in.deadline_overruns = channels_.deadline_misses.load(std::memory_order_relaxed);
+    in.vehicle_link_lost = channels_.vehicle_link_lost.load(std::memory_order_relaxed);
     const SupervisorState& state = supervisor_.update(in);
     channels_.out.write(state);
     const bool searching = state.mode == Mode::kSearch || state.mode == Mode::kRelocate;

@@ -1,8 +1,10 @@
 // Task glue for the trajectory server: reads the newest trajectory from its channel, samples it
 // and sends the setpoint to the vehicle link, and publishes it for other tasks (gimbal feed-
-// forward, recorder). Periodic (default 100 Hz in the task table).
+// forward, recorder). Periodic (default 100 Hz in the task table). It is the link's one caller, so it
+// also reads the link's status each step and reports a lost link (up once, down now) to the supervisor.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <optional>
 
@@ -26,6 +28,9 @@ class TrajectoryServerTask final : public rt::Task {
   using FaceFn = std::function<std::optional<Eigen::Vector3d>(rt::TimeNs)>;
   /// Baseline mode: the body yaws to face the point `face` gives (the person's estimate).
   void faceTowards(FaceFn face) { face_ = std::move(face); }
+  /// Where to report the link's loss (set once, before start). A link never up is not "lost": a vehicle
+  /// without a link (null backend) flies nothing, and one that never connects has no odometry either.
+  void reportLinkLossTo(std::atomic<bool>& link_lost) { link_lost_ = &link_lost; }
 
   void step(rt::TimeNs now_ns) override {
     if (trajectories_.version() != trajectory_version_) {
@@ -43,6 +48,11 @@ class TrajectoryServerTask final : public rt::Task {
       vehicle_.send(*setpoint);
       setpoints_.write(*setpoint);
     }
+    if (link_lost_ != nullptr) {
+      const bool link_ok = vehicle_.status(now_ns).link_ok;
+      link_was_up_ = link_was_up_ || link_ok;
+      link_lost_->store(link_was_up_ && !link_ok, std::memory_order_relaxed);
+    }
   }
 
  private:
@@ -52,6 +62,8 @@ class TrajectoryServerTask final : public rt::Task {
   hal::VehicleLink& vehicle_;
   rt::LatestSlot<hal::Setpoint>& setpoints_;
   FaceFn face_;
+  std::atomic<bool>* link_lost_ = nullptr;
+  bool link_was_up_ = false;
 };
 
 }  // namespace aerotrack::trajectory_server
