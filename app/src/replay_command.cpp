@@ -120,9 +120,8 @@ int replayCommand(const ParsedArgs& args) {
   auto system = System::build(*config, nullptr, start_ns);
   if (!system) return fail(system.error().message);
   // The run ends with the recording: its last record of any stream, shown at start + (end - first).
-  auto timeline = hal::replay::ReplayDataset::open(config->hal.replay, start_ns);
-  if (!timeline) return fail(timeline.error().message);
-  const hal::replay::ReplayTimeline& t = (*timeline)->timeline();
+  if (!(*system)->devices().recording) return fail(dir + ": no device replays the recording");
+  const hal::replay::ReplayTimeline& t = (*system)->devices().recording->timeline();
   // As long as the recorded run, if its manifest says; else (a kill -9, an import) one longest task
   // period after the last record, so that every task is released after it was shown.
   rt::DurationNs longest_period_ns = 0;

@@ -121,6 +121,7 @@ rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioIn
     auto opened = replay::ReplayDataset::open(config.replay, start_ns);
     if (!opened) return rt::Error{"hal: replay: " + opened.error().message};
     recording = std::move(opened.value());
+    d.recording = recording;
     // A replayed device whose stream was not recorded would be silent: say so at start, not in flight.
     const std::pair<const std::string*, const char*> needs[] = {
         {&config.odometry, "odometry"}, {&config.gimbal, "gimbal"}, {&config.depth_camera, "depth_camera"}};

@@ -195,15 +195,7 @@ CandumpWriter::~CandumpWriter() {
 
 rt::Status CandumpWriter::write(const CanLogRecord& frame) {
   if (fd_ < 0) return rt::Error{path_ + ": closed"};
-  const std::string line = formatCandumpLine(frame) + "\n";
-  std::size_t done = 0;
-  while (done < line.size()) {
-    const ssize_t n = ::write(fd_, line.data() + done, line.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return rt::Error{path_ + ": write failed: " + std::strerror(errno)};
-    done += static_cast<std::size_t>(n);
-  }
-  return rt::ok();
+  return writeAllFd(fd_, formatCandumpLine(frame) + "\n", path_);
 }
 
 rt::Status CandumpWriter::close() {

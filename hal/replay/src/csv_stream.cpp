@@ -128,7 +128,7 @@ rt::Expected<CsvStreamWriter> CsvStreamWriter::create(const std::string& path,
   if (writer.fd_ < 0) return rt::Error{path + ": cannot create: " + std::strerror(errno)};
   writer.path_ = path;
   writer.columns_ = columns.size();
-  if (rt::Status s = writer.writeAll(joinHeader(columns) + "\n"); !s) return s.error();
+  if (rt::Status s = writeAllFd(writer.fd_, joinHeader(columns) + "\n", writer.path_); !s) return s.error();
   return writer;
 }
 
@@ -153,12 +153,12 @@ CsvStreamWriter::~CsvStreamWriter() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-rt::Status CsvStreamWriter::writeAll(const std::string& text) {
+rt::Status writeAllFd(int fd, std::string_view text, const std::string& path) {
   std::size_t done = 0;
   while (done < text.size()) {
-    const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return rt::Error{path_ + ": write failed: " + std::strerror(errno)};
+    if (n <= 0) return rt::Error{path + ": write failed: " + std::strerror(errno)};
     done += static_cast<std::size_t>(n);
   }
   return rt::ok();
@@ -179,7 +179,7 @@ rt::Status CsvStreamWriter::write(rt::TimeNs stamp_ns, const std::vector<double>
     line_.append(number, ec == std::errc() ? end : number);
   }
   line_.push_back('\n');
-  return writeAll(line_);
+  return writeAllFd(fd_, line_, path_);
 }
 
 rt::Status CsvStreamWriter::close() {

@@ -92,6 +92,25 @@ DeviceHealth unreadableHealth(DeviceHealth h, std::uint64_t unreadable, const st
   return h;
 }
 
+/// Reads the frame file of one index row of a camera stream (beside the stream's CSV) with read, and
+/// checks its size against the manifest's camera. A frame that does not read or does not fit gives
+/// nothing: it is counted in unreadable, the first problem kept, and the device goes on.
+template <class Read>
+std::optional<cv::Mat> readFrameFile(const std::string& stream_path, std::uint64_t file_index,
+                                     const std::string& extension, const CameraIntrinsics& intrinsics,
+                                     const char* camera, Read read, std::uint64_t& unreadable,
+                                     std::string& first_unreadable) {
+  const std::string file =
+      (std::filesystem::path(stream_path).parent_path() / frameFileName(file_index, extension)).string();
+  rt::Expected<cv::Mat> frame = read(file);
+  std::string problem = frame ? std::string() : frame.error().message;
+  if (frame && (frame->cols != intrinsics.width_px || frame->rows != intrinsics.height_px))
+    problem = file + ": the frame's size differs from the manifest's " + camera;
+  if (problem.empty()) return std::move(*frame);
+  if (unreadable++ == 0) first_unreadable = problem;
+  return std::nullopt;
+}
+
 }  // namespace
 
 ReplayTimeline::ReplayTimeline(rt::TimeNs recording_start_ns, rt::TimeNs recording_end_ns, rt::TimeNs replay_start_ns,
@@ -292,17 +311,9 @@ ImageFrameHandle ReplayGimbalCamera::grab(rt::TimeNs now_ns) {
   const auto row = images_.newestUnseenAt(now_ns);
   if (!row) return {};
   const RecordedCamera& camera = *dataset.manifest().gimbal_camera;
-  const std::string file = (std::filesystem::path(dataset.images()->path).parent_path() /
-                            frameFileName(row->file_index, camera.image_format))
-                               .string();
-  auto bgr = readImage(file);
-  std::string problem = bgr ? std::string() : bgr.error().message;
-  if (bgr && (bgr->cols != camera.intrinsics.width_px || bgr->rows != camera.intrinsics.height_px))
-    problem = file + ": the image's size differs from the manifest's gimbal_camera";
-  if (!problem.empty()) {
-    if (unreadable_++ == 0) first_unreadable_ = problem;
-    return {};
-  }
+  auto bgr = readFrameFile(dataset.images()->path, row->file_index, camera.image_format, camera.intrinsics,
+                           "gimbal_camera", readImage, unreadable_, first_unreadable_);
+  if (!bgr) return {};
   auto frame = std::make_shared<ImageFrame>();
   frame->stamp_ns = row->stamp_ns;
   frame->sequence = row->sequence;
@@ -329,17 +340,9 @@ DepthFrameHandle ReplayDepthCamera::grab(rt::TimeNs now_ns) {
   if (dataset.depthFrames() == nullptr) return {};
   const auto row = cursor_.newestUnseenAt(now_ns);
   if (!row) return {};
-  const std::string file =
-      (std::filesystem::path(dataset.depthFrames()->path).parent_path() / frameFileName(row->file_index, "png"))
-          .string();
-  auto depth = readDepthPng(file);
-  std::string problem = depth ? std::string() : depth.error().message;
-  if (depth && (depth->cols != intrinsics_.width_px || depth->rows != intrinsics_.height_px))
-    problem = file + ": the frame's size differs from the manifest's depth_camera";
-  if (!problem.empty()) {
-    if (unreadable_++ == 0) first_unreadable_ = problem;
-    return {};
-  }
+  auto depth = readFrameFile(dataset.depthFrames()->path, row->file_index, "png", intrinsics_, "depth_camera",
+                             readDepthPng, unreadable_, first_unreadable_);
+  if (!depth) return {};
   auto frame = std::make_shared<DepthFrame>();
   frame->stamp_ns = row->stamp_ns;
   frame->sequence = row->sequence;

@@ -58,6 +58,9 @@ struct Devices {
   std::unique_ptr<Odometry> odometry;
   std::unique_ptr<VehicleLink> vehicle_link;
   std::shared_ptr<sim::Simulation> simulation;
+  /// Set when any backend is "replay": the dataset the replayed devices share (its timeline tells
+  /// `aerotrack replay` when the recording ends).
+  std::shared_ptr<const replay::ReplayDataset> recording;
 };
 
 /// Builds every device. scenario (one instantiated trial) is needed only if a backend is "sim".

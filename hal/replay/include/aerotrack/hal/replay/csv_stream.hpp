@@ -19,12 +19,18 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/time.hpp"
 
 namespace aerotrack::hal::replay {
+
+/// Writes all of text to fd, retrying short writes and EINTR. The streams of a dataset append each
+/// record with one call, so a record is whole in the file or (killed mid-call) a partial last line
+/// the reader drops. Error naming path.
+rt::Status writeAllFd(int fd, std::string_view text, const std::string& path);
 
 struct CsvRecord {
   rt::TimeNs stamp_ns = 0;
@@ -89,7 +95,6 @@ class CsvStreamWriter {
 
  private:
   CsvStreamWriter() = default;
-  rt::Status writeAll(const std::string& text);
 
   int fd_ = -1;
   std::string path_;
