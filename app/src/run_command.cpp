@@ -1,6 +1,6 @@
 // `aerotrack run --config FILE [--print-config] [--duration-s S]`: the onboard executable. Devices
 // from config, every task on the real-time executor, until SIGINT/SIGTERM (or the duration). Under
-// systemd (deploy/aerotrack.service) it reports READY=1 once the tasks run and pings the watchdog
+// systemd (tools/systemd/aerotrack.service) it reports READY=1 once the tasks run and pings the watchdog
 // only while every periodic task keeps stepping: a wedged task gets the service restarted.
 #include <unistd.h>
 
@@ -88,6 +88,7 @@ int runCommand(const ParsedArgs& args) {
   TaskLiveness liveness;
   const auto counts = [&watched] {
     std::vector<std::uint64_t> c;
+    c.reserve(watched.size());
     for (const rt::TimingStats* s : watched) c.push_back(s->execution().count());
     return c;
   };

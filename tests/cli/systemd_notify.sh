@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs `aerotrack run` the way systemd runs the service (deploy/aerotrack.service: Type=notify,
+# Runs `aerotrack run` the way systemd runs the service (tools/systemd/aerotrack.service: Type=notify,
 # WatchdogSec): a listener stands in for systemd's notification socket, and the run must send
 # READY=1 first, then WATCHDOG=1 about every half timeout, then STOPPING=1.
 # usage: systemd_notify.sh AEROTRACK CONFIG

@@ -4,6 +4,7 @@
 
 #include "aerotrack/hal/null/devices.hpp"
 #include "aerotrack/hal/sim/devices.hpp"
+#include "real_devices.hpp"
 
 namespace aerotrack::hal {
 
@@ -11,6 +12,16 @@ bool HalConfig::usesSim() const {
   for (const std::string* backend : {&gimbal_camera, &depth_camera, &gimbal, &odometry, &vehicle_link})
     if (*backend == "sim") return true;
   return false;
+}
+
+bool HalConfig::usesReal() const {
+  const RealDevices r = realDevices();
+  return r.gimbal_camera || r.depth_camera || r.gimbal || r.flight_controller;
+}
+
+RealDevices HalConfig::realDevices() const {
+  return {gimbal_camera == "real", depth_camera == "real", gimbal == "real",
+          odometry == "real" || vehicle_link == "real"};
 }
 
 bool HalConfig::usesReplay() const {
@@ -21,11 +32,11 @@ bool HalConfig::usesReplay() const {
 
 HalConfig parseHalConfig(const rt::ConfigNode& node) {
   HalConfig c;
-  c.gimbal_camera = node.getEnum("gimbal_camera", {"null", "sim", "replay"});
-  c.depth_camera = node.getEnum("depth_camera", {"null", "sim", "replay"});
-  c.gimbal = node.getEnum("gimbal", {"null", "sim", "replay"});
-  c.odometry = node.getEnum("odometry", {"null", "sim", "replay"});
-  c.vehicle_link = node.getEnum("vehicle_link", {"null", "sim", "replay"});
+  c.gimbal_camera = node.getEnum("gimbal_camera", {"null", "sim", "replay", "real"});
+  c.depth_camera = node.getEnum("depth_camera", {"null", "sim", "replay", "real"});
+  c.gimbal = node.getEnum("gimbal", {"null", "sim", "replay", "real"});
+  c.odometry = node.getEnum("odometry", {"null", "sim", "replay", "real"});
+  c.vehicle_link = node.getEnum("vehicle_link", {"null", "sim", "replay", "real"});
   if (node.has("replay")) {
     const rt::ConfigNode r = node.child("replay");
     c.replay.dir = r.getString("dir");
@@ -36,6 +47,10 @@ HalConfig parseHalConfig(const rt::ConfigNode& node) {
     r.finish();
   } else if (c.usesReplay()) {
     node.fail("replay", "a replay backend needs the replay: map (dir, offset_s, loop, bad_rows)");
+  }
+  if (node.has("real") || c.usesReal()) {
+    if (!node.has("real")) node.fail("real", "a real backend needs the real: map (the drivers' parameters)");
+    c.real = parseRealConfig(node.child("real"), c.realDevices());
   }
   node.finish();
   return c;
@@ -56,6 +71,10 @@ void emitYaml(YAML::Emitter& out, const HalConfig& c) {
     out << YAML::Key << "bad_rows" << YAML::Value
         << (c.replay.bad_rows == replay::BadRowPolicy::kStrict ? "strict" : "skip");
     out << YAML::EndMap;
+  }
+  if (c.usesReal()) {
+    out << YAML::Key << "real" << YAML::Value;
+    emitYaml(out, c.real, c.realDevices());
   }
   out << YAML::EndMap;
 }
@@ -135,35 +154,38 @@ rt::Expected<Devices> makeDevices(const HalConfig& config, const sim::ScenarioIn
       return rt::Error{"hal: replay: " + config.replay.dir + " has no gimbal_camera (images) or detections stream"};
     }
   }
+  if (config.usesReal()) {
+    if (rt::Status s = makeRealDevices(config, start_ns, d); !s) return s.error();
+  }
   if (config.gimbal_camera == "sim")
     d.gimbal_camera = std::make_unique<sim::SimGimbalCamera>(d.simulation);
   else if (config.gimbal_camera == "replay")
     d.gimbal_camera = std::make_unique<replay::ReplayGimbalCamera>(recording);
-  else
+  else if (config.gimbal_camera != "real")
     d.gimbal_camera = std::make_unique<null::NullGimbalCamera>();
   if (config.depth_camera == "sim")
     d.depth_camera = std::make_unique<sim::SimDepthCamera>(d.simulation);
   else if (config.depth_camera == "replay")
     d.depth_camera = std::make_unique<replay::ReplayDepthCamera>(recording);
-  else
+  else if (config.depth_camera != "real")
     d.depth_camera = std::make_unique<null::NullDepthCamera>();
   if (config.gimbal == "sim")
     d.gimbal = std::make_unique<sim::SimGimbal>(d.simulation);
   else if (config.gimbal == "replay")
     d.gimbal = std::make_unique<replay::ReplayGimbal>(recording);
-  else
+  else if (config.gimbal != "real")
     d.gimbal = std::make_unique<null::NullGimbal>();
   if (config.odometry == "sim")
     d.odometry = std::make_unique<sim::SimOdometry>(d.simulation);
   else if (config.odometry == "replay")
     d.odometry = std::make_unique<replay::ReplayOdometry>(recording);
-  else
+  else if (config.odometry != "real")
     d.odometry = std::make_unique<null::NullOdometry>();
   if (config.vehicle_link == "sim")
     d.vehicle_link = std::make_unique<sim::SimVehicleLink>(d.simulation);
   else if (config.vehicle_link == "replay")
     d.vehicle_link = std::make_unique<replay::ReplayVehicleLink>(recording);
-  else
+  else if (config.vehicle_link != "real")
     d.vehicle_link = std::make_unique<null::NullVehicleLink>();
   return d;
 }

@@ -78,7 +78,11 @@ rt::Expected<std::optional<CanReceived>> CanSocket::receive() {
   CanReceived r;
   r.error = (raw.can_id & CAN_ERR_FLAG) != 0;
   r.remote = (raw.can_id & CAN_RTR_FLAG) != 0;
-  r.frame.id = raw.can_id & (r.error ? CAN_ERR_MASK : ((raw.can_id & CAN_EFF_FLAG) != 0 ? CAN_EFF_MASK : CAN_SFF_MASK));
+  // An extended identifier keeps its flag: 0x241 in 29 bits is another node's frame, not the standard
+  // 0x241, and a decoder of standard identifiers must not take one for the other.
+  const canid_t id_mask =
+      r.error ? CAN_ERR_MASK : ((raw.can_id & CAN_EFF_FLAG) != 0 ? (CAN_EFF_FLAG | CAN_EFF_MASK) : CAN_SFF_MASK);
+  r.frame.id = raw.can_id & id_mask;
   r.frame.length = raw.can_dlc > 8 ? 8 : raw.can_dlc;
   std::memcpy(r.frame.data.data(), raw.data, sizeof(raw.data));
   return std::optional<CanReceived>{r};

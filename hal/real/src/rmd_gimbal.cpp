@@ -61,6 +61,12 @@ void RmdGimbal::drain(rt::TimeNs now_ns) {
       note(socket_.name() + (bus_off ? ": bus-off" : std::string(": CAN error frame, class ") + bits), bus_off);
       continue;
     }
+    if (r.remote) {  // a request for data, not data: whatever its bytes hold is no reading
+      char id[16];
+      std::snprintf(id, sizeof(id), "0x%03X", static_cast<unsigned>(r.frame.id));
+      note(socket_.name() + ": remote frame " + id + " ignored", false);
+      continue;
+    }
     const auto reply = protocol::rmd::decodeReply(params_.motor_id, r.frame);
     if (!reply) {
       note(reply.error().message, false);  // another node's frame, or garbage: ignored

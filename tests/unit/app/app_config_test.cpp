@@ -87,6 +87,58 @@ TEST(AppConfig, PrintedConfigParsesBackToTheSameConfig) {
   EXPECT_TRUE(overlapped);  // sim.yaml overlaps the mapping: the field is exercised
 }
 
+TEST(AppConfig, DroneConfigSelectsEveryRealDriverAndPrintsBackToTheSame) {
+  const auto c = loadAppConfig(kConfigDir + "/drone.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  for (const std::string* backend :
+       {&c->hal.gimbal_camera, &c->hal.depth_camera, &c->hal.gimbal, &c->hal.odometry, &c->hal.vehicle_link})
+    EXPECT_EQ(*backend, "real");
+  EXPECT_FALSE(c->hal.usesSim());
+  for (const rt::TaskSpec& t : c->tasks) {  // the simulator's tasks are not on the drone
+    EXPECT_NE(t.name, "sim_world");
+    EXPECT_NE(t.name, "target_check");
+    EXPECT_NE(t.name, "camera_strip");
+  }
+  // Relative paths are beside the config file.
+  EXPECT_EQ(c->hal.real.gimbal_camera_calibration, kConfigDir + "/calibration/gimbal_camera.yaml");
+  EXPECT_EQ(c->hal.real.depth_camera.calibration_dir, kConfigDir + "/calibration");
+  EXPECT_EQ(c->hal.real.can_interface, "can0");
+  EXPECT_EQ(c->hal.real.flight_controller.url, "udp://0.0.0.0:14540");
+  EXPECT_GE(1.0 / c->hal.real.flight_controller.setpoint_period_s, 20.0);  // PX4 offboard's minimum stream
+  const std::string printed = toYaml(*c);
+  const auto again = parseAppConfig(printed, "printed.yaml");
+  ASSERT_TRUE(again) << again.error().message << "\n" << printed;
+  EXPECT_EQ(toYaml(*again), printed);
+  EXPECT_TRUE(again->hal.real.depth_camera.T_BC.isApprox(c->hal.real.depth_camera.T_BC, 1e-12));
+}
+
+TEST(AppConfig, GivenBadRealDriverKeysThenErrorsNameThem) {
+  std::string text = readFile(kConfigDir + "/drone.yaml");
+  const auto errorWith = [&text](const std::string& what, const std::string& with) {
+    std::string t = text;
+    const std::size_t at = t.find(what);
+    EXPECT_NE(at, std::string::npos) << what;
+    t.replace(at, what.size(), with);
+    const auto c = parseAppConfig(t, "drone.yaml");
+    return c ? std::string("parsed") : c.error().message;
+  };
+  EXPECT_NE(
+      errorWith("      direction: 1 ", "      direction: 0.5 ").find("hal.real.gimbal.direction: must be 1 or -1"),
+      std::string::npos);
+  EXPECT_NE(errorWith("      motor_id: 1 ", "      motor_id: 33 ").find("hal.real.gimbal.motor_id"), std::string::npos);
+  EXPECT_NE(
+      errorWith("      pixel_format: MJPG", "      pixel_format: H264").find("hal.real.gimbal_camera.pixel_format"),
+      std::string::npos);
+  EXPECT_NE(errorWith("      setpoint_period_s: 0.02", "      setpoint_period_s: 0.5")
+                .find("hal.real.flight_controller.setpoint_period_s"),
+            std::string::npos);
+  EXPECT_NE(errorWith("  gimbal: real ", "  gimbal: null ")
+                .find("hal.real.gimbal: set only for a device whose backend is real"),
+            std::string::npos);
+  EXPECT_NE(errorWith("  real:\n", "  unreal:\n").find("hal.real: a real backend needs the real: map"),
+            std::string::npos);
+}
+
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
   const std::string yaml = simYamlWith("  max_speed_mps: 3.0", "  max_speed_mps: 3.0\n  max_sped_mps: 2.0");
   EXPECT_EQ(errorOf(yaml), at(yaml, "max_sped_mps") + ": vehicle.max_sped_mps: unknown key");
@@ -131,7 +183,8 @@ TEST(AppConfig, GivenAMissingLocalizationFileThenErrorNamesTheKeyAndTheFile) {
 
 TEST(AppConfig, GivenBadBackendThenErrorNamesIt) {
   const std::string yaml = simYamlWith("odometry: sim", "odometry: vicon");
-  EXPECT_EQ(errorOf(yaml), at(yaml, "odometry: vicon") + ": hal.odometry: 'vicon' is not one of: null, sim, replay");
+  EXPECT_EQ(errorOf(yaml),
+            at(yaml, "odometry: vicon") + ": hal.odometry: 'vicon' is not one of: null, sim, replay, real");
 }
 
 hal::sim::ScenarioInstance openTrial() {

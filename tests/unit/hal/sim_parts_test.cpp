@@ -185,7 +185,7 @@ TEST(DeviceFactory, GivenUnknownBackendInConfigThenErrorNamesKey) {
   ASSERT_TRUE(root);
   const auto parsed = rt::parseConfig<HalConfig>([&] { return parseHalConfig(*root); });
   ASSERT_FALSE(parsed);
-  EXPECT_EQ(parsed.error().message, "hal.yaml:4: odometry: 'gps' is not one of: null, sim, replay");
+  EXPECT_EQ(parsed.error().message, "hal.yaml:4: odometry: 'gps' is not one of: null, sim, replay, real");
 }
 
 TEST(DeviceFactory, GivenReplayBackendsThenTheyServeTheRecordingOrSayWhatIsMissing) {

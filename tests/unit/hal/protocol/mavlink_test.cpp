@@ -166,5 +166,22 @@ TEST(Mavlink, BadFramesAreCountedAndIgnoredNeverReturned) {
   EXPECT_EQ(found, 30U);
 }
 
+TEST(Mavlink, OnADatagramTransportAHalfFrameIsCountedAsTruncatedAndDropped) {
+  // Given a UDP datagram holding one whole frame and the first 15 bytes of another,
+  Parser parser;
+  const auto whole = hex(kAttitudeHex);
+  std::vector<std::uint8_t> datagram = whole;
+  for (std::size_t i = 0; i < 15; ++i) datagram.push_back(whole[i]);
+  // when it is fed and the datagram ends,
+  EXPECT_EQ(parser.feed(datagram.data(), datagram.size()).size(), 1U);
+  parser.endOfDatagram();
+  // then the half frame is counted once and does not swallow the next datagram's frame.
+  EXPECT_EQ(parser.truncated(), 1U);
+  EXPECT_EQ(parser.feed(whole.data(), whole.size()).size(), 1U);
+  parser.endOfDatagram();
+  EXPECT_EQ(parser.truncated(), 1U);
+  EXPECT_EQ(parser.badCrc(), 0U);
+}
+
 }  // namespace
 }  // namespace aerotrack::hal::protocol::mavlink

@@ -1,8 +1,9 @@
-// The RMD-X gimbal driver (hal/real/rmd_gimbal.hpp) against a simulated motor on the other end of a
-// socketpair carrying Linux's struct can_frame, as a SocketCAN socket does: the watchdog is armed
-// first, rate and angle commands become the protocol's frames, the multi-turn angle comes back in
-// radians; a silent motor, stray and garbage frames, and a bus-off error frame show in the health.
-// Opening a CAN interface that does not exist is a one-line error naming it.
+// The RMD-X gimbal driver (hal/real/rmd_gimbal.hpp; issue 11 item 3) against the simulated motor of
+// tests/support/rmd_motor_sim.hpp on the other end of a socketpair carrying Linux's struct can_frame,
+// as a SocketCAN socket does: the watchdog is armed first, rate and angle commands become the
+// protocol's frames, the multi-turn angle comes back in radians; a silent motor, stray and garbage
+// frames, and a bus-off error frame show in the health. Opening a CAN interface that does not exist
+// is a one-line error naming it. tests/vcan/ runs the same driver over real SocketCAN (vcan0).
 #include "aerotrack/hal/real/rmd_gimbal.hpp"
 
 #include <gtest/gtest.h>
@@ -16,71 +17,22 @@
 #include <numbers>
 #include <vector>
 
+#include "support/rmd_motor_sim.hpp"
+
 namespace aerotrack::hal::real {
 namespace {
 
 constexpr rt::TimeNs kMs = rt::kNsPerMillisecond;
-
-/// A motor with id 1 at the far end: answers every request the way protocol V4.2 says.
-class FakeMotor {
- public:
-  explicit FakeMotor(int fd) : fd_(fd) {}
-  ~FakeMotor() { ::close(fd_); }
-  FakeMotor(const FakeMotor&) = delete;
-  FakeMotor& operator=(const FakeMotor&) = delete;
-
-  /// Moves for dt_s at the commanded speed, then answers what arrived.
-  void serve(double dt_s) {
-    angle_cdeg_ += speed_cdps_ * dt_s;
-    can_frame in{};
-    while (::read(fd_, &in, sizeof(in)) == static_cast<ssize_t>(sizeof(in))) {
-      received_.push_back(in);
-      if (silent_) continue;
-      can_frame out{};
-      out.can_id = 0x241;
-      out.can_dlc = 8;
-      out.data[0] = in.data[0];
-      std::int32_t value = 0;
-      std::memcpy(&value, in.data + 4, 4);  // little-endian host, as the motor
-      if (in.data[0] == 0xA2) {
-        speed_cdps_ = value;
-        const auto dps = static_cast<std::int16_t>(std::lround(speed_cdps_ / 100.0));
-        std::memcpy(out.data + 4, &dps, 2);
-      } else if (in.data[0] == 0x92) {
-        const auto cdeg = static_cast<std::int32_t>(std::lround(angle_cdeg_));
-        std::memcpy(out.data + 4, &cdeg, 4);
-      }
-      ASSERT_EQ(::write(fd_, &out, sizeof(out)), static_cast<ssize_t>(sizeof(out)));
-    }
-  }
-  void inject(canid_t id, std::initializer_list<int> bytes) {
-    can_frame f{};
-    f.can_id = id;
-    f.can_dlc = static_cast<std::uint8_t>(bytes.size());
-    std::size_t i = 0;
-    for (const int b : bytes) f.data[i++] = static_cast<std::uint8_t>(b);
-    ASSERT_EQ(::write(fd_, &f, sizeof(f)), static_cast<ssize_t>(sizeof(f)));
-  }
-  const std::vector<can_frame>& received() const { return received_; }
-  void setSilent(bool silent) { silent_ = silent; }
-
- private:
-  int fd_;
-  double angle_cdeg_ = 9000.0;  // starts at 90 degrees
-  double speed_cdps_ = 0.0;
-  bool silent_ = false;
-  std::vector<can_frame> received_;
-};
 
 struct Bench {
   Bench() {
     int fds[2];
     EXPECT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK, 0, fds), 0);
     gimbal = std::make_unique<RmdGimbal>(CanSocket::adopt(fds[0], "pair0"), RmdGimbalParams{});
-    motor = std::make_unique<FakeMotor>(fds[1]);
+    motor = std::make_unique<test::RmdMotorSim>(fds[1]);
   }
   std::unique_ptr<RmdGimbal> gimbal;
-  std::unique_ptr<FakeMotor> motor;
+  std::unique_ptr<test::RmdMotorSim> motor;
 };
 
 TEST(RmdGimbal, ArmsTheWatchdogCommandsTheMotorAndReadsItsAngle) {
@@ -161,6 +113,26 @@ TEST(RmdGimbal, StrayAndGarbageFramesAreCountedAndIgnoredAndBusOffFails) {
   h = b.gimbal->health(10 * kMs);
   EXPECT_EQ(h.state, DeviceHealth::State::kFailed);
   EXPECT_EQ(h.detail, "pair0: bus-off");
+}
+
+// The motor speaks with standard identifiers only: an extended frame whose 29-bit identifier is
+// 0x241 is another node's, and a remote frame asks for data rather than carrying it; neither is an
+// angle, whatever its bytes say.
+TEST(RmdGimbal, ExtendedAndRemoteFramesWithTheReplyIdentifierAreNotReplies) {
+  Bench b;
+  b.gimbal->read(0);
+  b.motor->serve(0.0);
+  ASSERT_TRUE(b.gimbal->read(5 * kMs).has_value());
+  b.motor->inject(CAN_EFF_FLAG | 0x241, {0x92, 0, 0, 0, 0x10, 0x27, 0, 0});  // "100.00 deg"
+  b.motor->inject(CAN_RTR_FLAG | 0x241, {0x92, 0, 0, 0, 0x10, 0x27, 0, 0});
+  const auto state = b.gimbal->read(10 * kMs);
+  ASSERT_TRUE(state.has_value());
+  EXPECT_NEAR(state->angle_rad, std::numbers::pi / 2.0, 1e-9);
+  EXPECT_EQ(state->stamp_ns, 5 * kMs);  // still the motor's reply to the first request
+  const DeviceHealth h = b.gimbal->health(10 * kMs);
+  EXPECT_EQ(h.state, DeviceHealth::State::kDegraded);
+  EXPECT_EQ(h.error_count, 2U);
+  EXPECT_EQ(h.detail, "pair0 motor 1: 2 problems, the first: rmd: frame 0x80000241 is not a reply from motor 1");
 }
 
 TEST(CanSocket, OpeningAnInterfaceThatIsNotThereNamesIt) {

@@ -10,6 +10,7 @@
 #include <yaml-cpp/emitter.h>
 
 #include "aerotrack/hal/devices.hpp"
+#include "aerotrack/hal/real_config.hpp"
 #include "aerotrack/hal/replay/replay_devices.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/rt/config_node.hpp"
@@ -27,9 +28,13 @@ struct HalConfig {
   /// The `replay:` map inside `hal:`: required when a backend is "replay" (issue 10): `dir`, `offset_s`,
   /// `loop`, `bad_rows` (skip | strict).
   replay::ReplayOptions replay;
+  /// The `real:` map inside `hal:` (issue 11): the drivers' parameters, a sub-map per real device.
+  RealConfig real;
 
   bool usesSim() const;
   bool usesReplay() const;
+  bool usesReal() const;
+  RealDevices realDevices() const;
 };
 
 /// The `sim:` section: which scenario the sim backends fly and how.

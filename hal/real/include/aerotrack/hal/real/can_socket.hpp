@@ -14,9 +14,10 @@ namespace aerotrack::hal::real {
 
 /// What arrived: a data frame, or an error frame (the controller's report: bus-off, error passive ...).
 struct CanReceived {
+  /// A data frame's id; an extended frame's keeps CAN_EFF_FLAG (0x80000000), so it never equals a standard id.
   protocol::rmd::CanFrame frame;
-  bool error = false;  ///< An error frame: frame.id holds the error class bits (linux/can/error.h).
-  bool remote = false;
+  bool error = false;   ///< An error frame: frame.id holds the error class bits (linux/can/error.h).
+  bool remote = false;  ///< A remote (request) frame: it carries no data.
 };
 
 class CanSocket {

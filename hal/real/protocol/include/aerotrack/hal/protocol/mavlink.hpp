@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -97,6 +98,29 @@ struct Odometry {
   std::int8_t quality = 0;
 };
 
+/// A payload in fixed storage (full length, before truncation), for callers that must not allocate.
+struct Payload {
+  std::array<std::uint8_t, kMaxPayloadBytes> bytes{};
+  std::size_t size = 0;
+};
+inline constexpr std::size_t kMaxFrameBytes = kHeaderBytes + kMaxPayloadBytes + 2;  // unsigned
+/// A whole frame in fixed storage.
+struct FrameBytes {
+  std::array<std::uint8_t, kMaxFrameBytes> bytes{};
+  std::size_t size = 0;
+};
+void encodePayload(const Heartbeat& m, Payload& out);
+void encodePayload(const SetPositionTargetLocalNed& m, Payload& out);
+void encodePayload(const LocalPositionNed& m, Payload& out);
+void encodePayload(const Attitude& m, Payload& out);
+void encodePayload(const Odometry& m, Payload& out);
+/// Decoding from bytes that may be truncated (missing bytes read as zeros). No allocation.
+Heartbeat decodeHeartbeat(const std::uint8_t* payload, std::size_t size);
+SetPositionTargetLocalNed decodeSetPositionTargetLocalNed(const std::uint8_t* payload, std::size_t size);
+LocalPositionNed decodeLocalPositionNed(const std::uint8_t* payload, std::size_t size);
+Attitude decodeAttitude(const std::uint8_t* payload, std::size_t size);
+Odometry decodeOdometry(const std::uint8_t* payload, std::size_t size);
+
 // Payloads (full length, before truncation) and their decoding (the payload zero-padded to full length).
 std::vector<std::uint8_t> encodePayload(const Heartbeat& m);
 std::vector<std::uint8_t> encodePayload(const SetPositionTargetLocalNed& m);
@@ -119,6 +143,10 @@ struct Sender {
 std::vector<std::uint8_t> frame(std::uint32_t message_id, std::vector<std::uint8_t> payload, const Sender& sender,
                                 std::uint8_t sequence);
 
+/// As frame(), into fixed storage: no allocation.
+void frameInto(std::uint32_t message_id, const Payload& payload, const Sender& sender, std::uint8_t sequence,
+               FrameBytes& out);
+
 /// A frame that arrived: whose, which message, and its payload padded back to the message's length.
 struct Frame {
   std::uint8_t sequence = 0;
@@ -128,6 +156,18 @@ struct Frame {
   std::vector<std::uint8_t> payload;
 };
 
+/// A frame that arrived, seen in the parser's buffer (valid during the callback only): the payload as
+/// sent (payload_size bytes, possibly truncated), full_size its message's length.
+struct FrameView {
+  std::uint8_t sequence = 0;
+  std::uint8_t system_id = 0;
+  std::uint8_t component_id = 0;
+  std::uint32_t message_id = 0;
+  const std::uint8_t* payload = nullptr;
+  std::size_t payload_size = 0;
+  std::size_t full_size = 0;
+};
+
 /// Finds frames in a byte stream (UDP datagrams or a serial line), whatever is in between. A frame with
 /// a bad CRC, a message this codec does not know (its CRC cannot be checked), a signed frame, or bytes
 /// that are not a frame are counted and skipped, never returned.
@@ -135,14 +175,21 @@ class Parser {
  public:
   /// Appends bytes; the frames completed by them are returned in order.
   std::vector<Frame> feed(const std::uint8_t* data, std::size_t size);
+  /// As feed(), handing each frame to on_frame in order; allocates nothing once its buffer has grown
+  /// to the largest frame (on_frame should not either: a lambda holding a few pointers stays inline).
+  void feedEach(const std::uint8_t* data, std::size_t size, const std::function<void(const FrameView&)>& on_frame);
   std::uint64_t badCrc() const { return bad_crc_; }
   std::uint64_t unknownMessages() const { return unknown_; }
   std::uint64_t skippedBytes() const { return skipped_bytes_; }
   std::uint64_t unsupported() const { return unsupported_; }  ///< signed frames, MAVLink 1 frames
+  std::uint64_t truncated() const { return truncated_; }
+  /// For datagram transports (UDP), where a frame never spans two datagrams: the bytes left waiting
+  /// after a datagram are a truncated frame, counted and dropped rather than joined with the next one.
+  void endOfDatagram();
 
  private:
   std::vector<std::uint8_t> buffer_;
-  std::uint64_t bad_crc_ = 0, unknown_ = 0, skipped_bytes_ = 0, unsupported_ = 0;
+  std::uint64_t bad_crc_ = 0, unknown_ = 0, skipped_bytes_ = 0, unsupported_ = 0, truncated_ = 0;
 };
 
 }  // namespace aerotrack::hal::protocol::mavlink
