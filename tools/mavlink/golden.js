@@ -1,5 +1,5 @@
 // Golden MAVLink v2 frames from node-mavlink 2.3.0 (an independent implementation) for
-// tests/unit/hal/protocol/mavlink_test.cpp. Usage: npm install node-mavlink@2.3.0 && node golden.js
+// tests/unit/hal/protocol/mavlink_test.cpp. Usage: cd tools/mavlink && npm ci && node golden.js
 // Prints one line per frame: NAME HEX.
 const { MavLinkProtocolV2, minimal, common } = require('node-mavlink');
 const p = new MavLinkProtocolV2(1, 191);  // our system 1, component 191 (onboard computer)
