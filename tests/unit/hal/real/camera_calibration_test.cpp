@@ -9,7 +9,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <regex>
 
 namespace aerotrack::hal::real {
 namespace {
@@ -62,8 +61,13 @@ void expectExample(const CameraIntrinsics& k) {
 
 /// Replaces the first line starting with `key:` by `replacement` (a whole line, or "" to delete it).
 std::string withLine(const std::string& text, const std::string& key, const std::string& replacement) {
-  const std::regex line("(^|\n)" + key + ":[^\n]*\n");
-  return std::regex_replace(text, line, "$1" + replacement, std::regex_constants::format_first_only);
+  // Plain search, not std::regex: GCC 12's <regex> raises -Wmaybe-uninitialized under ASan at -O2.
+  std::size_t at = text.rfind(key + ":", 0) == 0 ? 0 : text.find("\n" + key + ":");
+  if (at == std::string::npos) return text;
+  if (text[at] == '\n') ++at;
+  const std::size_t end = text.find('\n', at);
+  const std::size_t line_end = end == std::string::npos ? text.size() : end + 1;
+  return text.substr(0, at) + replacement + text.substr(line_end);
 }
 
 TEST(CameraCalibration, GivenOurFormatWhenParsedThenIntrinsicsAndDistortionAreRead) {
