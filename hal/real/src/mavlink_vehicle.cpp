@@ -157,11 +157,6 @@ std::uint16_t MavlinkConnection::localPort() const {
   return socket_.localPort();
 }
 
-void MavlinkConnection::noteLocked(const std::string& problem) {
-  ++problems_;
-  if (first_problem_.empty()) first_problem_ = problem;
-}
-
 std::uint32_t MavlinkConnection::bootMsLocked(rt::TimeNs now_ns) const {
   const rt::TimeNs since_ns = first_poll_ns_ >= 0 ? now_ns - first_poll_ns_ : 0;
   return static_cast<std::uint32_t>(since_ns / rt::kNsPerMillisecond);
@@ -189,7 +184,7 @@ void MavlinkConnection::receiveLocked(rt::TimeNs now_ns) {
   for (int n = 0; n < kMaxDatagramsPerPoll; ++n) {
     auto received = socket_.receive(datagram_.data(), datagram_.size());
     if (!received) {
-      noteLocked(received.error().message);
+      noteLocked([&received] { return received.error().message; });
       return;
     }
     if (!received->has_value()) return;
@@ -206,10 +201,10 @@ void MavlinkConnection::receiveLocked(rt::TimeNs now_ns) {
         parser_.badCrc() + parser_.truncated() + parser_.unsupported() + parser_.skippedBytes();
     if (bad_after != bad_before) {
       ++counters_.malformed;
-      ++problems_;
-      if (first_problem_.empty())  // text only for the first: a flood of garbage allocates nothing
-        first_problem_ = socket_.url() + ": a malformed datagram (" + std::to_string(**received) +
-                         " bytes: bad CRC, truncated, MAVLink 1, signed or not MAVLink)";
+      noteLocked([&] {
+        return socket_.url() + ": a malformed datagram (" + std::to_string(**received) +
+               " bytes: bad CRC, truncated, MAVLink 1, signed or not MAVLink)";
+      });
     }
   }
 }
@@ -230,8 +225,9 @@ void MavlinkConnection::handleLocked(const mav::FrameView& frame, rt::TimeNs now
     case mav::kOdometry: {
       const mav::Odometry m = mav::decodeOdometry(frame.payload, frame.payload_size);
       if (m.frame_id != kFrameLocalNed) {
-        noteLocked(socket_.url() + ": ODOMETRY in MAV_FRAME " + std::to_string(m.frame_id) +
-                   ", not LOCAL_NED: ignored");
+        noteLocked([&] {
+          return socket_.url() + ": ODOMETRY in MAV_FRAME " + std::to_string(m.frame_id) + ", not LOCAL_NED: ignored";
+        });
         return;
       }
       const Eigen::Quaterniond q_NF(d(m.q[0]), d(m.q[1]), d(m.q[2]), d(m.q[3]));
@@ -240,8 +236,9 @@ void MavlinkConnection::handleLocked(const mav::FrameView& frame, rt::TimeNs now
       if (m.child_frame_id == kFrameBodyFrd) {
         v = q_NF.normalized() * v;  // expressed in the body (PX4 labels its ODOMETRY velocity so): into NED
       } else if (m.child_frame_id != kFrameLocalNed && m.child_frame_id != kFrameBodyNed) {
-        noteLocked(socket_.url() + ": ODOMETRY velocity in MAV_FRAME " + std::to_string(m.child_frame_id) +
-                   ": ignored");
+        noteLocked([&] {
+          return socket_.url() + ": ODOMETRY velocity in MAV_FRAME " + std::to_string(m.child_frame_id) + ": ignored";
+        });
         return;
       }
       const Eigen::Vector3d w_F = vec(m.rollspeed, m.pitchspeed, m.yawspeed);
@@ -303,7 +300,7 @@ void MavlinkConnection::transmitLocked(std::uint32_t message_id) {
   mav::frameInto(message_id, tx_payload_, sender, sequence_++, tx_frame_);
   if (rt::Status s = socket_.send(tx_frame_.bytes.data(), tx_frame_.size); !s) {
     ++counters_.send_failures;
-    noteLocked(s.error().message);
+    noteLocked([&s] { return s.error().message; });
     return;
   }
   if (message_id == mav::kHeartbeat) ++counters_.heartbeats_sent;

@@ -132,7 +132,13 @@ class MavlinkConnection {
   void sendDueLocked(rt::TimeNs now_ns);
   void publishLocked(OdometrySample sample);
   void transmitLocked(std::uint32_t message_id);  // tx_payload_, framed
-  void noteLocked(const std::string& problem);
+  /// Counts a problem; its text is made only for the first (kept for the health detail), so that a
+  /// problem an autopilot repeats at 50 Hz (e.g. ODOMETRY in an unexpected frame) allocates nothing.
+  template <class MakeText>
+  void noteLocked(MakeText make_text) {
+    ++problems_;
+    if (first_problem_.empty()) first_problem_ = make_text();
+  }
   std::uint32_t bootMsLocked(rt::TimeNs now_ns) const;
   DeviceHealth baseHealthLocked(rt::TimeNs now_ns) const;
 
