@@ -13,6 +13,7 @@
 #include "../malloc_counter.hpp"
 #include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/clock.hpp"
+#include "aerotrack/trajectory_server/trajectory_server.hpp"
 #include "search_test_util.hpp"
 
 namespace aerotrack::planning {
@@ -331,7 +332,7 @@ TEST(PlanningTask, FailedCheckKeepsTheOldTrajectory) {
   ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
   const auto first = rig.task->lastPublished().trajectory;
 
-  params.check.max_velocity_mps = 0.01;
+  params.check.max_velocity_mps = 0.1;  // the lowest the config allows (trajectoryCheckFields())
   TaskRig strict(params);
   strict.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
   strict.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
@@ -365,6 +366,123 @@ TEST(PlanningTask, FailedCycleWithBlockedOldTrajectoryStops) {
   const double handover_s = rt::nsToSeconds(stop.start_ns - first.start_ns);
   EXPECT_LT((stop.trajectory->sample(0.0).p_W_m - first.trajectory->sample(handover_s).p_W_m).norm(), 1e-9);
   EXPECT_LT(stop.trajectory->sample(stop.trajectory->durationS()).v_W_mps.norm(), 1e-9);
+}
+
+// The task in closed loop with readers that hold what it publishes as the real ones do: the trajectory
+// server (the real one: copies of the current and pending trajectories, by value) and the output
+// recorder (the newest wrapper handle). The drone flies the served trajectory perfectly; the person
+// walks along +x at 1 m/s on open ground.
+struct FollowRig {
+  const mapping::LocalGrid open_ground =
+      makeBoxGrid(Eigen::Vector3d(30, 20, 5), Eigen::Vector3d(8, 0, 1.5), {{{-10, -10, -0.2}, {20, 10, 0.0}}});
+  TaskRig rig;
+  trajectory_server::TrajectoryServer server{trajectory_server::TrajectoryServerParams{}};
+  std::shared_ptr<const trajectory_server::TimedTrajectory> recorder_holds;
+  std::uint64_t seen_version = 0;
+  hal::OdometrySample odometry = odometryAt(Eigen::Vector3d(0, 0, 1.5));
+  int k = 0;
+
+  FollowRig() { rig.grid.write(std::make_shared<const mapping::LocalGrid>(open_ground)); }
+
+  /// One 20 Hz cycle: the sensors, the planner, then the readers and the drone.
+  void cycle() {
+    const rt::TimeNs now_ns = rt::secondsToNs(0.05 * k++);
+    odometry.stamp_ns = now_ns;
+    rig.odometry.write(odometry);
+    const double t_s = rt::nsToSeconds(now_ns);
+    rig.target.write(personAt(Eigen::Vector3d(5.0 + t_s, 0.0, 1.0), now_ns, Eigen::Vector3d(1, 0, 0)));
+    rig.task->step(now_ns);
+    if (rig.trajectories.version() != seen_version) {
+      seen_version = rig.trajectories.version();
+      recorder_holds = rig.trajectories.read();
+      server.setTrajectory(*recorder_holds);
+    }
+    if (const std::optional<hal::Setpoint> sp = server.sample(now_ns + rt::secondsToNs(0.05))) {
+      odometry.p_WB_m = sp->p_W_m;
+      odometry.v_WB_mps = sp->v_W_mps;
+    }
+  }
+};
+
+// Samples of a trajectory, bit for bit, to see whether anyone rewrote it.
+std::vector<double> samplesOf(const trajectory_server::Trajectory& trajectory) {
+  std::vector<double> out;
+  for (double t = 0.0; t <= trajectory.durationS() + 0.1; t += 0.1) {
+    const trajectory_server::TrajectorySample s = trajectory.sample(t);
+    out.insert(out.end(), {s.p_W_m.x(), s.p_W_m.y(), s.p_W_m.z(), s.v_W_mps.x(), s.v_W_mps.y(), s.a_W_mps2.x()});
+  }
+  out.push_back(trajectory.durationS());
+  return out;
+}
+
+// DESIGN.md rule 4 for the task: once warm, a cycle allocates exactly what the planner's own cycle does
+// (the LBFGS++ temporaries, see WarmCycleAllocatesOnlyLbfgsTemporaries), so publishing a trajectory
+// allocates nothing: it is lent from the task's pools and comes back when the readers let it go.
+TEST(PlanningTask, SteadyStateCycleAllocatesOnlyTheOptimizersTemporaries) {
+  if (!aerotrack::test::kMallocCounted) GTEST_SKIP() << "malloc belongs to the sanitizer";
+  ASSERT_GE(aerotrack::test::mallocsOfAHeapBuffer(), 1);
+  FollowRig follow;
+  // Warm: the predictor full, the pools filled, and the drone caught up (one corridor box from then on:
+  // the optimiser's piece count, and so its scratch size, no longer changes).
+  for (int i = 0; i < 60; ++i) follow.cycle();
+  ASSERT_GE(follow.rig.task->count(PlanStatus::kPlanned), 50U);
+  const std::uint64_t growths = follow.rig.task->poolGrowths();
+  const std::uint64_t version = follow.rig.trajectories.version();
+  constexpr int kCycles = 40;
+  const int boxes = follow.rig.task->lastReport().corridor_boxes;
+  int planned = 0;
+  int same_boxes = 0;
+  long lbfgs_updates = 0;
+  long mallocs = 0;
+  {
+    const aerotrack::test::MallocCount count;
+    for (int i = 0; i < kCycles; ++i) {
+      follow.cycle();
+      const PlanReport& report = follow.rig.task->lastReport();
+      planned += report.status == PlanStatus::kPlanned ? 1 : 0;
+      same_boxes += report.corridor_boxes == boxes ? 1 : 0;
+      if (report.status == PlanStatus::kPlanned && report.optimizer_status != OptimizerStatus::kLineSearch)
+        lbfgs_updates += report.optimizer_iterations - 1;  // two temporaries per L-BFGS update
+    }
+    mallocs = count.count();
+  }
+  ASSERT_EQ(planned, kCycles);     // every cycle published (and the count above is exact)
+  ASSERT_EQ(same_boxes, kCycles);  // the piece count (the optimiser's scratch size) never changed
+  EXPECT_EQ(follow.rig.trajectories.version(), version + kCycles);
+  EXPECT_EQ(mallocs, 2 * lbfgs_updates);
+  EXPECT_EQ(follow.rig.task->poolGrowths(), growths);  // the pools stopped growing after warm-up
+}
+
+TEST(PlanningTask, ATrajectoryAReaderStillHoldsIsNeverRewritten) {
+  FollowRig follow;
+  for (int i = 0; i < 20; ++i) follow.cycle();
+  // The server's way: a copy of the wrapper (the inner handle only); the recorder's way: the wrapper.
+  const trajectory_server::TimedTrajectory server_copy = *follow.rig.trajectories.read();
+  for (int i = 0; i < 3; ++i) follow.cycle();
+  const std::shared_ptr<const trajectory_server::TimedTrajectory> recorder_handle = follow.rig.trajectories.read();
+  ASSERT_TRUE(server_copy.trajectory);
+  ASSERT_TRUE(recorder_handle && recorder_handle->trajectory);
+  ASSERT_NE(server_copy.trajectory, recorder_handle->trajectory);
+  const std::vector<double> server_before = samplesOf(*server_copy.trajectory);
+  const std::vector<double> recorder_before = samplesOf(*recorder_handle->trajectory);
+  const trajectory_server::TimedTrajectory recorder_wrapper_before = *recorder_handle;
+  const std::uint64_t planned_before = follow.rig.task->count(PlanStatus::kPlanned);
+
+  // Many cycles: every pooled object is lent again several times over.
+  constexpr int kCycles = 3 * static_cast<int>(PlanningTask::kTrajectoryPoolSize + PlanningTask::kTimedPoolSize);
+  for (int i = 0; i < kCycles; ++i) follow.cycle();
+  ASSERT_EQ(follow.rig.task->count(PlanStatus::kPlanned), planned_before + kCycles);
+
+  EXPECT_EQ(samplesOf(*server_copy.trajectory), server_before);
+  EXPECT_EQ(samplesOf(*recorder_handle->trajectory), recorder_before);
+  EXPECT_EQ(recorder_handle->trajectory, recorder_wrapper_before.trajectory);
+  EXPECT_EQ(recorder_handle->start_ns, recorder_wrapper_before.start_ns);
+  EXPECT_EQ(recorder_handle->source_capture_ns, recorder_wrapper_before.source_capture_ns);
+  // Neither held object is what the planner publishes now.
+  const auto newest = follow.rig.trajectories.read();
+  EXPECT_NE(newest.get(), recorder_handle.get());
+  EXPECT_NE(newest->trajectory, server_copy.trajectory);
+  EXPECT_NE(newest->trajectory, recorder_handle->trajectory);
 }
 
 TEST(MarginWalk, AStartInTheMarginMayOnlyBeLeftQuickly) {

@@ -2,23 +2,24 @@
 #include "aerotrack/planning/planning_task.hpp"
 
 namespace aerotrack::planning {
-PlanningTask::PoolEntry PlanningTask::makeEntry(int max_pieces) {
-  auto trajectory = std::make_shared<PolynomialTrajectory>(max_pieces);
-  auto timed = std::make_shared<trajectory_server::TimedTrajectory>();
-  timed->trajectory = trajectory;
-  return {std::move(trajectory), std::move(timed)};
-}
-
 PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& channels, const rt::Clock& stats_clock)
-    : planner_(std::move(planner)), channels_(channels), stats_clock_(stats_clock) {}
+    : planner_(std::move(planner)),
+      channels_(channels),
+      stats_clock_(stats_clock),
+      // + 1 piece: the brake to rest appended at the end
+      trajectory_pool_(kTrajectoryPoolSize, TrajectoryStorage(planner_.params().corridor.max_boxes + 1)),
+      timed_pool_(kTimedPoolSize, trajectory_server::TimedTrajectory{}) {}
 
-PlanningTask::PoolEntry& PlanningTask::freeEntry() {
-  // A fresh trajectory object for every cycle (one allocation at 20 Hz). Reusing a pooled one once its
-  // use_count() had dropped back is not a synchronisation with the thread that let it go (use_count is
-  // a relaxed load): ThreadSanitizer caught the planner rewriting a trajectory the server had just read.
-  ++pool_growths_;
-  next_ = makeEntry(planner_.params().corridor.max_boxes + 1);  // + the brake to rest at the end
-  return next_;
+PlanningTask::Lent PlanningTask::lend() {
+  Lent lent;
+  lent.timed = timed_pool_.acquire();
+  // A returned wrapper still holds the trajectory it carried last: release it before taking one, or every
+  // free wrapper would keep a trajectory lent.
+  lent.timed->trajectory.reset();
+  lent.storage = trajectory_pool_.acquire();
+  // Empty, as a new trajectory was: a cycle that fails before writing must not leave an old one in it.
+  lent.storage->trajectory.assign(no_coefficients_, no_durations_);
+  return lent;
 }
 
 double PlanningTask::meanCorridorBoxes() const {
@@ -29,11 +30,15 @@ double PlanningTask::meanCorridorBoxes() const {
   return built > 0 ? static_cast<double>(corridor_boxes_sum_) / static_cast<double>(built) : 0.0;
 }
 
-void PlanningTask::publish(PoolEntry& entry, rt::TimeNs start_ns, rt::TimeNs source_capture_ns) {
-  entry.timed->start_ns = start_ns;
-  entry.timed->source_capture_ns = source_capture_ns;
-  published_ = *entry.timed;
-  channels_.trajectories.write(entry.timed);
+void PlanningTask::publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_capture_ns) {
+  // The inner handle shares the storage slot's count (aliasing: no allocation), so the trajectory stays
+  // lent while any copy of the wrapper's handle lives, wherever the wrapper itself has gone.
+  const PolynomialTrajectory* trajectory = &lent.storage->trajectory;
+  lent.timed->trajectory = std::shared_ptr<const trajectory_server::Trajectory>(std::move(lent.storage), trajectory);
+  lent.timed->start_ns = start_ns;
+  lent.timed->source_capture_ns = source_capture_ns;
+  published_ = *lent.timed;
+  channels_.trajectories.write(std::move(lent.timed));
 }
 
 // Hold and land act once, on entering the mode; search publishes nothing. True when the cycle is done.
@@ -45,15 +50,15 @@ bool PlanningTask::handleMode(supervisor::Mode mode, const PlanInputs& inputs) {
   if (!entered || mode == Mode::kSearch || inputs.odometry == nullptr) return true;
   const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(planner_.params().planning_budget_s);
   const StatePva start = planner_.startState(inputs, start_ns);
-  PoolEntry& entry = freeEntry();
+  Lent lent = lend();
   if (mode == Mode::kHold) {
-    planner_.makeStopTrajectory(start, *entry.trajectory);
+    planner_.makeStopTrajectory(start, lent.storage->trajectory);
     ++holds_;
   } else {
-    planner_.makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), 0.0), *entry.trajectory);
+    planner_.makeMoveTrajectory(start, Eigen::Vector3d(start(0, 0), start(1, 0), 0.0), lent.storage->trajectory);
     ++landings_;
   }
-  publish(entry, start_ns, -1);
+  publish(lent, start_ns, -1);
   return true;
 }
 
@@ -79,9 +84,10 @@ void PlanningTask::step(rt::TimeNs now_ns) {
     }
   }
 
-  PoolEntry& entry = freeEntry();
+  Lent lent = lend();
   const rt::TimeNs begin_ns = stats_clock_.now();
-  const PlanReport report = planner_.plan(inputs, *entry.trajectory);
+  const PlanReport report = planner_.plan(inputs, lent.storage->trajectory);
+  last_report_ = report;
   const bool ran = report.status != PlanStatus::kNoOdometry && report.status != PlanStatus::kNoMap &&
                    report.status != PlanStatus::kNoTarget && report.status != PlanStatus::kTakeOff;
   if (ran) cycle_stats_.recordRun(stats_clock_.now() - begin_ns);
@@ -100,7 +106,7 @@ void PlanningTask::step(rt::TimeNs now_ns) {
                      report.status == PlanStatus::kStopped || report.status == PlanStatus::kTakeOff;
   // The plan used the estimate's newest measurement (tracking) or none (relocation, stop, take-off).
   const bool tracked = report.status == PlanStatus::kPlanned && target && target->initialised && !target->lost;
-  if (flies) publish(entry, report.start_ns, tracked ? target->last_accepted_ns : -1);
+  if (flies) publish(lent, report.start_ns, tracked ? target->last_accepted_ns : -1);
   const bool failed = report.status == PlanStatus::kStopped || report.status == PlanStatus::kSearchFailed ||
                       report.status == PlanStatus::kCorridorFailed || report.status == PlanStatus::kOptimizerFailed ||
                       report.status == PlanStatus::kCheckFailed;

@@ -1,10 +1,19 @@
 // Task glue for the tracking planner (issue 8 item 4): at a fixed rate (default 20 Hz; the paper
 // replans at 13 Hz) it reads the newest odometry, person estimate, local grid and octree snapshot, runs
 // one TrackingPlanner cycle and publishes the trajectory for the trajectory server, which switches to
-// it at its start time. Each cycle writes a new trajectory object (one allocation per cycle; see
-// freeEntry() for why reuse by use_count is not safe). The cycle's time (prediction
-// + search + corridor + optimisation + check) is measured with a stats clock passed in, as the executors
-// measure tasks; it is what summary.json reports as the planning time.
+// it at its start time. The cycle's time (prediction + search + corridor + optimisation + check) is
+// measured with a stats clock passed in, as the executors measure tasks; it is what summary.json reports
+// as the planning time.
+//
+// No allocation once warm (DESIGN.md rule 4): what a cycle publishes is lent from two rt::LendingPools,
+// one of TimedTrajectory wrappers (what the channel carries) and one of PolynomialTrajectory storage
+// (what the wrapper's inner handle points at, aliased into its pooled slot). The two are separate
+// because readers copy the wrapper by value (the trajectory server keeps current_ and pending_ copies):
+// the inner trajectory must stay lent as long as any such copy lives, not just the wrapper. A free
+// wrapper keeps its inner handle (the pool does not touch returned objects), so each cycle takes a
+// wrapper first and drops that handle before it takes a trajectory. An object goes back to its pool
+// when its last handle is dropped, on any thread, with a release/acquire edge (see lending_pool.hpp),
+// so the planner never rewrites a trajectory a reader still holds.
 #pragma once
 
 #include <array>
@@ -21,6 +30,7 @@
 #include "aerotrack/planning/tracking_planner.hpp"
 #include "aerotrack/rt/clock.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
+#include "aerotrack/rt/lending_pool.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/rt/timing_stats.hpp"
@@ -66,24 +76,50 @@ class PlanningTask final : public rt::Task {
   /// Brakes published on entering hold, and descents on entering land.
   std::uint64_t holds() const { return holds_; }
   std::uint64_t landings() const { return landings_; }
-  /// Trajectory objects allocated (one per cycle that ran).
-  std::uint64_t poolGrowths() const { return pool_growths_; }
+  /// Objects the trajectory pools added after start-up because all of theirs were lent (the only
+  /// allocations of the task once warm; they stop once the pools are as large as the readers need).
+  std::uint64_t poolGrowths() const { return trajectory_pool_.growths() + timed_pool_.growths(); }
   /// The last trajectory published, empty before the first.
   const trajectory_server::TimedTrajectory& lastPublished() const { return published_; }
+  /// The report of the last cycle that ran TrackingPlanner::plan (a default one before the first; hold,
+  /// land and search cycles do not plan and leave it as it was).
+  const PlanReport& lastReport() const { return last_report_; }
+
+  /// Objects each pool starts with: the channel, the recorder and the trajectory server's current and
+  /// pending copies hold a few at a time, and every free wrapper may still pin one trajectory.
+  static constexpr std::size_t kTimedPoolSize = 4;
+  static constexpr std::size_t kTrajectoryPoolSize = 8;
 
  private:
-  struct PoolEntry {
-    std::shared_ptr<PolynomialTrajectory> trajectory;
-    std::shared_ptr<trajectory_server::TimedTrajectory> timed;  // always points at `trajectory`
+  /// A pooled trajectory whose storage is reserved for max_pieces pieces. The pool fills its slots by
+  /// copying a prototype, and a copied std::vector keeps no spare capacity: a copy reserves afresh.
+  struct TrajectoryStorage {
+    explicit TrajectoryStorage(int pieces) : trajectory(pieces), max_pieces(pieces) {}
+    TrajectoryStorage(const TrajectoryStorage& other) : trajectory(other.max_pieces), max_pieces(other.max_pieces) {}
+    TrajectoryStorage(TrajectoryStorage&&) = delete;
+    TrajectoryStorage& operator=(const TrajectoryStorage&) = delete;
+    TrajectoryStorage& operator=(TrajectoryStorage&&) = delete;
+    ~TrajectoryStorage() = default;
+    PolynomialTrajectory trajectory;
+    int max_pieces;
   };
-  PoolEntry& freeEntry();
-  static PoolEntry makeEntry(int max_pieces);
+  /// What one cycle writes, lent from the pools: the wrapper (its inner handle already dropped) and an
+  /// empty trajectory. Whatever is not published goes back when the cycle drops it.
+  struct Lent {
+    std::shared_ptr<trajectory_server::TimedTrajectory> timed;
+    std::shared_ptr<TrajectoryStorage> storage;
+  };
+  Lent lend();
 
   TrackingPlanner planner_;
   PlanningChannels channels_;
   const rt::Clock& stats_clock_;
-  PoolEntry next_;  ///< The trajectory this cycle writes (new every cycle).
+  rt::LendingPool<TrajectoryStorage> trajectory_pool_;
+  rt::LendingPool<trajectory_server::TimedTrajectory> timed_pool_;
+  const RowMatrixX3d no_coefficients_ = RowMatrixX3d(0, 3);  ///< Empties a lent trajectory (no allocation).
+  const Eigen::VectorXd no_durations_ = Eigen::VectorXd(0);
   trajectory_server::TimedTrajectory published_;
+  PlanReport last_report_;
   std::array<std::uint64_t, kPlanStatusCount> counts_{};
   std::uint64_t cycles_ = 0;
   std::uint64_t search_partial_ = 0;
@@ -92,12 +128,11 @@ class PlanningTask final : public rt::Task {
   std::uint64_t optimizer_max_iterations_ = 0;
   std::uint64_t optimizer_line_search_ = 0;
   std::uint64_t corridor_boxes_sum_ = 0;
-  std::uint64_t pool_growths_ = 0;
   std::uint64_t holds_ = 0;
   std::uint64_t landings_ = 0;
   int failures_in_a_row_ = 0;
   supervisor::Mode last_mode_ = supervisor::Mode::kTakeOff;
-  void publish(PoolEntry& entry, rt::TimeNs start_ns, rt::TimeNs source_capture_ns);
+  void publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_capture_ns);
   bool handleMode(supervisor::Mode mode, const PlanInputs& inputs);
   rt::TimingStats cycle_stats_;
 };
