@@ -1,4 +1,4 @@
-// What a simulated run leaves behind (issue 3, README "sim outputs"): summary.json with the
+// What a simulated run leaves behind (issue 3, docs/command-line.md "sim outputs"): summary.json with the
 // verdict and the ground-truth metrics, and topdown.png (obstacles, the person's path, the
 // drone's path coloured by whether the person was visible, loss events marked).
 #pragma once

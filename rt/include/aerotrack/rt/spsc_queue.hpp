@@ -6,7 +6,7 @@
 // may dequeue, so "drop the oldest, keep the newest" -- what a camera stream wants -- is
 // impossible from the producer side. This ring lets the producer take the oldest unread slot with
 // one compare-and-swap on the consumer index, race-free with a concurrent pop. tests/bench
-// compares it with ReaderWriterQueue: see README "Runtime benchmarks".
+// compares it with ReaderWriterQueue: see docs/benchmarks.md "Runtime benchmarks".
 //
 // Each slot carries a sequence number (as in Vyukov's bounded queue): slot i is free for
 // position p when seq == p, holds position p's item when seq == p + 1, and after a pop of
