@@ -17,6 +17,37 @@
 #include "search_test_util.hpp"
 
 namespace aerotrack::planning {
+
+// The test seam of TrackingPlanner (its friend): the stages of plan(), one at a time.
+class TrackingPlannerStages {
+ public:
+  using PersonMotion = TrackingPlanner::PersonMotion;
+  explicit TrackingPlannerStages(TrackingPlanner& planner) : planner_(planner) {}
+  std::optional<PersonMotion> predictPerson(const PlanInputs& inputs) { return planner_.predictPerson(inputs); }
+  KinematicState selectGoal(const mapping::LocalGrid& grid, const PersonMotion& person, const StatePva& start,
+                            rt::TimeNs start_ns) const {
+    return planner_.selectGoal(grid, person, start, start_ns);
+  }
+  SearchStatus searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start, rt::TimeNs start_ns,
+                                  const KinematicState& goal, const PersonMotion& person) {
+    return planner_.searchTrackingPath(grid, start, start_ns, goal, person);
+  }
+  rt::Status buildCorridor(const mapping::LocalGrid& grid, const StatePva& start) {
+    return planner_.buildCorridor(grid, start);
+  }
+  rt::Expected<OptimizerResult> optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
+                                                   PolynomialTrajectory& out) {
+    return planner_.optimizeTrajectory(grid, start, out);
+  }
+  CheckResult checkPlannedTrajectory(const PolynomialTrajectory& trajectory, const mapping::LocalGrid& grid,
+                                     const PersonMotion& person, rt::TimeNs start_ns) const {
+    return planner_.checkPlannedTrajectory(trajectory, grid, nullptr, person, start_ns);
+  }
+
+ private:
+  TrackingPlanner& planner_;
+};
+
 namespace {
 
 using test::makeBoxGrid;
@@ -219,6 +250,216 @@ TEST(TrackingPlanner, OnTheGroundItTakesOffFirst) {
   EXPECT_NEAR(end.p_W_m.z(), planner.params().flight_altitude_m, 1e-9);
   EXPECT_NEAR(end.p_W_m.x(), 0.0, 1e-9);
   EXPECT_LT(end.v_W_mps.norm(), 1e-9);
+}
+
+// The stages of plan(), each on a crafted input.
+
+StatePva restAt(const Eigen::Vector3d& p) {
+  StatePva s = StatePva::Zero();
+  s.col(0) = p;
+  return s;
+}
+
+TEST(TrackingPlannerStages, PredictionIsNothingWithoutALiveEstimateOrAPathToRelocateAlong) {
+  TrackingPlanner planner = makePlanner();
+  TrackingPlannerStages stages(planner);
+  PlanInputs inputs;
+  EXPECT_FALSE(stages.predictPerson(inputs).has_value());  // no estimate
+  estimation::TargetEstimate lost = personAt(Eigen::Vector3d(7, 0, 1), 0);
+  lost.lost = true;
+  inputs.target = &lost;
+  EXPECT_FALSE(stages.predictPerson(inputs).has_value());
+  inputs.relocate = true;  // relocation without any prediction yet: nothing to fly along either
+  EXPECT_FALSE(stages.predictPerson(inputs).has_value());
+}
+
+TEST(TrackingPlannerStages, PredictionIsConstantVelocityUntilThePredictorHasEnoughEstimates) {
+  TrackingPlanner planner = makePlanner();
+  TrackingPlannerStages stages(planner);
+  const estimation::TargetEstimate walking = personAt(Eigen::Vector3d(7, 1, -0.3), 0, Eigen::Vector3d(1, 0.5, 0));
+  planner.observeTarget(walking);
+  PlanInputs inputs;
+  inputs.target = &walking;
+  const auto person = stages.predictPerson(inputs);
+  ASSERT_TRUE(person.has_value());
+  EXPECT_TRUE(person->live);
+  EXPECT_EQ(person->prediction, nullptr);
+  const double sight_m = planner.params().person_sight_height_m;
+  EXPECT_EQ(person->positionAt(rt::secondsToNs(0.5)), Eigen::Vector3d(7.5, 1.25, sight_m));
+  // Extrapolated at most the prediction horizon ahead.
+  const double horizon_s = planner.params().prediction.horizon_s;
+  EXPECT_LT((person->positionAt(rt::secondsToNs(horizon_s + 5.0)) -
+             Eigen::Vector3d(7 + horizon_s, 1 + 0.5 * horizon_s, sight_m))
+                .norm(),
+            1e-12);
+  EXPECT_EQ(person->velocityAt(rt::secondsToNs(3.0)), walking.v_WT_mps);
+}
+
+TEST(TrackingPlannerStages, PredictionIsTheBezierFitOnceWarmAndItIsFlownAlongWhenRelocating) {
+  TrackingPlanner planner = makePlanner();
+  TrackingPlannerStages stages(planner);
+  PlanInputs inputs;
+  std::optional<TrackingPlannerStages::PersonMotion> person;
+  estimation::TargetEstimate walking;
+  for (int k = 0; k <= 20; ++k) {  // walking along +x at 1 m/s
+    const rt::TimeNs t_ns = rt::secondsToNs(0.05 * k);
+    walking = personAt(Eigen::Vector3d(0.05 * k, 0, 1), t_ns, Eigen::Vector3d(1, 0, 0));
+    planner.observeTarget(walking);
+    inputs.now_ns = t_ns;
+    inputs.target = &walking;
+    person = stages.predictPerson(inputs);
+  }
+  ASSERT_TRUE(person.has_value());
+  ASSERT_NE(person->prediction, nullptr);
+  EXPECT_TRUE(person->live);
+  const Eigen::Vector3d ahead = person->positionAt(inputs.now_ns + rt::secondsToNs(0.5));
+  EXPECT_NEAR(ahead.x(), 1.5, 0.1);
+  EXPECT_NEAR(ahead.y(), 0.0, 0.05);
+  EXPECT_EQ(ahead.z(), planner.params().person_sight_height_m);
+  const Eigen::Vector3d predicted_far = person->positionAt(inputs.now_ns + rt::secondsToNs(1.0));
+
+  // Lost: with relocation the last prediction is flown along (not live), without it there is nothing.
+  estimation::TargetEstimate lost = walking;
+  lost.lost = true;
+  planner.observeTarget(lost);
+  inputs.target = &lost;
+  inputs.now_ns += rt::secondsToNs(0.2);
+  inputs.relocate = true;
+  const auto relocating = stages.predictPerson(inputs);
+  ASSERT_TRUE(relocating.has_value());
+  EXPECT_FALSE(relocating->live);
+  ASSERT_NE(relocating->prediction, nullptr);
+  EXPECT_EQ(relocating->positionAt(inputs.now_ns + rt::secondsToNs(0.8)), predicted_far);
+  inputs.relocate = false;
+  EXPECT_FALSE(stages.predictPerson(inputs).has_value());
+}
+
+// A standing person at (7, 0) behind a pillar that hides them from the plain goal (4.5, 0).
+struct PillarWorld {
+  mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5),
+                                        {{{5.6, -0.4, 0.0}, {6.0, 0.4, 3.0}},  // the pillar
+                                         {{-10, -10, -0.2}, {10, 10, 0.0}}});  // ground
+  estimation::TargetEstimate person = personAt(Eigen::Vector3d(7.0, 0.0, -0.3), 0);
+  TrackingPlannerStages::PersonMotion motion(const TrackingPlanner& planner) const {
+    TrackingPlannerStages::PersonMotion m;
+    m.estimate = &person;
+    m.live = true;
+    m.horizon_s = planner.params().prediction.horizon_s;
+    m.sight_height_m = planner.params().person_sight_height_m;
+    return m;
+  }
+};
+
+TEST(TrackingPlannerStages, GoalIsAtTheTrackingDistanceAndInSightOnlyInTheProposedMode) {
+  TrackingPlanner planner = makePlanner();
+  TrackingPlannerStages stages(planner);
+  const PillarWorld world;
+  const auto person = world.motion(planner);
+  const StatePva start = restAt(Eigen::Vector3d(0, 0, 1.2));
+  const double distance_m = planner.params().goal.tracking_distance_m;
+  const Eigen::Vector3d p_person(7.0, 0.0, planner.params().person_sight_height_m);
+
+  const KinematicState visible = stages.selectGoal(world.grid, person, start, 0);
+  EXPECT_EQ(visible.p_W_m.z(), planner.params().flight_altitude_m);  // not the drone's 1.2 m
+  EXPECT_NEAR((visible.p_W_m - p_person).head<2>().norm(), distance_m, 1e-9);
+  EXPECT_GT(std::abs(visible.p_W_m.y()), 0.5);  // moved round the person, out of the pillar's shadow
+  EXPECT_TRUE(world.grid.lineOfSight(visible.p_W_m, p_person));
+
+  planner.setOcclusionAware(false);  // the baseline: the plain goal, hidden or not
+  const KinematicState plain = stages.selectGoal(world.grid, person, start, 0);
+  EXPECT_LT((plain.p_W_m - Eigen::Vector3d(7.0 - distance_m, 0.0, planner.params().flight_altitude_m)).norm(), 1e-9);
+  EXPECT_FALSE(world.grid.lineOfSight(plain.p_W_m, p_person));
+}
+
+TEST(TrackingPlannerStages, SearchCorridorAndOptimisationGoRoundAWallFromTheStartToTheGoal) {
+  TrackingPlannerParams params = defaultParams();
+  params.search.max_expansions = 5000;
+  params.search.max_nodes = 100000;
+  TrackingPlanner planner = makePlanner(params);
+  TrackingPlannerStages stages(planner);
+  const WallWorld world;
+  const estimation::TargetEstimate person = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0);
+  TrackingPlannerStages::PersonMotion motion;
+  motion.estimate = &person;
+  motion.live = true;
+  motion.sight_height_m = params.person_sight_height_m;
+  const StatePva start = restAt(Eigen::Vector3d(0, 0, 1.5));
+  KinematicState goal;
+  goal.p_W_m = Eigen::Vector3d(4.5, 0, 1.5);
+
+  // Search: reaches the goal behind the wall.
+  ASSERT_EQ(stages.searchTrackingPath(world.grid, start, 0, goal, motion), SearchStatus::kReachedGoal);
+  const SearchPath& path = planner.searchPath();
+  EXPECT_EQ(path.status, SearchStatus::kReachedGoal);
+  EXPECT_EQ(path.stateAt(0.0).p_W_m, start.col(0));
+  EXPECT_LT((path.stateAt(path.duration_s).p_W_m - goal.p_W_m).norm(), 0.3);
+
+  // Corridor: a polyline from exactly the start to the path's end, inside the boxes.
+  ASSERT_TRUE(stages.buildCorridor(world.grid, start));
+  const std::vector<Eigen::Vector3d>& polyline = planner.polyline();
+  EXPECT_EQ(polyline.front(), start.col(0));
+  EXPECT_EQ(polyline.back(), path.stateAt(path.duration_s).p_W_m);
+  EXPECT_GE(polyline.size(), static_cast<std::size_t>(path.duration_s / params.path_sample_step_s));
+  const Corridor& corridor = planner.corridor();
+  EXPECT_GE(corridor.boxes.size(), 2U);  // one box cannot see round the wall
+  for (const Eigen::Vector3d& p : polyline) {
+    bool inside = false;
+    for (const CorridorBox& box : corridor.boxes) inside = inside || box.contains(p, -1e-9);
+    EXPECT_TRUE(inside) << p.transpose();
+  }
+
+  // Optimisation: starts exactly at the start state, ends at rest past the wall, clear of the grid.
+  PolynomialTrajectory out(24);
+  const auto optimized = stages.optimizeTrajectory(world.grid, start, out);
+  ASSERT_TRUE(optimized.has_value()) << optimized.error().message;
+  EXPECT_LT((out.sample(0.0).p_W_m - start.col(0)).norm(), 1e-9);
+  EXPECT_LT(out.sample(0.0).v_W_mps.norm(), 1e-9);
+  const trajectory_server::TrajectorySample end = out.sample(out.durationS());
+  EXPECT_LT(end.v_W_mps.norm(), 1e-3);
+  EXPECT_GT(end.p_W_m.x(), 3.0);
+  for (double t = 0.0; t <= out.durationS(); t += 0.01) EXPECT_FALSE(world.grid.isOccupied(out.sample(t).p_W_m));
+}
+
+TEST(TrackingPlannerStages, SearchFromInsideTheWallIsBlocked) {
+  TrackingPlanner planner = makePlanner();
+  TrackingPlannerStages stages(planner);
+  const WallWorld world;
+  const estimation::TargetEstimate person = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0);
+  TrackingPlannerStages::PersonMotion motion;
+  motion.estimate = &person;
+  motion.live = true;
+  KinematicState goal;
+  goal.p_W_m = Eigen::Vector3d(4.5, 0, 1.5);
+  EXPECT_EQ(stages.searchTrackingPath(world.grid, restAt(Eigen::Vector3d(2.75, 0, 1.5)), 0, goal, motion),
+            SearchStatus::kStartBlocked);
+}
+
+TEST(TrackingPlannerStages, FinalCheckRefusesTheWallAndThePersonAndPassesAClearPass) {
+  TrackingPlanner planner = makePlanner();
+  TrackingPlannerStages stages(planner);
+  const WallWorld world;
+  const estimation::TargetEstimate person = personAt(Eigen::Vector3d(7.0, 0.0, 1.0), 0);
+  TrackingPlannerStages::PersonMotion motion;
+  motion.estimate = &person;
+  motion.live = true;
+  motion.sight_height_m = planner.params().person_sight_height_m;
+  auto check = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+    PolynomialTrajectory move;
+    planner.makeMoveTrajectory(restAt(from), to, move);
+    return stages.checkPlannedTrajectory(move, world.grid, motion, 0);
+  };
+  // Beside the person, 3 m off their side: clear.
+  EXPECT_EQ(check({4, -3, 1.5}, {9, -3, 1.5}).verdict, CheckVerdict::kOk);
+  // Up to the wall (x = 2.5, inflated) and through it (within the check's 3 s horizon).
+  EXPECT_EQ(check({0, 0, 1.5}, {1.8, 0, 1.5}).verdict, CheckVerdict::kOk);
+  EXPECT_EQ(check({1, 0, 1.5}, {4, 0, 1.5}).verdict, CheckVerdict::kGridBlocked);
+  // Past the person 0.5 m away (they stand at x = 7): too close, from when it comes within 1 m.
+  const CheckResult close = check({5.5, 0.5, 1.5}, {8.5, 0.5, 1.5});
+  EXPECT_EQ(close.verdict, CheckVerdict::kTooCloseToPerson);
+  EXPECT_GT(close.t_s, 0.5);
+  EXPECT_LT(close.t_s, 2.0);  // the move passes x = 7 at 2 s
+  // A start already closer than the limit may stay as close, not come closer.
+  EXPECT_EQ(check({7, 0.5, 1.5}, {7, 0.6, 1.5}).verdict, CheckVerdict::kOk);
 }
 
 // DESIGN.md rule 4: once warm, a cycle allocates nothing of its own. The one exception is inside LBFGS++

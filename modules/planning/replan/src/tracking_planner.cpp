@@ -194,76 +194,15 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
     report.status = PlanStatus::kNoMap;
     return report;
   }
+  const mapping::LocalGrid& grid = *inputs.grid;
+  auto fail = [&](PlanStatus status) { return failCycle(report, status, inputs, start, out); };
 
-  auto fail = [&](PlanStatus status) {
-    report.status = status;
-    if (currentBlocked(inputs)) {
-      makeStopTrajectory(start, out);
-      report.status = PlanStatus::kStopped;
-    }
-    return report;
-  };
+  const std::optional<PersonMotion> person = predictPerson(inputs);  // 1. Sect. V-A
+  if (!person) return fail(PlanStatus::kNoTarget);
+  report.predicted = person->prediction != nullptr;
 
-  const estimation::TargetEstimate* target = inputs.target;
-  const bool live = target != nullptr && target->initialised && !target->lost;
-  const prediction::TargetPrediction* path_prediction = nullptr;
-  if (live) {
-    // Prediction (Sect. V-A), or constant velocity until the predictor has enough estimates.
-    if (auto predicted = predictor_.predict(inputs.now_ns)) {
-      last_prediction_ = *predicted;
-      path_prediction = &*last_prediction_;
-    }
-  } else if (inputs.relocate && last_prediction_) {
-    path_prediction = &*last_prediction_;  // relocation: the last predicted path
-  } else {
-    return fail(PlanStatus::kNoTarget);
-  }
-  report.predicted = path_prediction != nullptr;
-  const double horizon_s = params_.prediction.horizon_s;
-  // Past its end a prediction is continued at its end velocity (a Bezier extrapolated would diverge).
-  // The person's horizontal position at t_ns, at the height the planner sees them from (torso centre).
-  auto person_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
-    Eigen::Vector3d p;
-    if (path_prediction != nullptr) {
-      const rt::TimeNs end_ns = path_prediction->end_ns;
-      p = t_ns <= end_ns ? path_prediction->position(t_ns)
-                         : Eigen::Vector3d(path_prediction->position(end_ns) +
-                                           rt::nsToSeconds(t_ns - end_ns) * path_prediction->velocity(end_ns));
-    } else {
-      const double ahead_s = std::min(rt::nsToSeconds(t_ns - target->stamp_ns), horizon_s);
-      p = target->p_WT_m + ahead_s * target->v_WT_mps;
-    }
-    p.z() = params_.person_sight_height_m;
-    return p;
-  };
-  auto person_velocity_at = [&](rt::TimeNs t_ns) -> Eigen::Vector3d {
-    if (path_prediction != nullptr) return path_prediction->velocity(std::min(t_ns, path_prediction->end_ns));
-    return target->v_WT_mps;
-  };
-  KinematicState person_now;
-  person_now.p_W_m = person_at(start_ns);
-  person_now.v_W_mps = person_velocity_at(start_ns);
-  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(horizon_s);
-  KinematicState person_predicted;
-  person_predicted.p_W_m = person_at(predicted_ns);
-  person_predicted.v_W_mps = person_velocity_at(predicted_ns);
-  // The goal is held at the flight altitude (makeTrackingGoal keeps the height of the point it is given).
-  const Eigen::Vector3d p_drone_at_altitude(start(0, 0), start(1, 0), params_.flight_altitude_m);
-  // Proposed mode: a goal that sees the person (the baseline, Fast-Tracker 1.0, has no visibility terms).
-  const KinematicState goal =
-      search_.occlusionAware()
-          ? makeVisibleTrackingGoal(*inputs.grid, person_now, person_predicted, p_drone_at_altitude, params_.goal)
-          : makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
-
-  // Search (Sect. V-B). Its inputs are per-axis limited: the optimised start may exceed them slightly.
-  KinematicState search_start;
-  search_start.p_W_m = start.col(0);
-  const double v_axis = params_.search.max_velocity_mps;
-  search_start.v_W_mps = start.col(1).cwiseMax(-v_axis).cwiseMin(v_axis);
-  const double start_time_s = rt::nsToSeconds(start_ns);
-  // One reference captured: small enough for std::function to keep inline (no allocation).
-  const PersonPositionFn person_fn = [&person_at](double t_s) { return person_at(rt::secondsToNs(t_s)); };
-  report.search_status = search_.search(*inputs.grid, search_start, goal, start_time_s, person_fn, path_);
+  const KinematicState goal = selectGoal(grid, *person, start, start_ns);           // 2. Sect. V-B
+  report.search_status = searchTrackingPath(grid, start, start_ns, goal, *person);  // 3. Sect. V-B
   report.search_expansions = path_.expansions;
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
     return fail(PlanStatus::kSearchFailed);
@@ -272,16 +211,118 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
     return report;
   }
 
-  // Corridor (Sect. V-C): the path as chords of path_sample_step_s.
+  if (!buildCorridor(grid, start)) return fail(PlanStatus::kCorridorFailed);  // 4. Sect. V-C
+  report.corridor_boxes = static_cast<int>(corridor_.boxes.size());
+
+  const auto optimized = optimizeTrajectory(grid, start, out);  // 5. Sect. V-C
+  if (!optimized) return fail(PlanStatus::kOptimizerFailed);
+  report.optimizer_status = optimized->status;
+  report.optimizer_iterations = optimized->iterations;
+
+  report.check = checkPlannedTrajectory(out, grid, inputs.octree, *person, start_ns).verdict;  // 6.
+  if (report.check != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
+  report.status = person->live ? PlanStatus::kPlanned : PlanStatus::kRelocating;
+  return report;
+}
+
+PlanReport TrackingPlanner::failCycle(PlanReport report, PlanStatus status, const PlanInputs& inputs,
+                                      const StatePva& start, PolynomialTrajectory& out) {
+  report.status = status;
+  if (currentBlocked(inputs)) {
+    makeStopTrajectory(start, out);
+    report.status = PlanStatus::kStopped;
+  }
+  return report;
+}
+
+Eigen::Vector3d TrackingPlanner::PersonMotion::positionAt(rt::TimeNs t_ns) const {
+  Eigen::Vector3d p;
+  if (prediction != nullptr) {
+    const rt::TimeNs end_ns = prediction->end_ns;
+    p = t_ns <= end_ns ? prediction->position(t_ns)
+                       : Eigen::Vector3d(prediction->position(end_ns) +
+                                         rt::nsToSeconds(t_ns - end_ns) * prediction->velocity(end_ns));
+  } else {
+    const double ahead_s = std::min(rt::nsToSeconds(t_ns - estimate->stamp_ns), horizon_s);
+    p = estimate->p_WT_m + ahead_s * estimate->v_WT_mps;
+  }
+  p.z() = sight_height_m;
+  return p;
+}
+
+Eigen::Vector3d TrackingPlanner::PersonMotion::velocityAt(rt::TimeNs t_ns) const {
+  if (prediction != nullptr) return prediction->velocity(std::min(t_ns, prediction->end_ns));
+  return estimate->v_WT_mps;
+}
+
+std::optional<TrackingPlanner::PersonMotion> TrackingPlanner::predictPerson(const PlanInputs& inputs) {
+  PersonMotion person;
+  person.estimate = inputs.target;
+  person.live = inputs.target != nullptr && inputs.target->initialised && !inputs.target->lost;
+  person.horizon_s = params_.prediction.horizon_s;
+  person.sight_height_m = params_.person_sight_height_m;
+  if (person.live) {
+    // The Bezier prediction, or constant velocity until the predictor has enough estimates.
+    if (auto predicted = predictor_.predict(inputs.now_ns)) {
+      last_prediction_ = *predicted;
+      person.prediction = &*last_prediction_;
+    }
+  } else if (inputs.relocate && last_prediction_) {
+    person.prediction = &*last_prediction_;  // relocation: the last predicted path
+  } else {
+    return std::nullopt;
+  }
+  return person;
+}
+
+KinematicState TrackingPlanner::selectGoal(const mapping::LocalGrid& grid, const PersonMotion& person,
+                                           const StatePva& start, rt::TimeNs start_ns) const {
+  KinematicState person_now;
+  person_now.p_W_m = person.positionAt(start_ns);
+  person_now.v_W_mps = person.velocityAt(start_ns);
+  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(params_.prediction.horizon_s);
+  KinematicState person_predicted;
+  person_predicted.p_W_m = person.positionAt(predicted_ns);
+  person_predicted.v_W_mps = person.velocityAt(predicted_ns);
+  // The goal is held at the flight altitude (makeTrackingGoal keeps the height of the point it is given).
+  const Eigen::Vector3d p_drone_at_altitude(start(0, 0), start(1, 0), params_.flight_altitude_m);
+  // Proposed mode: a goal that sees the person (the baseline, Fast-Tracker 1.0, has no visibility terms).
+  return search_.occlusionAware()
+             ? makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal)
+             : makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
+}
+
+SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start,
+                                                 rt::TimeNs start_ns, const KinematicState& goal,
+                                                 const PersonMotion& person) {
+  // The search's inputs are per-axis limited: the optimised start may exceed them slightly.
+  KinematicState search_start;
+  search_start.p_W_m = start.col(0);
+  const double v_axis = params_.search.max_velocity_mps;
+  search_start.v_W_mps = start.col(1).cwiseMax(-v_axis).cwiseMin(v_axis);
+  const double start_time_s = rt::nsToSeconds(start_ns);
+  // One reference captured: small enough for std::function to keep inline (no allocation).
+  const PersonPositionFn person_fn = [&person](double t_s) { return person.positionAt(rt::secondsToNs(t_s)); };
+  return search_.search(grid, search_start, goal, start_time_s, person_fn, path_);
+}
+
+int TrackingPlanner::chordCount() const {
+  return std::max(1, static_cast<int>(std::ceil(path_.duration_s / params_.path_sample_step_s)));
+}
+
+rt::Status TrackingPlanner::buildCorridor(const mapping::LocalGrid& grid, const StatePva& start) {
   polyline_.clear();
-  const int steps = std::max(1, static_cast<int>(std::ceil(path_.duration_s / params_.path_sample_step_s)));
+  const int steps = chordCount();
   const double dt_s = path_.duration_s / steps;
   for (int k = 0; k <= steps; ++k) polyline_.push_back(path_.stateAt(k * dt_s).p_W_m);
   polyline_.front() = start.col(0);
-  if (!corridor_builder_.build(*inputs.grid, polyline_, corridor_)) return fail(PlanStatus::kCorridorFailed);
-  report.corridor_boxes = static_cast<int>(corridor_.boxes.size());
+  return corridor_builder_.build(grid, polyline_, corridor_);
+}
 
+rt::Expected<OptimizerResult> TrackingPlanner::optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
+                                                                  PolynomialTrajectory& out) {
   // Initial guess: the waypoints the corridor chose, timed as the search path passes them.
+  const double dt_s = path_.duration_s / chordCount();
   durations_s_.clear();
   double previous_s = 0.0;
   for (const int index : corridor_.waypoint_path_index) {
@@ -303,40 +344,35 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   if (end.col(1).norm() > params_.optimizer.max_velocity_mps)
     end.col(1) *= params_.optimizer.max_velocity_mps / end.col(1).norm();
   const double brake_s = stopDurationS(end.col(1).norm(), params_.optimizer.max_acceleration_mps2);
-  if (!inputs.grid->segmentFree(end.col(0), end.col(0) + end.col(1) * (brake_s / 2.0))) end.col(1).setZero();
+  if (!grid.segmentFree(end.col(0), end.col(0) + end.col(1) * (brake_s / 2.0))) end.col(1).setZero();
   const TrajectoryProblem problem{start, end, corridor_.boxes, corridor_.waypoints_W_m, durations_s_};
-  const auto optimized = optimizer_.optimize(problem, out);
-  if (!optimized) return fail(PlanStatus::kOptimizerFailed);
-  report.optimizer_status = optimized->status;
-  report.optimizer_iterations = optimized->iterations;
+  auto optimized = optimizer_.optimize(problem, out);
+  if (!optimized) return optimized;
 
   // Every published trajectory ends at rest: the optimised part ends moving (towards the goal, or where a
   // partial search stopped), and the server holds a finished trajectory's end point. Without the brake
   // the drone would overshoot that point, into whatever lies beyond it, if no later plan took over (a
-  // relocation flew into a wall that way). With it, the check below proves the brake clear too: the
+  // relocation flew into a wall that way). With it, the final check proves the brake clear too: the
   // drone can always stop on the trajectory it flies.
   appendStop(out);
+  return optimized;
+}
 
-  // Final check (issue 8 item 3), then the distance to the person along the way.
-  CheckResult check = checkTrajectory(out, params_.check, *inputs.grid, checker_, inputs.octree);
-  if (check.verdict == CheckVerdict::kOk && params_.min_person_distance_m > 0.0) {
-    auto distance_at = [&](double t_s) {
-      const Eigen::Vector3d d = out.sample(t_s).p_W_m - person_at(start_ns + rt::secondsToNs(t_s));
-      return d.head<2>().norm();
-    };
-    const double limit_m = std::min(params_.min_person_distance_m, distance_at(0.0)) - 1e-6;
-    const double end_s = std::min(out.durationS(), params_.check.horizon_s);
-    for (double t = 0.0; t <= end_s; t += params_.check.sample_step_s) {
-      if (distance_at(t) < limit_m) {
-        check = {CheckVerdict::kTooCloseToPerson, t};
-        break;
-      }
-    }
+CheckResult TrackingPlanner::checkPlannedTrajectory(const PolynomialTrajectory& trajectory,
+                                                    const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+                                                    const PersonMotion& person, rt::TimeNs start_ns) const {
+  CheckResult check = checkTrajectory(trajectory, params_.check, grid, checker_, octree);
+  if (check.verdict != CheckVerdict::kOk || !(params_.min_person_distance_m > 0.0)) return check;
+  auto distance_at = [&](double t_s) {
+    const Eigen::Vector3d d = trajectory.sample(t_s).p_W_m - person.positionAt(start_ns + rt::secondsToNs(t_s));
+    return d.head<2>().norm();
+  };
+  const double limit_m = std::min(params_.min_person_distance_m, distance_at(0.0)) - 1e-6;
+  const double end_s = std::min(trajectory.durationS(), params_.check.horizon_s);
+  for (double t = 0.0; t <= end_s; t += params_.check.sample_step_s) {
+    if (distance_at(t) < limit_m) return {CheckVerdict::kTooCloseToPerson, t};
   }
-  report.check = check.verdict;
-  if (check.verdict != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
-  report.status = live ? PlanStatus::kPlanned : PlanStatus::kRelocating;
-  return report;
+  return check;
 }
 
 }  // namespace aerotrack::planning

@@ -128,8 +128,9 @@ class TrackingPlanner {
   /// Feeds the person's estimate to the predictor (call every cycle; repeats and lost estimates are ignored).
   void observeTarget(const estimation::TargetEstimate& estimate);
 
-  /// One cycle. On kPlanned, kStopped and kTakeOff the trajectory to fly is in `out` (starting at
-  /// report.start_ns); on other statuses `out` may hold a rejected attempt and must not be flown.
+  /// One cycle: the stages below in turn, each one's result the next one's input. On kPlanned, kStopped
+  /// and kTakeOff the trajectory to fly is in `out` (starting at report.start_ns); on other statuses `out`
+  /// may hold a rejected attempt and must not be flown.
   PlanReport plan(const PlanInputs& inputs, PolynomialTrajectory& out);
 
   /// The state a cycle starts from (exposed for tests): the current trajectory at start_ns, or the
@@ -148,10 +149,66 @@ class TrackingPlanner {
   void appendStop(PolynomialTrajectory& out);
 
  private:
+  friend class TrackingPlannerStages;  // the test seam: tests/unit/planning runs the stages one by one
+
   TrackingPlanner(const TrackingPlannerParams& params, KinodynamicSearch search, CorridorBuilder corridor,
                   TrajectoryOptimizer optimizer, prediction::TargetPredictor predictor,
                   mapping::TrajectoryChecker checker);
   bool currentBlocked(const PlanInputs& inputs) const;
+
+  /// The person's motion as the stages after the prediction see it (what predictPerson gives them).
+  struct PersonMotion {
+    /// The Bezier prediction (live) or the last one (relocation); null: constant velocity from `estimate`.
+    const prediction::TargetPrediction* prediction = nullptr;
+    const estimation::TargetEstimate* estimate = nullptr;  ///< Used only when `prediction` is null.
+    bool live = false;                                     ///< A live estimate (else relocation).
+    double horizon_s = 0.0;       ///< Constant velocity runs on this far past the estimate at most.
+    double sight_height_m = 0.0;  ///< The W z of every position (the torso's centre).
+    /// The person's position at t_ns (W, m) at the sight height. Past its end a prediction is continued at
+    /// its end velocity (a Bezier extrapolated would diverge).
+    Eigen::Vector3d positionAt(rt::TimeNs t_ns) const;
+    /// Their velocity at t_ns (W, m/s): the prediction's, held after its end, or the estimate's.
+    Eigen::Vector3d velocityAt(rt::TimeNs t_ns) const;
+  };
+
+  // The stages of plan(), in order. Each allocates nothing once warm (the optimiser's L-BFGS history aside).
+
+  /// Stage 1, prediction (paper Sect. V-A): with a live estimate, the predictor's Bezier QP fit of the
+  /// recent estimates (kept for relocation), or constant velocity while it has too few of them; when
+  /// relocating without one, the last prediction. Nothing when neither (the cycle fails: kNoTarget).
+  /// The result points into `inputs` and into this planner: valid for this cycle only.
+  std::optional<PersonMotion> predictPerson(const PlanInputs& inputs);
+  /// Stage 2, goal selection (Sect. V-B): x_g mixed from the person's state at the hand-over (start_ns)
+  /// and at the prediction horizon after it, held at the tracking distance and the flight altitude; in the
+  /// proposed (occlusion-aware) mode moved round the person to where they are in sight.
+  KinematicState selectGoal(const mapping::LocalGrid& grid, const PersonMotion& person, const StatePva& start,
+                            rt::TimeNs start_ns) const;
+  /// Stage 3, occlusion-aware kinodynamic search (Sect. V-B) from the start (its velocity clipped to the
+  /// search's per-axis limit) to the goal, checking sight lines to the person's path; the path in path_.
+  /// Returns the search's status.
+  SearchStatus searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start, rt::TimeNs start_ns,
+                                  const KinematicState& goal, const PersonMotion& person);
+  /// Stage 4, corridor (Sect. V-C): path_ cut into chords of about path_sample_step_s (polyline_, its first
+  /// point exactly the start) and the overlapping free boxes along them (corridor_), or the builder's error.
+  rt::Status buildCorridor(const mapping::LocalGrid& grid, const StatePva& start);
+  /// Stage 5, optimisation (Sect. V-C): the minimum-jerk spline through corridor_ from `start` to the end
+  /// of path_ (initial guess: the corridor's waypoints, timed as the path passes them), then a brake to
+  /// rest appended (appendStop). The path's end velocity is kept if the drone can brake from it in free
+  /// space, else (and after a partial search) the end is at rest.
+  rt::Expected<OptimizerResult> optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
+                                                   PolynomialTrajectory& out);
+  /// Stage 6, final check (issue 8 item 3): limits, inflated grid and FCL against the octree (when there is
+  /// one), then never closer horizontally to the person's path than min_person_distance_m (or than it
+  /// starts, if closer), within check.horizon_s of start_ns.
+  CheckResult checkPlannedTrajectory(const PolynomialTrajectory& trajectory, const mapping::LocalGrid& grid,
+                                     const octomap::OcTree* octree, const PersonMotion& person,
+                                     rt::TimeNs start_ns) const;
+  /// A failed cycle: `status`, or kStopped with a stop written into `out` if the current trajectory is
+  /// blocked ahead.
+  PlanReport failCycle(PlanReport report, PlanStatus status, const PlanInputs& inputs, const StatePva& start,
+                       PolynomialTrajectory& out);
+  /// The polyline's chord count along path_ (at least 1); each chord lasts path_.duration_s / that.
+  int chordCount() const;
 
   TrackingPlannerParams params_;
   KinodynamicSearch search_;
