@@ -46,20 +46,22 @@ Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometr
 }
 
 rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
-                                              const mapping::PoseHistory& poses, const GimbalAngleHistory& gimbal,
+                                              const hal::OdometryHistory& poses, const GimbalAngleHistory& gimbal,
                                               const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
   if (!p_C_m.allFinite()) return rt::Error{"camera to world: p_C is not finite"};
-  const mapping::PoseLookup pose = poses.lookup(stamp_ns);
-  if (pose.status != mapping::PoseLookupStatus::kOk) {
+  const hal::OdometryHistory::Lookup pose = poses.lookup(stamp_ns);
+  if (pose.status != rt::HistoryStatus::kOk) {
     return rt::Error{std::string("camera to world: no body pose at t = ") + std::to_string(stamp_ns) +
-                     " ns: " + mapping::toString(pose.status)};
+                     " ns: " + rt::toString(pose.status)};
   }
   const GimbalAngleLookup angle = gimbal.lookup(stamp_ns);
-  if (angle.status != HistoryLookupStatus::kOk) {
+  if (angle.status != rt::HistoryStatus::kOk) {
     return rt::Error{std::string("camera to world: no gimbal angle at t = ") + std::to_string(stamp_ns) +
-                     " ns: " + toString(angle.status)};
+                     " ns: " + rt::toString(angle.status)};
   }
-  return cameraToWorld(p_C_m, pose.T_WB, angle.angle_rad, extrinsics, frame);
+  const Eigen::Isometry3d& T_WB = pose.value;
+  const double gimbal_angle_rad = angle.value;
+  return cameraToWorld(p_C_m, T_WB, gimbal_angle_rad, extrinsics, frame);
 }
 
 }  // namespace aerotrack::estimation

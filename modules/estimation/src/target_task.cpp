@@ -19,7 +19,7 @@ rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
                                             rt::SpscQueue<hal::GimbalState>& gimbal,
                                             rt::LatestSlot<TargetEstimate>& out) {
   if (auto s = localization::validate(params.localization); !s) return rt::Error{"localization: " + s.error().message};
-  auto poses = mapping::PoseHistory::create({});
+  auto poses = hal::OdometryHistory::create({});
   if (!poses) return poses.error();
   auto gimbal_history = GimbalAngleHistory::create({});
   if (!gimbal_history) return gimbal_history.error();
@@ -29,7 +29,7 @@ rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
                     detections, odometry, gimbal, out);
 }
 
-TargetTask::TargetTask(const TargetTaskParams& params, mapping::PoseHistory poses, GimbalAngleHistory gimbal_history,
+TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
                        TargetEstimator estimator, rt::SpscQueue<hal::DetectionFrame>& detections,
                        rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
                        rt::LatestSlot<TargetEstimate>& out)
@@ -71,9 +71,9 @@ void TargetTask::process(const hal::DetectionFrame& frame) {
 
 void TargetTask::step(rt::TimeNs now_ns) {
   while (const auto sample = odometry_.try_pop())
-    if (poses_.push(*sample) == mapping::PushResult::kAccepted) newest_pose_ns_ = sample->stamp_ns;
+    if (poses_.push(*sample) == rt::HistoryPush::kAccepted) newest_pose_ns_ = sample->stamp_ns;
   while (const auto state = gimbal_.try_pop())
-    if (gimbal_history_.push(*state)) newest_gimbal_ns_ = state->stamp_ns;
+    if (gimbal_history_.push(*state) == rt::HistoryPush::kAccepted) newest_gimbal_ns_ = state->stamp_ns;
   while (const auto frame = detections_.try_pop()) {
     if (frame->target_index < 0 || frame->target_index >= static_cast<int>(frame->person_count)) continue;
     ++stats_.detections;

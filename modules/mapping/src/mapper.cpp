@@ -53,7 +53,7 @@ rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame) {
   ++stats_.frames_inserted;
   const octomap::OcTree& tree = map_->tree();
   // Keep the window on the drone: the pose at the frame's time is known (the insert used it).
-  const Eigen::Vector3d drone_W_m = poses_->poseAt(frame.stamp_ns)->translation();
+  const Eigen::Vector3d drone_W_m = poses_->valueAt(frame.stamp_ns)->translation();
   if (!grid_initialised_) {
     if (auto moved = grid_->recenter(drone_W_m, tree); !moved) return moved.error();
     if (rt::Status s = grid_->rebuild(tree); !s) return s.error();

@@ -108,23 +108,23 @@ TEST(CameraToWorld, GivenAPitchedDroneThenTheLevelFrameIgnoresThePitchAndKeepsTh
 TEST(CameraToWorld, GivenHistoriesThenTheCaptureTimeIsInterpolatedNotTheLatest) {
   // Given odometry at 0 and 100 ms (moving 1 m along x, yaw 0 -> 90 degrees) and gimbal samples
   // at 0 and 100 ms (0 -> 90 degrees).
-  auto poses = mapping::PoseHistory::create({});
+  auto poses = hal::OdometryHistory::create({});
   auto gimbal = GimbalAngleHistory::create({.capacity = 8, .max_gap_ns = 200 * rt::kNsPerMillisecond});
   ASSERT_TRUE(poses && gimbal);
-  mapping::PoseHistory& pose_history = *poses;
+  hal::OdometryHistory& pose_history = *poses;
   hal::OdometrySample odo;
   odo.stamp_ns = 0;
-  pose_history.push(odo);
+  ASSERT_EQ(pose_history.push(odo), rt::HistoryPush::kAccepted);
   odo.stamp_ns = 40 * rt::kNsPerMillisecond;
   odo.p_WB_m = Eigen::Vector3d(0.4, 0.0, 0.0);
   odo.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(36 * kDeg, Eigen::Vector3d::UnitZ()));
-  pose_history.push(odo);
+  ASSERT_EQ(pose_history.push(odo), rt::HistoryPush::kAccepted);
   odo.stamp_ns = 80 * rt::kNsPerMillisecond;
   odo.p_WB_m = Eigen::Vector3d(0.8, 0.0, 0.0);
   odo.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(72 * kDeg, Eigen::Vector3d::UnitZ()));
-  pose_history.push(odo);
-  ASSERT_TRUE(gimbal->push({0, 0.0, 0.0}));
-  ASSERT_TRUE(gimbal->push({100 * rt::kNsPerMillisecond, 90 * kDeg, 0.0}));
+  ASSERT_EQ(pose_history.push(odo), rt::HistoryPush::kAccepted);
+  ASSERT_EQ(gimbal->push({0, 0.0, 0.0}), rt::HistoryPush::kAccepted);
+  ASSERT_EQ(gimbal->push({100 * rt::kNsPerMillisecond, 90 * kDeg, 0.0}), rt::HistoryPush::kAccepted);
   const GimbalCameraExtrinsics extrinsics;  // camera at the body origin
   // When the image was captured at 20 ms.
   const auto p_W =
@@ -145,24 +145,24 @@ TEST(GimbalAngleHistory, GivenMultiTurnAnglesThenInterpolationIsLinearInTheUnwra
   auto history = GimbalAngleHistory::create({.capacity = 4, .max_gap_ns = 100});
   ASSERT_TRUE(history);
   // Given 350 and 370 degrees (unwrapped) 10 ns apart.
-  ASSERT_TRUE(history->push({10, 350 * kDeg, 0.0}));
-  ASSERT_TRUE(history->push({20, 370 * kDeg, 0.0}));
+  ASSERT_EQ(history->push({10, 350 * kDeg, 0.0}), rt::HistoryPush::kAccepted);
+  ASSERT_EQ(history->push({20, 370 * kDeg, 0.0}), rt::HistoryPush::kAccepted);
   // Then the midpoint is 360 degrees, not 180.
   const GimbalAngleLookup mid = history->lookup(15);
   ASSERT_EQ(mid.status, HistoryLookupStatus::kOk);
-  EXPECT_NEAR(mid.angle_rad, 360 * kDeg, 1e-12);
+  EXPECT_NEAR(mid.value, 360 * kDeg, 1e-12);
   // And out-of-order, duplicate and non-finite samples are refused.
-  EXPECT_FALSE(history->push({20, 0.0, 0.0}));
-  EXPECT_FALSE(history->push({30, std::nan(""), 0.0}));
+  EXPECT_EQ(history->push({20, 0.0, 0.0}), rt::HistoryPush::kRejectedOutOfOrder);
+  EXPECT_EQ(history->push({30, std::nan(""), 0.0}), rt::HistoryPush::kRejectedInvalid);
   EXPECT_EQ(history->rejectedCount(), 2u);
   EXPECT_EQ(history->lookup(5).status, HistoryLookupStatus::kBeforeOldest);
   EXPECT_EQ(history->lookup(21).status, HistoryLookupStatus::kAfterNewest);
-  ASSERT_TRUE(history->push({300, 0.0, 0.0}));
+  ASSERT_EQ(history->push({300, 0.0, 0.0}), rt::HistoryPush::kAccepted);
   EXPECT_EQ(history->lookup(100).status, HistoryLookupStatus::kGapTooLarge);
   EXPECT_EQ(history->lookup(20).status, HistoryLookupStatus::kOk);  // exactly a sample
   // The ring keeps the newest 4.
-  ASSERT_TRUE(history->push({310, 0.0, 0.0}));
-  ASSERT_TRUE(history->push({320, 0.0, 0.0}));
+  ASSERT_EQ(history->push({310, 0.0, 0.0}), rt::HistoryPush::kAccepted);
+  ASSERT_EQ(history->push({320, 0.0, 0.0}), rt::HistoryPush::kAccepted);
   EXPECT_EQ(history->lookup(15).status, HistoryLookupStatus::kBeforeOldest);
   EXPECT_FALSE(GimbalAngleHistory::create({.capacity = 1}));
 }

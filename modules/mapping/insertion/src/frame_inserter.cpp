@@ -29,7 +29,8 @@ rt::Expected<FrameInsertReport> FrameInserter::insert(const hal::DepthFrame& fra
     report.pose_status = pose.status;
     return report;
   }
-  const Eigen::Isometry3d T_WC = pose.T_WB * frame.T_BC;
+  const Eigen::Isometry3d& T_WB = pose.value;
+  const Eigen::Isometry3d T_WC = T_WB * frame.T_BC;
   rt::Expected<DepthPointsStats> points = depthToPoints(frame, T_WC, params_, hits_W_, misses_W_);
   if (!points) {
     ++frames_invalid_;

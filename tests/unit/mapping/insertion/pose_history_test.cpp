@@ -1,7 +1,7 @@
-// Tests of PoseHistory: interpolation against hand-computed poses (linear position, slerp yaw),
-// rejection of out-of-order and non-finite samples, and the cases that give no pose (empty,
-// before the oldest, after the newest, a gap). A slow linear-scan reference checks lookups after
-// the ring wrapped.
+// Tests of PoseHistory (hal::OdometryHistory, an rt::StampedHistory): interpolation against
+// hand-computed poses (linear position, slerp yaw), rejection of out-of-order and non-finite samples,
+// and the cases that give no pose (empty, before the oldest, after the newest, a gap). A slow
+// linear-scan reference checks lookups after the ring wrapped.
 #include "aerotrack/mapping/pose_history.hpp"
 
 #include <cmath>
@@ -49,7 +49,7 @@ TEST(PoseHistory, GivenYaw0AndYaw90_WhenPoseAtHalfway_ThenYaw45AndMidpoint) {
   ASSERT_EQ(history.push(sample(0, {0.0, 0.0, 0.0}, 0.0)), PushResult::kAccepted);
   ASSERT_EQ(history.push(sample(20 * kMs, {2.0, 4.0, -2.0}, kPi / 2)), PushResult::kAccepted);
 
-  const std::optional<Eigen::Isometry3d> T_WB = history.poseAt(10 * kMs);
+  const std::optional<Eigen::Isometry3d> T_WB = history.valueAt(10 * kMs);
   ASSERT_TRUE(T_WB.has_value());
   EXPECT_NEAR(T_WB->translation().x(), 1.0, 1e-12);
   EXPECT_NEAR(T_WB->translation().y(), 2.0, 1e-12);
@@ -59,7 +59,7 @@ TEST(PoseHistory, GivenYaw0AndYaw90_WhenPoseAtHalfway_ThenYaw45AndMidpoint) {
   EXPECT_NEAR(T_WB->linear()(2, 2), 1.0, 1e-12);
 
   // A quarter of the way: 22.5 deg and a quarter of the displacement.
-  const std::optional<Eigen::Isometry3d> T_quarter = history.poseAt(5 * kMs);
+  const std::optional<Eigen::Isometry3d> T_quarter = history.valueAt(5 * kMs);
   ASSERT_TRUE(T_quarter.has_value());
   EXPECT_NEAR(yawOf(*T_quarter), kPi / 8, 1e-12);
   EXPECT_TRUE(T_quarter->translation().isApprox(Eigen::Vector3d(0.5, 1.0, -0.5), 1e-12));
@@ -69,7 +69,7 @@ TEST(PoseHistory, GivenYawAcrossPlusMinusPi_WhenPoseAtHalfway_ThenShortestArcThr
   PoseHistory history = makeHistory();
   (void)history.push(sample(0, Eigen::Vector3d::Zero(), 170.0 * kPi / 180.0));
   (void)history.push(sample(10 * kMs, Eigen::Vector3d::Zero(), -170.0 * kPi / 180.0));
-  const std::optional<Eigen::Isometry3d> T_WB = history.poseAt(5 * kMs);
+  const std::optional<Eigen::Isometry3d> T_WB = history.valueAt(5 * kMs);
   ASSERT_TRUE(T_WB.has_value());
   EXPECT_NEAR(std::abs(yawOf(*T_WB)), kPi, 1e-9);  // Not 0 (the long way round).
 }
@@ -80,7 +80,7 @@ TEST(PoseHistory, GivenSamples_WhenPoseAtTheirStamps_ThenExactlyTheirPoses) {
   (void)history.push(sample(200, {4.0, 5.0, 6.0}, 0.6));
   (void)history.push(sample(300, {7.0, 8.0, 9.0}, 0.9));
   for (int i = 0; i < 3; ++i) {
-    const std::optional<Eigen::Isometry3d> T_WB = history.poseAt(100 * (i + 1));
+    const std::optional<Eigen::Isometry3d> T_WB = history.valueAt(100 * (i + 1));
     ASSERT_TRUE(T_WB.has_value());
     EXPECT_TRUE(T_WB->translation().isApprox(Eigen::Vector3d(1.0 + 3 * i, 2.0 + 3 * i, 3.0 + 3 * i), 1e-15));
     EXPECT_NEAR(yawOf(*T_WB), 0.3 * (i + 1), 1e-12);
@@ -106,10 +106,10 @@ TEST(PoseHistory, GivenNonFiniteOrZeroQuaternionSample_WhenPush_ThenRejectedAndC
   bad_q.q_WB.w() = std::numeric_limits<double>::infinity();
   hal::OdometrySample zero_q = sample(3, {0.0, 0.0, 0.0}, 0.0);
   zero_q.q_WB.coeffs().setZero();
-  EXPECT_EQ(history.push(bad_p), PushResult::kRejectedNonFinite);
-  EXPECT_EQ(history.push(bad_q), PushResult::kRejectedNonFinite);
-  EXPECT_EQ(history.push(zero_q), PushResult::kRejectedNonFinite);
-  EXPECT_EQ(history.rejectedNonFiniteCount(), 3U);
+  EXPECT_EQ(history.push(bad_p), PushResult::kRejectedInvalid);
+  EXPECT_EQ(history.push(bad_q), PushResult::kRejectedInvalid);
+  EXPECT_EQ(history.push(zero_q), PushResult::kRejectedInvalid);
+  EXPECT_EQ(history.rejectedInvalidCount(), 3U);
   EXPECT_TRUE(history.empty());
 }
 
@@ -119,20 +119,22 @@ TEST(PoseHistory, GivenUnnormalisedQuaternion_WhenPush_ThenStoredNormalised) {
   s.q_WB.coeffs() *= 3.0;
   (void)history.push(s);
   EXPECT_NEAR(history.newest().q_WB.norm(), 1.0, 1e-15);
-  EXPECT_NEAR(yawOf(*history.poseAt(1)), 0.5, 1e-12);
+  const std::optional<Eigen::Isometry3d> T_WB = history.valueAt(1);
+  ASSERT_TRUE(T_WB.has_value());
+  EXPECT_NEAR(yawOf(*T_WB), 0.5, 1e-12);
 }
 
 TEST(PoseHistory, GivenTimesOutsideTheSamples_WhenLookup_ThenNothingAndWhy) {
   PoseHistory history = makeHistory();
   EXPECT_EQ(history.lookup(0).status, PoseLookupStatus::kEmpty);
-  EXPECT_FALSE(history.poseAt(0).has_value());
+  EXPECT_FALSE(history.valueAt(0).has_value());
   (void)history.push(sample(100 * kMs, {0.0, 0.0, 0.0}, 0.0));
   (void)history.push(sample(110 * kMs, {1.0, 0.0, 0.0}, 0.0));
   EXPECT_EQ(history.lookup(100 * kMs - 1).status, PoseLookupStatus::kBeforeOldest);
   EXPECT_EQ(history.lookup(110 * kMs + 1).status, PoseLookupStatus::kAfterNewest);
   EXPECT_EQ(history.lookup(130 * kMs).status, PoseLookupStatus::kAfterNewest);  // 20 ms: no extrapolation.
-  EXPECT_FALSE(history.poseAt(130 * kMs).has_value());
-  EXPECT_TRUE(history.poseAt(110 * kMs).has_value());
+  EXPECT_FALSE(history.valueAt(130 * kMs).has_value());
+  EXPECT_TRUE(history.valueAt(110 * kMs).has_value());
 }
 
 TEST(PoseHistory, GivenFutureTolerance_WhenLookupJustAfterNewest_ThenNewestPoseHeld) {
@@ -141,7 +143,7 @@ TEST(PoseHistory, GivenFutureTolerance_WhenLookupJustAfterNewest_ThenNewestPoseH
   PoseHistory history = makeHistory(params);
   (void)history.push(sample(0, {0.0, 0.0, 0.0}, 0.0));
   (void)history.push(sample(10 * kMs, {1.0, 0.0, 0.0}, 0.2));
-  const std::optional<Eigen::Isometry3d> held = history.poseAt(12 * kMs);
+  const std::optional<Eigen::Isometry3d> held = history.valueAt(12 * kMs);
   ASSERT_TRUE(held.has_value());
   EXPECT_EQ(held->translation().x(), 1.0);  // Held, not extrapolated to 1.2.
   EXPECT_NEAR(yawOf(*held), 0.2, 1e-12);
@@ -155,10 +157,10 @@ TEST(PoseHistory, GivenGapLongerThanMaxGap_WhenLookupInside_ThenNothingButSample
   (void)history.push(sample(0, {0.0, 0.0, 0.0}, 0.0));
   (void)history.push(sample(40 * kMs, {1.0, 0.0, 0.0}, 0.0));   // 40 ms gap: fine.
   (void)history.push(sample(140 * kMs, {2.0, 0.0, 0.0}, 0.0));  // 100 ms gap: stale.
-  EXPECT_TRUE(history.poseAt(20 * kMs).has_value());
+  EXPECT_TRUE(history.valueAt(20 * kMs).has_value());
   EXPECT_EQ(history.lookup(90 * kMs).status, PoseLookupStatus::kGapTooLarge);
-  EXPECT_TRUE(history.poseAt(40 * kMs).has_value());
-  EXPECT_TRUE(history.poseAt(140 * kMs).has_value());
+  EXPECT_TRUE(history.valueAt(40 * kMs).has_value());
+  EXPECT_TRUE(history.valueAt(140 * kMs).has_value());
 }
 
 /// Slow reference: linear scan over the samples pushed, kept in a plain vector.
@@ -192,7 +194,7 @@ TEST(PoseHistory, GivenRingWrappedSeveralTimes_WhenLookup_ThenMatchesLinearScanO
   EXPECT_EQ(history.oldest().stamp_ns, kept.front().stamp_ns);
   EXPECT_EQ(history.lookup(kept.front().stamp_ns - 1).status, PoseLookupStatus::kBeforeOldest);
   for (rt::TimeNs t = kept.front().stamp_ns; t <= kept.back().stamp_ns; t += 333'333) {
-    const std::optional<Eigen::Isometry3d> got = history.poseAt(t);
+    const std::optional<Eigen::Isometry3d> got = history.valueAt(t);
     const std::optional<Eigen::Isometry3d> want = referencePose(kept, t);
     ASSERT_TRUE(got.has_value() && want.has_value()) << t;
     EXPECT_TRUE(got->translation().isApprox(want->translation(), 1e-12)) << t;

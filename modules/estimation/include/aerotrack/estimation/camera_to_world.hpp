@@ -14,7 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "aerotrack/estimation/gimbal_history.hpp"
-#include "aerotrack/mapping/pose_history.hpp"
+#include "aerotrack/hal/odometry_history.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/time.hpp"
@@ -56,7 +56,7 @@ Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometr
 /// capture time stamp_ns. Error (saying which history and why) if either lookup fails or p_C is
 /// not finite. Thread safety: as the histories' const lookups. Allocation: only for an error.
 rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
-                                              const mapping::PoseHistory& poses, const GimbalAngleHistory& gimbal,
+                                              const hal::OdometryHistory& poses, const GimbalAngleHistory& gimbal,
                                               const GimbalCameraExtrinsics& extrinsics,
                                               CameraFrame frame = CameraFrame::kCamera);
 

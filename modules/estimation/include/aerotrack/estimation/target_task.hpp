@@ -13,8 +13,8 @@
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
 #include "aerotrack/estimation/target_estimator.hpp"
+#include "aerotrack/hal/odometry_history.hpp"
 #include "aerotrack/localization/localization_model.hpp"
-#include "aerotrack/mapping/pose_history.hpp"
 #include "aerotrack/perception/torso_features.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
@@ -55,14 +55,14 @@ class TargetTask final : public rt::Task {
   const TargetTaskStats& stats() const { return stats_; }
 
  private:
-  TargetTask(const TargetTaskParams& params, mapping::PoseHistory poses, GimbalAngleHistory gimbal_history,
+  TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
              TargetEstimator estimator, rt::SpscQueue<hal::DetectionFrame>& detections,
              rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
              rt::LatestSlot<TargetEstimate>& out);
   void process(const hal::DetectionFrame& frame);
 
   TargetTaskParams params_;
-  mapping::PoseHistory poses_;
+  hal::OdometryHistory poses_;
   GimbalAngleHistory gimbal_history_;
   TargetEstimator estimator_;
   rt::SpscQueue<hal::DetectionFrame>& detections_;
