@@ -15,6 +15,7 @@
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "app_config.hpp"
 #include "sim_report.hpp"
+#include "support/require.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -70,17 +71,19 @@ TEST(SimRealtime, GivenSimConfigOnThreadsThenEveryTaskRunsAndTheDroneTakesOff) {
 }
 
 /// Lockstep run of the short trial with the sim configuration: the trace hash and the drone's height.
+/// Fails the calling test (test::require) if the trial, the system or its simulation is missing.
 std::pair<std::uint64_t, double> runLockstep(const AppConfig& config) {
-  auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/tests/data/short.yaml", 1, std::nullopt);
-  EXPECT_TRUE(trial) << trial.error().message;
+  const hal::sim::ScenarioInstance trial = aerotrack::test::require(
+      loadTrial(AEROTRACK_SOURCE_DIR "/tests/data/short.yaml", 1, std::nullopt), "tests/data/short.yaml");
   rt::ManualClock clock(0);
   const rt::MonotonicClock wall;
-  auto system = System::build(config, &trial.value(), clock.now());
-  EXPECT_TRUE(system) << system.error().message;
+  const std::unique_ptr<System> system =
+      aerotrack::test::require(System::build(config, &trial, clock.now()), "the system");
   rt::LockstepExecutor executor(clock, wall);
-  for (const auto& b : (*system)->bindings()) EXPECT_TRUE(executor.add(b));
+  for (const auto& b : system->bindings()) EXPECT_TRUE(executor.add(b));
   EXPECT_TRUE(executor.runUntil(3 * rt::kNsPerSecond));
-  return {executor.traceHash(), (*system)->devices().simulation->truth().drone.p_W_m.z()};
+  const hal::sim::Simulation& sim = aerotrack::test::require(system->devices().simulation.get(), "the simulation");
+  return {executor.traceHash(), sim.truth().drone.p_W_m.z()};
 }
 
 TEST(SimLockstep, GivenMappingOverlappedOnTheWorkerThreadThenTwoRunsAreIdentical) {

@@ -10,6 +10,7 @@
 #include "aerotrack/rt/lockstep_executor.hpp"
 #include "app_config.hpp"
 #include "sim_report.hpp"
+#include "support/require.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -59,17 +60,16 @@ Flight fly(const std::string& yaml, std::uint64_t seed, double sim_s, std::optio
   rt::LockstepExecutor executor(clock, wall);
   for (const auto& b : (*system)->bindings()) EXPECT_TRUE(executor.add(b));
   EXPECT_TRUE(executor.runUntil(rt::secondsToNs(std::min(sim_s, trial->duration_s))));
-  const hal::sim::Simulation& sim = *(*system)->devices().simulation;
+  const hal::sim::Simulation& sim = aerotrack::test::require((*system)->devices().simulation.get(), "the simulation");
   RunInfo info;
   info.sim_time_s = rt::nsToSeconds(clock.now());
   Flight f;
   f.summary = simSummary(sim, info);
-  const supervisor::SupervisorTask* sup = (*system)->supervisorTask();
-  EXPECT_NE(sup, nullptr);
-  f.mode = supervisor::toString(sup->state().mode);
-  f.reason = supervisor::toString(sup->state().reason);
-  for (std::size_t i = 0; i < sup->transitionCount(); ++i)
-    f.modes.emplace_back(supervisor::toString(sup->transitions()[i].mode));
+  const supervisor::SupervisorTask& sup = aerotrack::test::require((*system)->supervisorTask(), "the supervisor task");
+  f.mode = supervisor::toString(sup.state().mode);
+  f.reason = supervisor::toString(sup.state().reason);
+  for (std::size_t i = 0; i < sup.transitionCount(); ++i)
+    f.modes.emplace_back(supervisor::toString(sup.transitions()[i].mode));
   f.final_speed_mps = sim.truth().drone.v_W_mps.norm();
   return f;
 }

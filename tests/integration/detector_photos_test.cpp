@@ -12,6 +12,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "aerotrack/perception/detector.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::perception {
 namespace {
@@ -31,10 +32,7 @@ Detector makeDetector(const std::string& search_model = "multipose") {
   DetectorParams params;
   params.model_dir = std::string(AEROTRACK_SOURCE_DIR) + "/models";
   params.search_model = search_model;
-  auto detector = Detector::create(params);
-  EXPECT_TRUE(detector.has_value()) << (detector ? "" : detector.error().message);
-  if (!detector) std::abort();
-  return std::move(detector.value());
+  return aerotrack::test::require(Detector::create(params), "Detector::create");
 }
 
 bool inside(const hal::Keypoint2D& k, const hal::PersonDetection& d) {

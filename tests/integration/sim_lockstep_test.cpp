@@ -6,6 +6,7 @@
 #include "aerotrack/rt/lockstep_executor.hpp"
 #include "app_config.hpp"
 #include "sim_report.hpp"
+#include "support/require.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -17,19 +18,19 @@ struct Outcome {
   Eigen::Vector3d drone_m = Eigen::Vector3d::Zero();
 };
 
+/// Fails the calling test (test::require) if the config, the trial or the system cannot be made.
 Outcome fly(const std::string& scenario, std::uint64_t seed, double max_sim_s) {
-  auto config = loadAppConfig(AEROTRACK_SOURCE_DIR "/config/sim.yaml");
-  EXPECT_TRUE(config);
-  auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/" + scenario + ".yaml", seed, std::nullopt);
-  EXPECT_TRUE(trial) << trial.error().message;
-  auto system = System::build(*config, &trial.value(), 0);
-  EXPECT_TRUE(system) << system.error().message;
+  const AppConfig config =
+      aerotrack::test::require(loadAppConfig(AEROTRACK_SOURCE_DIR "/config/sim.yaml"), "config/sim.yaml");
+  const hal::sim::ScenarioInstance trial = aerotrack::test::require(
+      loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/" + scenario + ".yaml", seed, std::nullopt), scenario);
+  const std::unique_ptr<System> system = aerotrack::test::require(System::build(config, &trial, 0), "the system");
   rt::ManualClock clock(0);
   rt::MonotonicClock wall;
   rt::LockstepExecutor executor(clock, wall);
-  for (const auto& b : (*system)->bindings()) EXPECT_TRUE(executor.add(b));
-  EXPECT_TRUE(executor.runUntil(rt::secondsToNs(std::min(max_sim_s, trial->duration_s))));
-  const hal::sim::Simulation& sim = *(*system)->devices().simulation;
+  for (const auto& b : system->bindings()) EXPECT_TRUE(executor.add(b));
+  EXPECT_TRUE(executor.runUntil(rt::secondsToNs(std::min(max_sim_s, trial.duration_s))));
+  const hal::sim::Simulation& sim = aerotrack::test::require(system->devices().simulation.get(), "the simulation");
   RunInfo info;  // no timings: they are wall-clock measurements and differ between runs
   info.sim_time_s = rt::nsToSeconds(clock.now());
   return {executor.traceHash(), simSummary(sim, info), sim.truth().drone.p_W_m};

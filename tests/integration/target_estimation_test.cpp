@@ -9,6 +9,7 @@
 #include "app_config.hpp"
 #include "device_tasks.hpp"
 #include "sim_report.hpp"
+#include "support/require.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -19,20 +20,22 @@ struct TrackedRun {
   double visible_ratio = 0.0;  ///< The share of the time the person could be seen (the simulator's truth).
 };
 
+/// Fails the calling test (test::require) if the config, the trial, the system, its target task or
+/// its simulation is missing.
 TrackedRun estimationOf(const std::string& scenario, std::uint64_t seed, double speed_mps) {
-  auto config = loadAppConfig(AEROTRACK_SOURCE_DIR "/config/sim.yaml");
-  EXPECT_TRUE(config) << config.error().message;
-  auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/" + scenario + ".yaml", seed, speed_mps);
-  EXPECT_TRUE(trial) << trial.error().message;
-  auto system = System::build(*config, &trial.value(), 0);
-  EXPECT_TRUE(system) << system.error().message;
+  const AppConfig config =
+      aerotrack::test::require(loadAppConfig(AEROTRACK_SOURCE_DIR "/config/sim.yaml"), "config/sim.yaml");
+  const hal::sim::ScenarioInstance trial = aerotrack::test::require(
+      loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/" + scenario + ".yaml", seed, speed_mps), scenario);
+  const std::unique_ptr<System> system = aerotrack::test::require(System::build(config, &trial, 0), "the system");
   rt::ManualClock clock(0);
   rt::MonotonicClock wall;
   rt::LockstepExecutor executor(clock, wall);
-  for (const auto& b : (*system)->bindings()) EXPECT_TRUE(executor.add(b));
-  EXPECT_TRUE(executor.runUntil(rt::secondsToNs(trial->duration_s)));
-  return {estimationSummary((*system)->targetTask(), (*system)->targetCheckTask()),
-          (*system)->devices().simulation->metrics().visibleRatio()};
+  for (const auto& b : system->bindings()) EXPECT_TRUE(executor.add(b));
+  EXPECT_TRUE(executor.runUntil(rt::secondsToNs(trial.duration_s)));
+  const estimation::TargetTask& target = aerotrack::test::require(system->targetTask(), "the target task");
+  const hal::sim::Simulation& sim = aerotrack::test::require(system->devices().simulation.get(), "the simulation");
+  return {estimationSummary(&target, system->targetCheckTask()), sim.metrics().visibleRatio()};
 }
 
 class TargetEstimation : public ::testing::TestWithParam<std::uint64_t> {};

@@ -8,6 +8,7 @@
 
 #include "app_config.hpp"
 #include "sim_report.hpp"
+#include "support/require.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -188,9 +189,8 @@ TEST(AppConfig, GivenBadBackendThenErrorNamesIt) {
 }
 
 hal::sim::ScenarioInstance openTrial() {
-  auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/open.yaml", 1, std::nullopt);
-  EXPECT_TRUE(trial) << trial.error().message;
-  return trial.value();
+  return aerotrack::test::require(loadTrial(AEROTRACK_SOURCE_DIR "/config/scenarios/open.yaml", 1, std::nullopt),
+                                  "open.yaml");
 }
 
 TEST(System, GivenUnknownTaskNameThenErrorNamesTheRow) {

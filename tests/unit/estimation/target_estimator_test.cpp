@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "aerotrack/estimation/target_estimator.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::estimation {
 namespace {
@@ -82,9 +83,7 @@ TargetMeasurement measure(const Path& path, int k, std::mt19937_64& rng) {
 }
 
 Errors run(const Path& path, double duration_s, unsigned seed, const TargetEstimatorParams& params = {}) {
-  auto created = TargetEstimator::create(params);
-  EXPECT_TRUE(created);
-  TargetEstimator& estimator = *created;
+  TargetEstimator estimator = aerotrack::test::require(TargetEstimator::create(params), "TargetEstimator::create");
   std::mt19937_64 rng(seed);
   Errors e;
   std::size_t counted = 0;
@@ -274,10 +273,9 @@ TEST(TargetEstimatorParams, GivenAConfigSectionThenEveryKeyIsRequiredAndChecked)
       "  measurement_std_z_m: 0.3\n  initial_speed_std_mps: 1.5\n  gate_chi2: 16.27\n  reinit_after_rejections: 8\n"
       "  lost_after_s: 1.0\n  replay_window_s: 0.5\n  max_buffered_measurements: 64\n";
   const auto parse = [](const std::string& text) {
-    const auto root = rt::ConfigNode::fromString(text, "cfg.yaml");
-    EXPECT_TRUE(root);
+    const rt::ConfigNode root = aerotrack::test::require(rt::ConfigNode::fromString(text, "cfg.yaml"), "cfg.yaml");
     return rt::parseConfig<TargetEstimatorParams>(
-        [&root] { return parseTargetEstimatorParams(root->child("estimator")); });
+        [&root] { return parseTargetEstimatorParams(root.child("estimator")); });
   };
   const auto params = parse(good);
   ASSERT_TRUE(params) << params.error().message;

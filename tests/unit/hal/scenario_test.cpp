@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "aerotrack/hal/sim/scenario.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::hal::sim {
 namespace {
@@ -14,9 +15,7 @@ namespace {
 const std::string kScenarios = AEROTRACK_SOURCE_DIR "/config/scenarios/";
 
 ScenarioSpec load(const std::string& name) {
-  auto spec = loadScenarioSpec(kScenarios + name + ".yaml");
-  EXPECT_TRUE(spec) << spec.error().message;
-  return spec.value();
+  return aerotrack::test::require(loadScenarioSpec(kScenarios + name + ".yaml"), name);
 }
 
 std::string readFile(const std::string& path) {

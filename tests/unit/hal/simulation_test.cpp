@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "aerotrack/hal/sim/simulation.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::hal::sim {
 namespace {
@@ -45,15 +46,12 @@ success:
 }
 
 std::unique_ptr<Simulation> makeSim(bool wall_between, bool depth = true) {
-  auto spec = parseScenarioSpec(worldYaml(wall_between), "test.yaml");
-  EXPECT_TRUE(spec) << spec.error().message;
-  auto trial = instantiate(*spec, 1);
-  EXPECT_TRUE(trial) << trial.error().message;
+  const ScenarioSpec spec =
+      aerotrack::test::require(parseScenarioSpec(worldYaml(wall_between), "test.yaml"), "test.yaml");
+  const ScenarioInstance trial = aerotrack::test::require(instantiate(spec, 1), "instantiate");
   SimulationOptions options;
   options.render_depth = depth;
-  auto sim = Simulation::create(*trial, options, 0);
-  EXPECT_TRUE(sim) << sim.error().message;
-  return std::move(sim.value());
+  return aerotrack::test::require(Simulation::create(trial, options, 0), "Simulation::create");
 }
 
 void hover(Simulation& sim, double seconds, std::vector<DetectionFrame>* detections = nullptr) {

@@ -9,14 +9,14 @@
 #include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 #include "aerotrack/trajectory_server/trajectory_server.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::trajectory_server {
 namespace {
 
 MinJerkTour makeTour(double vmax = 2.0, double amax = 2.0) {
-  auto tour = MinJerkTour::create({{0, 0, 0}, {4, 0, 0}, {4, 3, 0}}, vmax, amax);
-  EXPECT_TRUE(tour);
-  return std::move(tour.value());
+  return aerotrack::test::require(MinJerkTour::create({{0, 0, 0}, {4, 0, 0}, {4, 3, 0}}, vmax, amax),
+                                  "MinJerkTour::create");
 }
 
 TEST(MinJerkTour, GivenBadInputThenError) {

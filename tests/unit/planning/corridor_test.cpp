@@ -26,6 +26,7 @@
 #include "aerotrack/planning/corridor.hpp"
 #include "aerotrack/planning/kinodynamic_search.hpp"
 #include "search_test_util.hpp"
+#include "support/require.hpp"
 
 #define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "../malloc_counter.hpp"
@@ -41,9 +42,7 @@ constexpr double kBoundaryM = 1e-9;  // points exactly on a face may test outsid
 using Path = std::vector<Eigen::Vector3d>;
 
 CorridorBuilder makeBuilder(const CorridorParams& params = CorridorParams{}) {
-  auto builder = CorridorBuilder::create(params);
-  EXPECT_TRUE(builder.has_value()) << (builder ? "" : builder.error().message);
-  return std::move(builder).value();
+  return aerotrack::test::require(CorridorBuilder::create(params), "CorridorBuilder::create");
 }
 
 /// A polyline through `corners`, with points every step_m along each leg.

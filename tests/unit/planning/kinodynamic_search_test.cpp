@@ -14,6 +14,7 @@
 #include "aerotrack/planning/kinodynamic_search.hpp"
 #include "aerotrack/planning/obvp.hpp"
 #include "search_test_util.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::planning {
 namespace {
@@ -23,9 +24,7 @@ using test::makeBoxGrid;
 using test::OccupiedBox;
 
 KinodynamicSearch makeSearch(const KinodynamicSearchParams& params) {
-  auto search = KinodynamicSearch::create(params);
-  EXPECT_TRUE(search.has_value()) << (search ? "" : search.error().message);
-  return std::move(search).value();
+  return aerotrack::test::require(KinodynamicSearch::create(params), "KinodynamicSearch::create");
 }
 
 KinematicState at(double x, double y, double z) {

@@ -16,6 +16,7 @@
 #include <Eigen/Dense>
 
 #include "aerotrack/prediction/dense_qp.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::prediction {
 namespace {
@@ -106,9 +107,7 @@ DenseQpSolver makeSolver(int max_iterations = 200) {
   params.max_equalities = 4;
   params.max_inequalities = 16;
   params.max_iterations = max_iterations;
-  auto solver = DenseQpSolver::create(params);
-  EXPECT_TRUE(solver);
-  return std::move(solver.value());
+  return aerotrack::test::require(DenseQpSolver::create(params), "DenseQpSolver::create");
 }
 
 TEST(DenseQpSolver, GivenRandomFeasibleProblemsThenMatchesTheEnumeratingReference) {

@@ -24,6 +24,7 @@
 #include <gtest/gtest.h>
 
 #include "aerotrack/prediction/target_predictor.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::prediction {
 namespace {
@@ -82,9 +83,7 @@ Errors summarise(std::vector<double> errors) {
 Errors run(const Path& path, double duration_s, double first_eval_s, const TargetPredictorParams& params = {}) {
   std::vector<double> errors;
   for (unsigned seed = 1; seed <= 5; ++seed) {
-    auto created = TargetPredictor::create(params);
-    EXPECT_TRUE(created);
-    TargetPredictor& predictor = *created;
+    TargetPredictor predictor = aerotrack::test::require(TargetPredictor::create(params), "TargetPredictor::create");
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> noise(0.0, kNoiseM);
     const int frames = static_cast<int>(duration_s * kRateHz);
@@ -233,10 +232,9 @@ TEST(TargetPredictorParams, GivenAConfigSectionThenEveryKeyIsRequiredAndChecked)
       "  pin_to_newest: false\n  min_samples: 5\n  max_data_age_s: 3.0\n  max_samples: 128\n"
       "  qp_max_iterations: 100\n";
   const auto parse = [](const std::string& text) {
-    const auto root = rt::ConfigNode::fromString(text, "cfg.yaml");
-    EXPECT_TRUE(root);
+    const rt::ConfigNode root = aerotrack::test::require(rt::ConfigNode::fromString(text, "cfg.yaml"), "cfg.yaml");
     return rt::parseConfig<TargetPredictorParams>(
-        [&root] { return parseTargetPredictorParams(root->child("prediction")); });
+        [&root] { return parseTargetPredictorParams(root.child("prediction")); });
   };
   const auto params = parse(good);
   ASSERT_TRUE(params) << params.error().message;

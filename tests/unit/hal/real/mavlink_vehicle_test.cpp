@@ -18,6 +18,7 @@
 
 #include "aerotrack/hal/real/ned_enu.hpp"
 #include "support/fake_autopilot.hpp"
+#include "support/require.hpp"
 
 // Counts the allocations made while a test says so (this thread only): the driver must make none in
 // steady state.
@@ -248,9 +249,7 @@ TEST(RemoteClockTest, FollowsADriftingClockAndStartsAgainAfterAReboot) {
 struct Bench {
   explicit Bench(const FakeAutopilotParams& fake_params = {}, MavlinkParams params = {}) {
     params.url = "udp://127.0.0.1:0";
-    auto opened = MavlinkConnection::open(params);
-    EXPECT_TRUE(opened.has_value()) << opened.error().message;
-    connection = *opened;
+    connection = aerotrack::test::require(MavlinkConnection::open(params), "MavlinkConnection::open");
     odometry = std::make_unique<MavlinkOdometry>(connection);
     link = std::make_unique<MavlinkVehicleLink>(connection);
     fake = std::make_unique<FakeAutopilot>(connection->localPort(), fake_params);

@@ -18,6 +18,7 @@
 #include "aerotrack/hal/real/v4l2_depth_camera.hpp"
 #include "aerotrack/hal/real/v4l2_device.hpp"
 #include "aerotrack/hal/real/v4l2_gimbal_camera.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::hal::real {
 namespace {
@@ -218,9 +219,9 @@ struct GimbalRig {
   std::vector<std::uint8_t> jpeg = redBlueJpeg(64, 48);
 
   explicit GimbalRig(const std::string& pixel_format = "MJPG") {
-    auto c = V4l2GimbalCamera::open(std::make_unique<FakeSource>(device), gimbalParams(pixel_format), kT0);
-    EXPECT_TRUE(c) << c.error().message;
-    if (c) camera = std::move(*c);
+    camera = aerotrack::test::require(
+        V4l2GimbalCamera::open(std::make_unique<FakeSource>(device), gimbalParams(pixel_format), kT0),
+        "V4l2GimbalCamera::open");
   }
   void push(std::uint64_t sequence, std::optional<rt::TimeNs> stamp_ns) {
     device->ready.push_back({jpeg, sequence, stamp_ns});

@@ -14,6 +14,7 @@
 
 #include <octomap/OcTree.h>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/mapping/trajectory_checker.hpp"
 #include "aerotrack/trajectory_server/min_jerk_tour.hpp"
 
@@ -92,15 +93,12 @@ TrajectoryChecker makeChecker(double margin_m = 0.0, int group = 16) {
   TrajectoryCheckerParams params;
   params.margin_m = margin_m;
   params.broad_phase_group = group;
-  auto checker = TrajectoryChecker::create(params);
-  EXPECT_TRUE(checker) << checker.error().message;
-  return checker.value();
+  return aerotrack::test::require(TrajectoryChecker::create(params), "TrajectoryChecker::create");
 }
 
 CollisionReport checkOk(const TrajectoryChecker& checker, const Trajectory& trajectory, const octomap::OcTree& tree) {
-  auto report = checker.check(trajectory, 0.0, trajectory.durationS(), tree);
-  EXPECT_TRUE(report) << report.error().message;
-  return report.value();
+  return aerotrack::test::require(checker.check(trajectory, 0.0, trajectory.durationS(), tree),
+                                  "TrajectoryChecker::check");
 }
 
 // ---- the slow obvious reference ----

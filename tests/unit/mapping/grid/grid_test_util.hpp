@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/mapping/local_grid.hpp"
 
 namespace aerotrack::mapping::test {
@@ -38,9 +39,7 @@ inline void setCell(octomap::OcTree& tree, const CellIndex& cell, bool occupied)
 }
 
 inline LocalGrid makeGrid(LocalGridParams params) {
-  auto grid = LocalGrid::create(params);
-  EXPECT_TRUE(grid.has_value()) << (grid ? "" : grid.error().message);
-  return std::move(grid).value();
+  return aerotrack::test::require(LocalGrid::create(params), "LocalGrid::create");
 }
 
 /// Reference state: what a search of the tree says about the cell.

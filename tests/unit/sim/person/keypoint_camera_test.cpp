@@ -9,6 +9,7 @@
 #include <random>
 #include <string>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/hal/sim/walking_person.hpp"
 
@@ -34,9 +35,9 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& ta
 
 // A person standing at the origin facing -x (towards a camera on the -x axis).
 Keypoints standingFacingMinusX() {
-  auto w = WalkingPerson::create({}, {{{0, 0}, 1.0}, {{-1, 0}, 1.0}});
-  EXPECT_TRUE(w.has_value());
-  return w->state(-1.0).keypoints_W_m;
+  const WalkingPerson w =
+      aerotrack::test::require(WalkingPerson::create({}, {{{0, 0}, 1.0}, {{-1, 0}, 1.0}}), "WalkingPerson::create");
+  return w.state(-1.0).keypoints_W_m;
 }
 
 KeypointCameraParams noiseless() {

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/sim/walking_person.hpp"
 
 namespace aerotrack::hal::sim {
@@ -24,9 +25,7 @@ const Eigen::Vector3d& kp(const PersonState& s, K k) {
 }
 
 WalkingPerson make(const std::vector<PathPoint>& path, const PersonParams& params = {}) {
-  auto w = WalkingPerson::create(params, path);
-  EXPECT_TRUE(w.has_value()) << (w ? "" : w.error().message);
-  return std::move(w).value();
+  return aerotrack::test::require(WalkingPerson::create(params, path), "WalkingPerson::create");
 }
 
 // Forward component of a keypoint relative to the pelvis ground point, along the heading.

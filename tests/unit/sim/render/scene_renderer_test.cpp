@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/sim/scene_renderer.hpp"
 
 namespace aerotrack::hal::sim {
@@ -32,15 +33,14 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& ta
 
 // A person standing at (x, 0) facing -x, towards a camera on the -x side.
 PersonState standingAt(double x_m) {
-  auto walker = WalkingPerson::create({}, {{{x_m, 0.0}, 1.0}, {{x_m - 1.0, 0.0}, 1.0}});
-  EXPECT_TRUE(walker.has_value());
-  return walker->state(-1.0);
+  const WalkingPerson walker = aerotrack::test::require(
+      WalkingPerson::create({}, {{{x_m, 0.0}, 1.0}, {{x_m - 1.0, 0.0}, 1.0}}), "WalkingPerson::create");
+  return walker.state(-1.0);
 }
 
 ObstacleWorld world(std::vector<Box> boxes, std::vector<Cylinder> cylinders = {}) {
-  auto w = ObstacleWorld::create(std::move(boxes), std::move(cylinders));
-  EXPECT_TRUE(w.has_value());
-  return std::move(w.value());
+  return aerotrack::test::require(ObstacleWorld::create(std::move(boxes), std::move(cylinders)),
+                                  "ObstacleWorld::create");
 }
 
 Eigen::Vector2d projected(const Eigen::Vector3d& p_W, const Eigen::Isometry3d& T_WC, const CameraIntrinsics& k) {

@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/sim/geometric_controller.hpp"
 #include "aerotrack/hal/sim/so3.hpp"
 
@@ -43,10 +44,9 @@ struct Loop {
     s.p_W_m = p_W_m;
     s.R_WB = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     s.thrust_n = params.mass_kg * params.gravity_mps2;
-    auto quad = Quadrotor::create(params, s);
-    auto controller = GeometricController::create(GeometricControllerParams{}, params);
-    EXPECT_TRUE(quad.has_value() && controller.has_value());
-    return Loop{std::move(quad.value()), std::move(controller.value())};
+    return Loop{aerotrack::test::require(Quadrotor::create(params, s), "Quadrotor::create"),
+                aerotrack::test::require(GeometricController::create(GeometricControllerParams{}, params),
+                                         "GeometricController::create")};
   }
 
   /// Flies for n steps; the setpoint is a function of time since the start; `each` sees every step.

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/sim/quadrotor.hpp"
 
 namespace aerotrack::hal::sim {
@@ -21,9 +22,7 @@ QuadrotorParams noDrag() {
 }
 
 Quadrotor make(const QuadrotorParams& params, const QuadrotorState& initial) {
-  auto quad = Quadrotor::create(params, initial);
-  EXPECT_TRUE(quad.has_value()) << (quad ? "" : quad.error().message);
-  return std::move(quad.value());
+  return aerotrack::test::require(Quadrotor::create(params, initial), "Quadrotor::create");
 }
 
 Eigen::Matrix3d rotation(double angle_rad, const Eigen::Vector3d& axis) {

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/depth_units.hpp"
 #include "aerotrack/hal/sim/depth_camera.hpp"
 
@@ -21,9 +22,8 @@ namespace {
 constexpr double kZ16Tol = 0.5e-3 + 1e-5;
 
 ObstacleWorld makeWorld(std::vector<Box> boxes, std::vector<Cylinder> cylinders) {
-  auto world = ObstacleWorld::create(std::move(boxes), std::move(cylinders));
-  EXPECT_TRUE(world.has_value()) << world.error().message;
-  return std::move(world).value();
+  return aerotrack::test::require(ObstacleWorld::create(std::move(boxes), std::move(cylinders)),
+                                  "ObstacleWorld::create");
 }
 
 /// Camera at p_W_m looking along world +x, level: C z -> W x, C x -> W -y, C y -> W -z.

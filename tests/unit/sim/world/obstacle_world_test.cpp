@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../../../support/require.hpp"
 #include "aerotrack/hal/sim/obstacle_world.hpp"
 
 namespace aerotrack::hal::sim {
@@ -22,9 +23,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kTol = 1e-12;
 
 ObstacleWorld makeWorld(std::vector<Box> boxes, std::vector<Cylinder> cylinders, double cell_size_m = 1.0) {
-  auto world = ObstacleWorld::create(std::move(boxes), std::move(cylinders), cell_size_m);
-  EXPECT_TRUE(world.has_value()) << world.error().message;
-  return std::move(world).value();
+  return aerotrack::test::require(ObstacleWorld::create(std::move(boxes), std::move(cylinders), cell_size_m),
+                                  "ObstacleWorld::create");
 }
 
 Box box(double x0, double y0, double z0, double x1, double y1, double z1) {
