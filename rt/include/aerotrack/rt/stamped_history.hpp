@@ -78,7 +78,7 @@ enum class HistoryPush : std::uint8_t {
 template <class V>
 struct HistoryLookup {
   HistoryStatus status = HistoryStatus::kEmpty;
-  V value;  ///< Valid when status == kOk; the traits' none() otherwise.
+  V value{};  ///< Valid when status == kOk; the traits' none() otherwise.
 };
 
 template <class T>
