@@ -2,8 +2,12 @@
 #include "aerotrack/rt/config_node.hpp"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <locale>
 #include <sstream>
 
 namespace aerotrack::rt {
@@ -16,13 +20,28 @@ std::string shortValue(const YAML::Node& value) {
   return "nothing";
 }
 
-std::string formatNumber(double v) {
+}  // namespace
+
+std::string formatConfigNumber(double value) {
   std::ostringstream out;
-  out << v;
-  return out.str();
+  out.imbue(std::locale::classic());
+  out << value;
+  std::string text = out.str();
+  if (!std::isfinite(value) || std::strtod(text.c_str(), nullptr) == value) return text;
+  std::array<char, 32> buffer{};
+  const auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return ec == std::errc() ? std::string(buffer.data(), end) : text;
 }
 
-}  // namespace
+bool Range::contains(double value) const {
+  return std::isfinite(value) && (lo_open ? value > lo : value >= lo) && (hi_open ? value < hi : value <= hi);
+}
+
+std::string Range::toString() const {
+  const bool lo_excluded = lo_open || !std::isfinite(lo);
+  const bool hi_excluded = hi_open || !std::isfinite(hi);
+  return (lo_excluded ? "(" : "[") + formatConfigNumber(lo) + ", " + formatConfigNumber(hi) + (hi_excluded ? ")" : "]");
+}
 
 ConfigNode::ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path)
     : node_(node),
@@ -98,9 +117,12 @@ T ConfigNode::scalarAs(const std::string& key, const YAML::Node& value, const ch
 }
 
 double ConfigNode::getDouble(const std::string& key, double min, double max) const {
+  return getDouble(key, Range::closed(min, max));
+}
+
+double ConfigNode::getDouble(const std::string& key, const Range& range) const {
   const double v = scalarAs<double>(key, require(key), "a number");
-  if (!std::isfinite(v) || v < min || v > max)
-    fail(key, formatNumber(v) + " is out of range [" + formatNumber(min) + ", " + formatNumber(max) + "]");
+  if (!range.contains(v)) fail(key, formatConfigNumber(v) + " is out of range " + range.toString());
   return v;
 }
 
@@ -127,25 +149,32 @@ std::string ConfigNode::getString(const std::string& key) const {
 }
 
 std::string ConfigNode::getEnum(const std::string& key, std::initializer_list<const char*> allowed) const {
+  return getEnum(key, std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+std::string ConfigNode::getEnum(const std::string& key, const std::vector<std::string>& allowed) const {
   // YAML reads a bare `null` as "no value"; where "null" is an allowed name (null backends), it
   // means that name.
   const YAML::Node raw = node_.IsMap() ? node_[key] : YAML::Node();
-  const bool null_allowed =
-      std::any_of(allowed.begin(), allowed.end(), [](const char* a) { return std::string(a) == "null"; });
+  const bool null_allowed = std::find(allowed.begin(), allowed.end(), "null") != allowed.end();
   if (null_allowed && raw.IsDefined() && raw.IsNull()) {
     used_->insert(key);
     return "null";
   }
   std::string v = getString(key);
   std::string list;
-  for (const char* a : allowed) {
+  for (const std::string& a : allowed) {
     if (v == a) return v;
-    list += list.empty() ? a : std::string(", ") + a;
+    list += list.empty() ? a : ", " + a;
   }
   fail(key, "'" + v + "' is not one of: " + list);
 }
 
 std::vector<double> ConfigNode::getDoubleList(const std::string& key, std::size_t size, double min, double max) const {
+  return getDoubleList(key, size, Range::closed(min, max));
+}
+
+std::vector<double> ConfigNode::getDoubleList(const std::string& key, std::size_t size, const Range& range) const {
   const YAML::Node value = require(key);
   if (!value.IsSequence()) fail(key, "expected a list of numbers, got " + shortValue(value));
   if (size != 0 && value.size() != size)
@@ -154,9 +183,8 @@ std::vector<double> ConfigNode::getDoubleList(const std::string& key, std::size_
   for (std::size_t i = 0; i < value.size(); ++i) {
     const std::string item_key = key + "[" + std::to_string(i) + "]";
     const double v = scalarAs<double>(item_key, value[i], "a number");
-    if (!std::isfinite(v) || v < min || v > max)
-      fail(key, "item " + std::to_string(i) + ": " + formatNumber(v) + " is out of range [" + formatNumber(min) + ", " +
-                    formatNumber(max) + "]");
+    if (!range.contains(v))
+      fail(key, "item " + std::to_string(i) + ": " + formatConfigNumber(v) + " is out of range " + range.toString());
     out.push_back(v);
   }
   return out;
@@ -181,9 +209,8 @@ std::vector<std::vector<double>> ConfigNode::getDoubleRows(const std::string& ke
       } catch (const YAML::Exception&) {
         fail(key, row_name + ": expected a number, got " + shortValue(row[c]));
       }
-      if (!std::isfinite(v) || v < min || v > max)
-        fail(key, row_name + ": " + formatNumber(v) + " is out of range [" + formatNumber(min) + ", " +
-                      formatNumber(max) + "]");
+      if (const Range range = Range::closed(min, max); !range.contains(v))
+        fail(key, row_name + ": " + formatConfigNumber(v) + " is out of range " + range.toString());
       out.push_back(v);
     }
     rows.push_back(std::move(out));

@@ -9,8 +9,10 @@
 // parsers linear; parseConfig() converts them to an Error value at the boundary (rule 6).
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <initializer_list>
+#include <limits>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -22,6 +24,33 @@
 #include "aerotrack/rt/expected.hpp"
 
 namespace aerotrack::rt {
+
+/// An interval of numbers with open or closed ends ("[0, 1)"), for range checks that parsing and
+/// validation share (field_table.hpp). Only finite numbers are ever inside: an infinite end means "no
+/// bound on this side" and is written open ("(0, inf)"), so finite() admits every finite number.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = true;
+  bool hi_open = true;
+
+  static constexpr Range closed(double low, double high) { return {low, high, false, false}; }     ///< [low, high]
+  static constexpr Range closedOpen(double low, double high) { return {low, high, false, true}; }  ///< [low, high)
+  static constexpr Range openClosed(double low, double high) { return {low, high, true, false}; }  ///< (low, high]
+  static constexpr Range open(double low, double high) { return {low, high, true, true}; }         ///< (low, high)
+  static constexpr Range atLeast(double low) { return {low, std::numeric_limits<double>::infinity(), false, true}; }
+  static constexpr Range greaterThan(double low) { return {low, std::numeric_limits<double>::infinity(), true, true}; }
+  static constexpr Range finite() { return {}; }  ///< (-inf, inf)
+
+  /// Whether `value` is finite and inside. Pure.
+  bool contains(double value) const;
+  /// "[0, 1)", "(0, inf)", "(-inf, inf)" (numbers as formatConfigNumber writes them).
+  std::string toString() const;
+};
+
+/// A number for messages and printed configs: the %g form when it reads back as the same double
+/// ("0.05", "1e+06", "100000"), else the shortest form that does ("0.9999999999999999"); "nan", "inf".
+std::string formatConfigNumber(double value);
 
 /// Thrown by ConfigNode while parsing; caught by parseConfig(). Do not let it escape a library.
 class ConfigError : public std::runtime_error {
@@ -40,14 +69,19 @@ class ConfigNode {
 
   // Required scalars. Throw ConfigError if missing, of the wrong type or outside [min, max].
   double getDouble(const std::string& key, double min, double max) const;
+  /// As above, in `range` ("key: 1 is out of range [0, 1)").
+  double getDouble(const std::string& key, const Range& range) const;
   int getInt(const std::string& key, int min, int max) const;
   std::uint64_t getUint64(const std::string& key) const;
   bool getBool(const std::string& key) const;
   std::string getString(const std::string& key) const;
   /// A string that must be one of `allowed`. If "null" is allowed, a YAML null means "null".
   std::string getEnum(const std::string& key, std::initializer_list<const char*> allowed) const;
+  std::string getEnum(const std::string& key, const std::vector<std::string>& allowed) const;
   /// A list of exactly `size` numbers (any size if size == 0), each in [min, max].
   std::vector<double> getDoubleList(const std::string& key, std::size_t size, double min, double max) const;
+  /// As above, each in `range`.
+  std::vector<double> getDoubleList(const std::string& key, std::size_t size, const Range& range) const;
   /// A list of rows, each a list of exactly `columns` numbers in [min, max] ("[[0, 0, 1], [5, 0, 1]]").
   std::vector<std::vector<double>> getDoubleRows(const std::string& key, std::size_t columns, double min,
                                                  double max) const;
