@@ -9,10 +9,6 @@
 namespace aerotrack::prediction {
 namespace {
 
-bool positiveFinite(double v) {
-  return std::isfinite(v) && v > 0.0;
-}
-
 /// sum_i points[i] b_i^degree(s).
 Eigen::Vector3d evaluate(std::span<const Eigen::Vector3d> points, int degree, double s) {
   std::array<double, kMaxBezierDegree + 1> b{};
@@ -24,44 +20,35 @@ Eigen::Vector3d evaluate(std::span<const Eigen::Vector3d> points, int degree, do
 
 }  // namespace
 
-rt::Status validate(const TargetPredictorParams& p) {
-  if (p.bezier_degree < 3 || p.bezier_degree > kMaxBezierDegree) {
-    return rt::Error{"target predictor: bezier_degree must be in 3.." + std::to_string(kMaxBezierDegree)};
-  }
-  for (const auto& [name, value] : {std::pair<const char*, double>{"window_s", p.window_s},
-                                    {"horizon_s", p.horizon_s},
-                                    {"weight_half_life_s", p.weight_half_life_s},
-                                    {"max_speed_mps", p.max_speed_mps},
-                                    {"max_accel_mps2", p.max_accel_mps2},
-                                    {"max_data_age_s", p.max_data_age_s}}) {
-    if (!positiveFinite(value)) return rt::Error{std::string("target predictor: ") + name + " must be finite and > 0"};
-  }
-  if (!std::isfinite(p.accel_energy_weight_s3) || p.accel_energy_weight_s3 < 0.0) {
-    return rt::Error{"target predictor: accel_energy_weight_s3 must be finite and >= 0"};
-  }
-  if (p.min_samples < 2) return rt::Error{"target predictor: min_samples must be >= 2"};
-  if (p.max_samples < p.min_samples) return rt::Error{"target predictor: max_samples must be >= min_samples"};
-  if (p.qp_max_iterations < 1) return rt::Error{"target predictor: qp_max_iterations must be >= 1"};
-  return rt::ok();
+const rt::FieldTable<TargetPredictorParams>& targetPredictorFields() {
+  using P = TargetPredictorParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable(
+      {
+          rt::integer("bezier_degree", &P::bezier_degree, 3, kMaxBezierDegree),
+          rt::number("window_s", &P::window_s, Range::closed(0.05, 60.0)),
+          rt::number("horizon_s", &P::horizon_s, Range::closed(0.01, 60.0)),
+          rt::number("weight_half_life_s", &P::weight_half_life_s, Range::closed(1e-3, 3600.0)),
+          rt::number("accel_energy_weight_s3", &P::accel_energy_weight_s3, Range::closed(0.0, 1e6)),
+          rt::number("max_speed_mps", &P::max_speed_mps, Range::closed(1e-3, 100.0)),
+          rt::number("max_accel_mps2", &P::max_accel_mps2, Range::closed(1e-3, 100.0)),
+          rt::flag("fit_z", &P::fit_z),
+          rt::flag("pin_to_newest", &P::pin_to_newest),
+          rt::integer("min_samples", &P::min_samples, 2, 100'000),
+          rt::number("max_data_age_s", &P::max_data_age_s, Range::closed(1e-3, 3600.0)),
+          rt::integer("max_samples", &P::max_samples, 2, 100'000),
+          rt::integer("qp_max_iterations", &P::qp_max_iterations, 1, 100'000),
+      },
+      {{"max_samples", "must be >= min_samples", [](const P& p) { return p.max_samples >= p.min_samples; }}});
+  return kTable;
+}
+
+rt::Status validate(const TargetPredictorParams& params) {
+  return targetPredictorFields().validate(params);
 }
 
 TargetPredictorParams parseTargetPredictorParams(const rt::ConfigNode& node) {
-  TargetPredictorParams p;
-  p.bezier_degree = node.getInt("bezier_degree", 3, kMaxBezierDegree);
-  p.window_s = node.getDouble("window_s", 0.05, 60.0);
-  p.horizon_s = node.getDouble("horizon_s", 0.01, 60.0);
-  p.weight_half_life_s = node.getDouble("weight_half_life_s", 1e-3, 3600.0);
-  p.accel_energy_weight_s3 = node.getDouble("accel_energy_weight_s3", 0.0, 1e6);
-  p.max_speed_mps = node.getDouble("max_speed_mps", 1e-3, 100.0);
-  p.max_accel_mps2 = node.getDouble("max_accel_mps2", 1e-3, 100.0);
-  p.fit_z = node.getBool("fit_z");
-  p.pin_to_newest = node.getBool("pin_to_newest");
-  p.min_samples = node.getInt("min_samples", 2, 100000);
-  p.max_data_age_s = node.getDouble("max_data_age_s", 1e-3, 3600.0);
-  p.max_samples = node.getInt("max_samples", 2, 100000);
-  p.qp_max_iterations = node.getInt("qp_max_iterations", 1, 100000);
-  node.finish();
-  return p;
+  return targetPredictorFields().parse(node);
 }
 
 Eigen::Vector3d TargetPrediction::position(rt::TimeNs t_ns) const {
@@ -94,7 +81,7 @@ Eigen::Vector3d TargetPrediction::acceleration(rt::TimeNs t_ns) const {
 }
 
 rt::Expected<TargetPredictor> TargetPredictor::create(const TargetPredictorParams& params) {
-  if (rt::Status status = validate(params); !status) return status.error();
+  if (rt::Status status = validate(params); !status) return rt::Error{"target predictor: " + status.error().message};
   const int n = params.bezier_degree;
   DenseQpSolverParams qp;
   qp.max_variables = n + 1;

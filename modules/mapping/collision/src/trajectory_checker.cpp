@@ -169,19 +169,26 @@ rt::Status sampleTrajectory(const trajectory_server::Trajectory& trajectory, dou
   return rt::ok();
 }
 
+const rt::FieldTable<TrajectoryCheckerParams>& trajectoryCheckerFields() {
+  using P = TrajectoryCheckerParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable(
+      {
+          rt::number("radius_m", &P::radius_m, Range::closed(0.01, 5.0)),
+          rt::number("sample_step_m", &P::sample_step_m, Range::closed(0.005, 5.0)),
+          rt::number("margin_m", &P::margin_m, Range::closed(0.0, 5.0)),
+          rt::integer("broad_phase_group", &P::broad_phase_group, 1, kMaxBroadPhaseGroup),
+      },
+      {{"sample_step_m", "must be <= radius_m", [](const P& p) { return p.sample_step_m <= p.radius_m; }}});
+  return kTable;
+}
+
+rt::Status validate(const TrajectoryCheckerParams& params) {
+  return trajectoryCheckerFields().validate(params);
+}
+
 rt::Expected<TrajectoryChecker> TrajectoryChecker::create(const TrajectoryCheckerParams& params) {
-  if (!isFinitePositive(params.radius_m))
-    return error("radius_m must be positive, got " + std::to_string(params.radius_m));
-  if (!isFinitePositive(params.sample_step_m) || params.sample_step_m > params.radius_m) {
-    return error("sample_step_m must be in (0, radius_m], got " + std::to_string(params.sample_step_m));
-  }
-  if (!std::isfinite(params.margin_m) || params.margin_m < 0.0) {
-    return error("margin_m must be >= 0, got " + std::to_string(params.margin_m));
-  }
-  if (params.broad_phase_group < 1 || params.broad_phase_group > kMaxBroadPhaseGroup) {
-    return error("broad_phase_group must be in [1, " + std::to_string(kMaxBroadPhaseGroup) + "], got " +
-                 std::to_string(params.broad_phase_group));
-  }
+  if (const rt::Status valid = validate(params); !valid) return error(valid.error().message);
   return TrajectoryChecker(params);
 }
 

@@ -104,31 +104,28 @@ bool layerCellsFree(const LocalGrid& grid, const CellBox& layer, int thin_axis, 
 
 }  // namespace
 
+const rt::FieldTable<CorridorParams>& corridorFields() {
+  using P = CorridorParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable({
+      rt::numberList("max_box_size_m", &P::max_box_size_m, 3, Range::closed(0.01, 100.0)),
+      rt::integer("max_boxes", &P::max_boxes, 1, 10'000),
+      rt::integer("max_path_cells", &P::max_path_cells, 1, 10'000'000),
+      rt::number("corner_tolerance_m", &P::corner_tolerance_m, Range::closed(0.0, 0.05)),
+  });
+  return kTable;
+}
+
 rt::Status validate(const CorridorParams& params) {
-  if (!params.max_box_size_m.allFinite() || (params.max_box_size_m.array() <= 0.0).any()) {
-    return rt::Error{"corridor: max_box_size_m must be finite and > 0 on every axis"};
-  }
-  if (params.max_boxes < 1) return rt::Error{"corridor: max_boxes must be >= 1"};
-  if (params.max_path_cells < 1) return rt::Error{"corridor: max_path_cells must be >= 1"};
-  if (!(params.corner_tolerance_m >= 0.0 && params.corner_tolerance_m <= 0.05)) {
-    return rt::Error{"corridor: corner_tolerance_m must be in [0, 0.05] m"};
-  }
-  return rt::ok();
+  return corridorFields().validate(params);
 }
 
 CorridorParams parseCorridorParams(const rt::ConfigNode& node) {
-  CorridorParams p;
-  const std::vector<double> size_m = node.getDoubleList("max_box_size_m", 3, 0.01, 100.0);
-  p.max_box_size_m = Eigen::Vector3d(size_m[0], size_m[1], size_m[2]);
-  p.max_boxes = node.getInt("max_boxes", 1, 10'000);
-  p.max_path_cells = node.getInt("max_path_cells", 1, 10'000'000);
-  p.corner_tolerance_m = node.getDouble("corner_tolerance_m", 0.0, 0.05);
-  node.finish();
-  return p;
+  return corridorFields().parse(node);
 }
 
 rt::Expected<CorridorBuilder> CorridorBuilder::create(const CorridorParams& params) {
-  if (rt::Status status = validate(params); !status) return status.error();
+  if (rt::Status status = validate(params); !status) return rt::Error{"corridor: " + status.error().message};
   return CorridorBuilder(params);
 }
 

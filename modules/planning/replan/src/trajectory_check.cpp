@@ -28,28 +28,27 @@ std::string_view toString(CheckVerdict verdict) {
   return "unknown";
 }
 
-rt::Status validate(const TrajectoryCheckParams& p) {
-  if (!(p.max_velocity_mps > 0.0)) return rt::Error{"max_velocity_mps must be > 0"};
-  if (!(p.max_acceleration_mps2 > 0.0)) return rt::Error{"max_acceleration_mps2 must be > 0"};
-  if (!(p.max_jerk_mps3 > 0.0)) return rt::Error{"max_jerk_mps3 must be > 0"};
-  if (!(p.tolerance >= 0.0 && p.tolerance <= 1.0)) return rt::Error{"tolerance must be in [0, 1]"};
-  if (!(p.sample_step_s > 0.0)) return rt::Error{"sample_step_s must be > 0"};
-  if (!(p.horizon_s > 0.0)) return rt::Error{"horizon_s must be > 0"};
-  if (!(p.margin_escape_s > 0.0)) return rt::Error{"margin_escape_s must be > 0"};
-  return rt::ok();
+const rt::FieldTable<TrajectoryCheckParams>& trajectoryCheckFields() {
+  using P = TrajectoryCheckParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable({
+      rt::number("max_velocity_mps", &P::max_velocity_mps, Range::closed(0.1, 30.0)),
+      rt::number("max_acceleration_mps2", &P::max_acceleration_mps2, Range::closed(0.1, 50.0)),
+      rt::number("max_jerk_mps3", &P::max_jerk_mps3, Range::closed(0.1, 1e4)),
+      rt::number("tolerance", &P::tolerance, Range::closed(0.0, 1.0)),
+      rt::number("sample_step_s", &P::sample_step_s, Range::closed(1e-3, 1.0)),
+      rt::number("horizon_s", &P::horizon_s, Range::closed(0.1, 60.0)),
+      rt::number("margin_escape_s", &P::margin_escape_s, Range::closed(0.01, 10.0)),
+  });
+  return kTable;
+}
+
+rt::Status validate(const TrajectoryCheckParams& params) {
+  return trajectoryCheckFields().validate(params);
 }
 
 TrajectoryCheckParams parseTrajectoryCheckParams(const rt::ConfigNode& node) {
-  TrajectoryCheckParams p;
-  p.max_velocity_mps = node.getDouble("max_velocity_mps", 0.1, 30.0);
-  p.max_acceleration_mps2 = node.getDouble("max_acceleration_mps2", 0.1, 50.0);
-  p.max_jerk_mps3 = node.getDouble("max_jerk_mps3", 0.1, 1e4);
-  p.tolerance = node.getDouble("tolerance", 0.0, 1.0);
-  p.sample_step_s = node.getDouble("sample_step_s", 1e-3, 1.0);
-  p.horizon_s = node.getDouble("horizon_s", 0.1, 60.0);
-  p.margin_escape_s = node.getDouble("margin_escape_s", 0.01, 10.0);
-  node.finish();
-  return p;
+  return trajectoryCheckFields().parse(node);
 }
 
 CheckResult checkTrajectory(const PolynomialTrajectory& trajectory, const TrajectoryCheckParams& params,

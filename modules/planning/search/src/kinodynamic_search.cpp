@@ -63,26 +63,52 @@ std::string_view toString(SearchStatus status) {
   return "unknown";
 }
 
+const rt::FieldTable<KinodynamicSearchParams>& kinodynamicSearchFields() {
+  using P = KinodynamicSearchParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable({
+      rt::number("max_velocity_mps", &P::max_velocity_mps, Range::closed(0.1, 30.0)),
+      rt::number("max_acceleration_mps2", &P::max_acceleration_mps2, Range::closed(0.1, 50.0)),
+      rt::integer("acceleration_steps", &P::acceleration_steps, 1, 4),
+      rt::number("primitive_duration_s", &P::primitive_duration_s, Range::closed(0.01, 2.0)),
+      rt::number("time_weight", &P::time_weight, Range::closed(1e-3, 1e4)),
+      rt::number("heuristic_weight", &P::heuristic_weight, Range::closed(0.0, 100.0)),
+      rt::number("time_penalty_per_s", &P::time_penalty_per_s, Range::closed(0.0, 1e4)),
+      rt::number("occlusion_penalty", &P::occlusion_penalty, Range::closed(0.0, 1e6)),
+      rt::flag("occlusion_aware", &P::occlusion_aware),
+      rt::number("position_resolution_m", &P::position_resolution_m, Range::closed(0.01, 5.0)),
+      rt::number("velocity_resolution_mps", &P::velocity_resolution_mps, Range::closed(0.01, 10.0)),
+      rt::number("goal_tolerance_m", &P::goal_tolerance_m, Range::closed(0.0, 5.0)),
+      rt::number("goal_velocity_tolerance_mps", &P::goal_velocity_tolerance_mps, Range::closed(0.0, 10.0)),
+      rt::number("one_shot_distance_m", &P::one_shot_distance_m, Range::closed(0.0, 50.0)),
+      rt::integer("max_expansions", &P::max_expansions, 1, 10'000'000),
+      rt::integer("max_nodes", &P::max_nodes, 2, 10'000'000),
+  });
+  return kTable;
+}
+
+rt::Status validate(const KinodynamicSearchParams& params) {
+  return kinodynamicSearchFields().validate(params);
+}
+
 KinodynamicSearchParams parseKinodynamicSearchParams(const rt::ConfigNode& node) {
-  KinodynamicSearchParams p;
-  p.max_velocity_mps = node.getDouble("max_velocity_mps", 0.1, 30.0);
-  p.max_acceleration_mps2 = node.getDouble("max_acceleration_mps2", 0.1, 50.0);
-  p.acceleration_steps = node.getInt("acceleration_steps", 1, 4);
-  p.primitive_duration_s = node.getDouble("primitive_duration_s", 0.01, 2.0);
-  p.time_weight = node.getDouble("time_weight", 1e-3, 1e4);
-  p.heuristic_weight = node.getDouble("heuristic_weight", 0.0, 100.0);
-  p.time_penalty_per_s = node.getDouble("time_penalty_per_s", 0.0, 1e4);
-  p.occlusion_penalty = node.getDouble("occlusion_penalty", 0.0, 1e6);
-  p.occlusion_aware = node.getBool("occlusion_aware");
-  p.position_resolution_m = node.getDouble("position_resolution_m", 0.01, 5.0);
-  p.velocity_resolution_mps = node.getDouble("velocity_resolution_mps", 0.01, 10.0);
-  p.goal_tolerance_m = node.getDouble("goal_tolerance_m", 0.0, 5.0);
-  p.goal_velocity_tolerance_mps = node.getDouble("goal_velocity_tolerance_mps", 0.0, 10.0);
-  p.one_shot_distance_m = node.getDouble("one_shot_distance_m", 0.0, 50.0);
-  p.max_expansions = node.getInt("max_expansions", 1, 10'000'000);
-  p.max_nodes = node.getInt("max_nodes", 2, 10'000'000);
-  node.finish();
-  return p;
+  return kinodynamicSearchFields().parse(node);
+}
+
+const rt::FieldTable<TrackingGoalParams>& trackingGoalFields() {
+  using P = TrackingGoalParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable({
+      rt::number("predicted_weight", &P::predicted_weight, Range::closed(0.0, 1.0)),
+      rt::number("tracking_distance_m", &P::tracking_distance_m, Range::closed(0.0, 50.0)),
+      rt::number("visible_step_rad", &P::visible_step_rad, Range::closed(0.01, 3.2)),
+      rt::number("visible_max_turn_rad", &P::visible_max_turn_rad, Range::closed(0.0, 3.2)),
+  });
+  return kTable;
+}
+
+rt::Status validate(const TrackingGoalParams& params) {
+  return trackingGoalFields().validate(params);
 }
 
 KinematicState makeTrackingGoal(const KinematicState& person_now, const KinematicState& person_predicted,
@@ -159,24 +185,8 @@ Eigen::Vector3d SearchPath::accelerationAt(double t_s) const {
 }
 
 rt::Expected<KinodynamicSearch> KinodynamicSearch::create(const KinodynamicSearchParams& params) {
-  const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
-  const auto non_negative = [](double x) { return std::isfinite(x) && x >= 0.0; };
-  if (!positive(params.max_velocity_mps) || !positive(params.max_acceleration_mps2) ||
-      !positive(params.primitive_duration_s) || !positive(params.time_weight) ||
-      !positive(params.position_resolution_m) || !positive(params.velocity_resolution_mps)) {
-    return rt::Error{"kinodynamic search: limits, primitive duration, time weight and resolutions must be > 0"};
-  }
-  if (!non_negative(params.heuristic_weight) || !non_negative(params.time_penalty_per_s) ||
-      !non_negative(params.occlusion_penalty) || !non_negative(params.goal_tolerance_m) ||
-      !non_negative(params.goal_velocity_tolerance_mps) || !non_negative(params.one_shot_distance_m)) {
-    return rt::Error{"kinodynamic search: weights, penalties and tolerances must be finite and >= 0"};
-  }
-  if (params.acceleration_steps < 1 || params.acceleration_steps > 4) {
-    return rt::Error{"kinodynamic search: acceleration_steps must be in [1, 4]"};
-  }
-  if (params.max_expansions < 1 || params.max_nodes < 2) {
-    return rt::Error{"kinodynamic search: max_expansions must be >= 1 and max_nodes >= 2"};
-  }
+  if (const rt::Status valid = validate(params); !valid)
+    return rt::Error{"kinodynamic search: " + valid.error().message};
   return KinodynamicSearch(params);
 }
 

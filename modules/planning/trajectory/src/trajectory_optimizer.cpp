@@ -89,52 +89,38 @@ std::string_view toString(OptimizerStatus status) {
   return "unknown";
 }
 
-rt::Status validate(const TrajectoryOptimizerParams& p) {
-  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  if (!positive(p.max_velocity_mps)) return rt::Error{"max_velocity_mps must be > 0"};
-  if (!positive(p.max_acceleration_mps2)) return rt::Error{"max_acceleration_mps2 must be > 0"};
-  if (!positive(p.max_jerk_mps3)) return rt::Error{"max_jerk_mps3 must be > 0"};
-  if (!positive(p.barrier_weight)) return rt::Error{"barrier_weight must be > 0"};
-  if (!non_negative(p.time_weight)) return rt::Error{"time_weight must be >= 0"};
-  if (!non_negative(p.waypoint_velocity_weight)) return rt::Error{"waypoint_velocity_weight must be >= 0"};
-  if (!non_negative(p.waypoint_acceleration_weight)) return rt::Error{"waypoint_acceleration_weight must be >= 0"};
-  if (!non_negative(p.corridor_weight)) return rt::Error{"corridor_weight must be >= 0"};
-  if (!non_negative(p.corridor_margin_m)) return rt::Error{"corridor_margin_m must be >= 0"};
-  if (!non_negative(p.sample_velocity_weight)) return rt::Error{"sample_velocity_weight must be >= 0"};
-  if (!non_negative(p.sample_acceleration_weight)) return rt::Error{"sample_acceleration_weight must be >= 0"};
-  if (!non_negative(p.sample_jerk_weight)) return rt::Error{"sample_jerk_weight must be >= 0"};
-  if (p.samples_per_piece < 1) return rt::Error{"samples_per_piece must be >= 1"};
-  if (p.max_iterations < 1) return rt::Error{"max_iterations must be >= 1"};
-  if (!positive(p.relative_cost_tolerance)) return rt::Error{"relative_cost_tolerance must be > 0"};
-  if (!positive(p.gradient_tolerance)) return rt::Error{"gradient_tolerance must be > 0"};
-  if (p.memory < 1) return rt::Error{"memory must be >= 1"};
-  if (p.max_pieces < 1) return rt::Error{"max_pieces must be >= 1"};
-  return rt::ok();
+const rt::FieldTable<TrajectoryOptimizerParams>& trajectoryOptimizerFields() {
+  using P = TrajectoryOptimizerParams;
+  using rt::Range;
+  static const rt::FieldTable<P> kTable({
+      rt::number("max_velocity_mps", &P::max_velocity_mps, Range::closed(0.1, 30.0)),
+      rt::number("max_acceleration_mps2", &P::max_acceleration_mps2, Range::closed(0.1, 50.0)),
+      rt::number("max_jerk_mps3", &P::max_jerk_mps3, Range::closed(0.1, 1e4)),
+      rt::number("barrier_weight", &P::barrier_weight, Range::closed(1e-9, 1e6)),
+      rt::number("time_weight", &P::time_weight, Range::closed(0.0, 1e6)),
+      rt::number("waypoint_velocity_weight", &P::waypoint_velocity_weight, Range::closed(0.0, 1e9)),
+      rt::number("waypoint_acceleration_weight", &P::waypoint_acceleration_weight, Range::closed(0.0, 1e9)),
+      rt::number("corridor_weight", &P::corridor_weight, Range::closed(0.0, 1e12)),
+      rt::number("corridor_margin_m", &P::corridor_margin_m, Range::closed(0.0, 1.0)),
+      rt::number("sample_velocity_weight", &P::sample_velocity_weight, Range::closed(0.0, 1e9)),
+      rt::number("sample_acceleration_weight", &P::sample_acceleration_weight, Range::closed(0.0, 1e9)),
+      rt::number("sample_jerk_weight", &P::sample_jerk_weight, Range::closed(0.0, 1e9)),
+      rt::integer("samples_per_piece", &P::samples_per_piece, 1, 256),
+      rt::integer("max_iterations", &P::max_iterations, 1, 100'000),
+      rt::number("relative_cost_tolerance", &P::relative_cost_tolerance, Range::closed(1e-12, 1.0)),
+      rt::number("gradient_tolerance", &P::gradient_tolerance, Range::closed(1e-12, 1.0)),
+      rt::integer("memory", &P::memory, 1, 64),
+      rt::integer("max_pieces", &P::max_pieces, 1, 100'000),
+  });
+  return kTable;
+}
+
+rt::Status validate(const TrajectoryOptimizerParams& params) {
+  return trajectoryOptimizerFields().validate(params);
 }
 
 TrajectoryOptimizerParams parseTrajectoryOptimizerParams(const rt::ConfigNode& node) {
-  TrajectoryOptimizerParams p;
-  p.max_velocity_mps = node.getDouble("max_velocity_mps", 0.1, 30.0);
-  p.max_acceleration_mps2 = node.getDouble("max_acceleration_mps2", 0.1, 50.0);
-  p.max_jerk_mps3 = node.getDouble("max_jerk_mps3", 0.1, 1e4);
-  p.barrier_weight = node.getDouble("barrier_weight", 1e-9, 1e6);
-  p.time_weight = node.getDouble("time_weight", 0.0, 1e6);
-  p.waypoint_velocity_weight = node.getDouble("waypoint_velocity_weight", 0.0, 1e9);
-  p.waypoint_acceleration_weight = node.getDouble("waypoint_acceleration_weight", 0.0, 1e9);
-  p.corridor_weight = node.getDouble("corridor_weight", 0.0, 1e12);
-  p.corridor_margin_m = node.getDouble("corridor_margin_m", 0.0, 1.0);
-  p.sample_velocity_weight = node.getDouble("sample_velocity_weight", 0.0, 1e9);
-  p.sample_acceleration_weight = node.getDouble("sample_acceleration_weight", 0.0, 1e9);
-  p.sample_jerk_weight = node.getDouble("sample_jerk_weight", 0.0, 1e9);
-  p.samples_per_piece = node.getInt("samples_per_piece", 1, 256);
-  p.max_iterations = node.getInt("max_iterations", 1, 100000);
-  p.relative_cost_tolerance = node.getDouble("relative_cost_tolerance", 1e-12, 1.0);
-  p.gradient_tolerance = node.getDouble("gradient_tolerance", 1e-12, 1.0);
-  p.memory = node.getInt("memory", 1, 64);
-  p.max_pieces = node.getInt("max_pieces", 1, 100000);
-  node.finish();
-  return p;
+  return trajectoryOptimizerFields().parse(node);
 }
 
 double TrajectoryOptimizer::durationFromTau(double tau) {

@@ -30,6 +30,7 @@
 #include "aerotrack/prediction/dense_qp.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 #include "aerotrack/rt/time.hpp"
 
 namespace aerotrack::prediction {
@@ -50,11 +51,15 @@ struct TargetPredictorParams {
   int qp_max_iterations = 100;           ///< Per axis; >= 1.
 };
 
-/// Ok if every field is in its documented range; the error names the field.
+/// The predictor's config section: every field of TargetPredictorParams by its name, all required, with
+/// the one range per field (and the rule max_samples >= min_samples) that parsing, validate() and
+/// printing share (rt/field_table.hpp; the ranges are in the .cpp).
+const rt::FieldTable<TargetPredictorParams>& targetPredictorFields();
+
+/// Ok if every field is in its range and the rule holds; the error names the field.
 rt::Status validate(const TargetPredictorParams& params);
 
-/// Reads the predictor's config section: every field of TargetPredictorParams by its name, all
-/// required. Throws rt::ConfigError naming the key (use inside rt::parseConfig).
+/// targetPredictorFields().parse. Throws rt::ConfigError naming the key (use inside rt::parseConfig).
 TargetPredictorParams parseTargetPredictorParams(const rt::ConfigNode& node);
 
 /// The predicted path: a Bezier curve in W from start_ns (the oldest estimate used) to end_ns

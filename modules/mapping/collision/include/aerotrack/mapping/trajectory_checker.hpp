@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 
 namespace octomap {
@@ -37,6 +38,13 @@ struct TrajectoryCheckerParams {
   /// (broad phase). 1 disables the broad phase (one FCL query per sample). In [1, 64].
   int broad_phase_group = 16;
 };
+
+/// The planner's `collision:` config section: every field above by its name, all required, with the one
+/// range per field (and the rule sample_step_m <= radius_m) that parsing, validate() and printing share
+/// (rt/field_table.hpp; the ranges are in the .cpp).
+const rt::FieldTable<TrajectoryCheckerParams>& trajectoryCheckerFields();
+/// Every field in its range and the rule; the error names the field.
+rt::Status validate(const TrajectoryCheckerParams& params);
 
 struct CollisionReport {
   bool collision_free = true;
@@ -79,7 +87,7 @@ rt::Status sampleTrajectory(const trajectory_server::Trajectory& trajectory, dou
 /// of their children (OctoMap's default; after lazy updates call updateInnerOccupancy()).
 class TrajectoryChecker {
  public:
-  /// Validates `params`. Error naming the first bad field.
+  /// Validates `params` (validate()). Error naming the first bad field.
   static rt::Expected<TrajectoryChecker> create(const TrajectoryCheckerParams& params);
 
   /// Checks `trajectory` between t_begin_s and t_end_s (s since its start, clamped to

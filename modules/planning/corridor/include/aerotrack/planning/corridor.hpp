@@ -48,6 +48,7 @@
 #include "aerotrack/mapping/local_grid.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 
 namespace aerotrack::planning {
 
@@ -82,12 +83,15 @@ struct CorridorParams {
   double corner_tolerance_m = 0.002;
 };
 
-/// Success when every field is in its documented range, else an Error naming the field.
+/// The `corridor:` config section (max_box_size_m: [x, y, z], max_boxes, max_path_cells, corner_tolerance_m; all
+/// required), with the one range per field that parsing, validate() and printing share (rt/field_table.hpp).
+const rt::FieldTable<CorridorParams>& corridorFields();
+
+/// Success when every field is in its range (corridorFields()), else an Error naming the field.
 rt::Status validate(const CorridorParams& params);
 
-/// Reads every key of a `corridor:` section (max_box_size_m: [x, y, z], max_boxes, max_path_cells,
-/// corner_tolerance_m; all required) and calls finish(). Throws rt::ConfigError (file:line: key: message) on a missing,
-/// unknown or out-of-range key (use rt::parseConfig at the boundary).
+/// corridorFields().parse: reads every key of a `corridor:` section and calls finish(). Throws rt::ConfigError
+/// (file:line: key: message) on a missing, unknown or out-of-range key (use rt::parseConfig at the boundary).
 CorridorParams parseCorridorParams(const rt::ConfigNode& node);
 
 /// The corridor of one path: M >= 1 boxes and M - 1 waypoints.

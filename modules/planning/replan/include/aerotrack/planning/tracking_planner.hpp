@@ -38,6 +38,7 @@
 #include "aerotrack/prediction/target_predictor.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 
 namespace aerotrack::planning {
@@ -67,9 +68,15 @@ struct TrackingPlannerParams {
   mapping::TrajectoryCheckerParams collision;
 };
 
-rt::Status validate(const TrackingPlannerParams& params);
 /// The `planning:` config section: the scalars above and the sub-sections goal, search, corridor,
-/// optimizer, prediction, check, collision; every key required. Throws rt::ConfigError naming the key.
+/// optimizer, prediction, check, collision (each its module's table); every key required. The one list
+/// of keys and ranges that parsing, validate() and printing (--print-config) share (rt/field_table.hpp);
+/// the ranges are in planner_config.cpp, with the rule flight_altitude_m > takeoff_below_m.
+const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields();
+/// Every field (sub-sections included) in its range, and every rule; the error names the key path
+/// ("goal.predicted_weight must be in [0, 1], got 2").
+rt::Status validate(const TrackingPlannerParams& params);
+/// trackingPlannerFields().parse. Throws rt::ConfigError naming the file, line and key.
 TrackingPlannerParams parseTrackingPlannerParams(const rt::ConfigNode& node);
 
 enum class PlanStatus : std::uint8_t {

@@ -16,6 +16,7 @@
 #include "aerotrack/planning/polynomial_trajectory.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 
 namespace aerotrack::planning {
 
@@ -50,8 +51,12 @@ class MarginWalk {
   bool left_margin_ = false;
 };
 
+/// The `check:` config section: every field of TrajectoryCheckParams by its name, all required, with the one
+/// range per field that parsing, validate() and printing share (rt/field_table.hpp; ranges in the .cpp).
+const rt::FieldTable<TrajectoryCheckParams>& trajectoryCheckFields();
+/// Every field in its range; the error names the key.
 rt::Status validate(const TrajectoryCheckParams& params);
-/// Every field by its name, all required; throws rt::ConfigError naming the key.
+/// trajectoryCheckFields().parse; throws rt::ConfigError naming the key.
 TrajectoryCheckParams parseTrajectoryCheckParams(const rt::ConfigNode& node);
 
 enum class CheckVerdict : std::uint8_t {

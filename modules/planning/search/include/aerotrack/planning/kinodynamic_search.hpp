@@ -29,6 +29,7 @@
 #include "aerotrack/mapping/local_grid.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 
 namespace aerotrack::planning {
 
@@ -53,8 +54,13 @@ struct KinodynamicSearchParams {
                           ///< the search also stops (partial) when it is full.
 };
 
-/// Reads every key of a `search:` section (every field above) and calls
-/// finish(). Throws rt::ConfigError (file:line: key: message) on a missing, unknown or out-of-range key.
+/// The `search:` config section: every field above by its name, all required, with the one range that
+/// parsing, validate() and printing share (rt/field_table.hpp; the ranges are in the .cpp).
+const rt::FieldTable<KinodynamicSearchParams>& kinodynamicSearchFields();
+/// Every field in its range; the error names the key.
+rt::Status validate(const KinodynamicSearchParams& params);
+/// kinodynamicSearchFields().parse: reads every key of a `search:` section and calls finish(). Throws
+/// rt::ConfigError (file:line: key: message) on a missing, unknown or out-of-range key.
 KinodynamicSearchParams parseKinodynamicSearchParams(const rt::ConfigNode& node);
 
 /// Position and velocity in W.
@@ -71,6 +77,11 @@ struct TrackingGoalParams {
   double visible_step_rad = 0.2618;      // 15 degrees
   double visible_max_turn_rad = 1.5708;  // 90 degrees either way
 };
+
+/// The planner's `goal:` config section (every field above, all required; ranges in the .cpp).
+const rt::FieldTable<TrackingGoalParams>& trackingGoalFields();
+/// Every field in its range; the error names the key.
+rt::Status validate(const TrackingGoalParams& params);
 
 /// The goal state: the mix of the person's current and predicted states, moved horizontally towards the
 /// drone by tracking_distance_m (behind the person's velocity when the drone is right above it, -x when the

@@ -31,6 +31,7 @@
 #include "aerotrack/planning/polynomial_trajectory.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 
 namespace aerotrack::planning {
 
@@ -55,8 +56,12 @@ struct TrajectoryOptimizerParams {
   int max_pieces = 32;                        ///< Scratch sized for this many pieces (more allocates); >= 1.
 };
 
+/// The `optimizer:` config section: every field above by its name, all required, with the one range per field
+/// that parsing, validate() and printing share (rt/field_table.hpp; the ranges are in the .cpp).
+const rt::FieldTable<TrajectoryOptimizerParams>& trajectoryOptimizerFields();
+/// Every field in its range; the error names the key.
 rt::Status validate(const TrajectoryOptimizerParams& params);
-/// Every field by its name, all required; throws rt::ConfigError naming the key.
+/// trajectoryOptimizerFields().parse; throws rt::ConfigError naming the key.
 TrajectoryOptimizerParams parseTrajectoryOptimizerParams(const rt::ConfigNode& node);
 
 /// Which cost terms evaluate() includes (bit mask; for the gradient tests).
