@@ -1,5 +1,6 @@
-// Calibration CSV and parameter YAML of the localization (see localization_io.hpp). YAML is read
-// through rt::ConfigNode, so its errors have the project's "file:line: key: message" form.
+// Calibration CSV and parameter YAML of the localization (see localization_io.hpp). The YAML is read
+// and written by localizationFields() (the one key list, rt/field_table.hpp) through rt::ConfigNode, so
+// its errors have the project's "file:line: key: message" form.
 #include "aerotrack/localization/localization_io.hpp"
 
 #include <array>
@@ -18,7 +19,6 @@ namespace {
 
 constexpr std::array<std::string_view, 5> kColumns = {"torso_px", "u_px", "x_m", "y_m", "z_m"};
 constexpr std::size_t kRequiredColumns = 4;  // z_m is optional
-constexpr double kHuge = 1e300;
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -163,42 +163,7 @@ std::string formatParamsYaml(const LocalizationParams& params) {
   std::string text =
       "# aerotrack localization parameters (issue 6; paper Sect. IV-B). predict(torso_px, u_px) gives p_C\n"
       "# in metres, camera frame x forward, y left, z up.\n";
-  text += "model: " + std::string(toString(params.model)) + "\n";
-  text += "z_m: " + formatNumber(params.z_m) + "\n";
-  text += "fit_samples: " + std::to_string(params.fit_samples) + "\n";
-  text += "fit_mean_error_m: " + formatNumber(params.fit_mean_error_m) + "\n";
-  const auto line = [&text](const char* key, double value) {
-    text += "  " + std::string(key) + ": " + formatNumber(value) + "\n";
-  };
-  if (params.model == LocalizationModel::kPaper) {
-    const PaperModelParams& p = params.paper;
-    text +=
-        "# x = l1_m e^(k1_per_px L) + l2_m e^(k2_per_px L); y = (l3 e^(k3_per_px u) + l4 e^(k4_per_px u)) (x + b_m)\n";
-    text += "paper:\n";
-    line("l1_m", p.l1_m);
-    line("k1_per_px", p.k1_per_px);
-    line("l2_m", p.l2_m);
-    line("k2_per_px", p.k2_per_px);
-    line("l3", p.l3);
-    line("k3_per_px", p.k3_per_px);
-    line("l4", p.l4);
-    line("k4_per_px", p.k4_per_px);
-    line("b_m", p.b_m);
-  } else {
-    const PinholeModelParams& p = params.pinhole;
-    text += "# x = fy_px torso_m / L + x_offset_m + x_inv_sq_m_px2 / L^2;\n";
-    text += "# y = -x (u - cx_px) / fx_px (1 + y_scale_correction) + y_offset_m\n";
-    text += "pinhole:\n";
-    line("fx_px", p.fx_px);
-    line("fy_px", p.fy_px);
-    line("cx_px", p.cx_px);
-    line("torso_m", p.torso_m);
-    line("x_offset_m", p.x_offset_m);
-    line("x_inv_sq_m_px2", p.x_inv_sq_m_px2);
-    line("y_scale_correction", p.y_scale_correction);
-    line("y_offset_m", p.y_offset_m);
-  }
-  return text;
+  return text + localizationFields().toYaml(params) + "\n";
 }
 
 rt::Status writeParamsYaml(const LocalizationParams& params, const std::string& path) {
@@ -206,60 +171,18 @@ rt::Status writeParamsYaml(const LocalizationParams& params, const std::string& 
   return writeFile(path, formatParamsYaml(params));
 }
 
-namespace {
-
-LocalizationParams parseParams(const rt::ConfigNode& root) {
-  LocalizationParams params;
-  const std::string model = root.getEnum("model", {"paper", "pinhole"});
-  params.model = model == "paper" ? LocalizationModel::kPaper : LocalizationModel::kPinhole;
-  params.z_m = root.getDouble("z_m", -kHuge, kHuge);
-  params.fit_samples = root.getUint64("fit_samples");
-  params.fit_mean_error_m = root.getDouble("fit_mean_error_m", 0.0, kHuge);
-  if (params.model == LocalizationModel::kPaper) {
-    const rt::ConfigNode node = root.child("paper");
-    PaperModelParams& p = params.paper;
-    p.l1_m = node.getDouble("l1_m", -kHuge, kHuge);
-    p.k1_per_px = node.getDouble("k1_per_px", -kHuge, kHuge);
-    p.l2_m = node.getDouble("l2_m", -kHuge, kHuge);
-    p.k2_per_px = node.getDouble("k2_per_px", -kHuge, kHuge);
-    p.l3 = node.getDouble("l3", -kHuge, kHuge);
-    p.k3_per_px = node.getDouble("k3_per_px", -kHuge, kHuge);
-    p.l4 = node.getDouble("l4", -kHuge, kHuge);
-    p.k4_per_px = node.getDouble("k4_per_px", -kHuge, kHuge);
-    p.b_m = node.getDouble("b_m", -kHuge, kHuge);
-    node.finish();
-  } else {
-    const rt::ConfigNode node = root.child("pinhole");
-    PinholeModelParams& p = params.pinhole;
-    p.fx_px = node.getDouble("fx_px", 1e-9, kHuge);
-    p.fy_px = node.getDouble("fy_px", 1e-9, kHuge);
-    p.cx_px = node.getDouble("cx_px", -kHuge, kHuge);
-    p.torso_m = node.getDouble("torso_m", -kHuge, kHuge);
-    p.x_offset_m = node.getDouble("x_offset_m", -kHuge, kHuge);
-    p.x_inv_sq_m_px2 = node.getDouble("x_inv_sq_m_px2", -kHuge, kHuge);
-    p.y_scale_correction = node.getDouble("y_scale_correction", -kHuge, kHuge);
-    p.y_offset_m = node.getDouble("y_offset_m", -kHuge, kHuge);
-    node.finish();
-  }
-  root.finish();
-  if (rt::Status valid = validate(params); !valid) root.fail("model", valid.error().message);
-  return params;
-}
-
-}  // namespace
-
 rt::Expected<LocalizationParams> parseParamsYaml(const std::string& text, const std::string& source_name) {
   rt::Expected<rt::ConfigNode> root = rt::ConfigNode::fromString(text, source_name);
   if (!root) return root.error();
   const rt::ConfigNode node = *root;
-  return rt::parseConfig<LocalizationParams>([&node] { return parseParams(node); });
+  return rt::parseConfig<LocalizationParams>([&node] { return localizationFields().parse(node); });
 }
 
 rt::Expected<LocalizationParams> readParamsYaml(const std::string& path) {
   rt::Expected<rt::ConfigNode> root = rt::ConfigNode::loadFile(path);
   if (!root) return root.error();
   const rt::ConfigNode node = *root;
-  return rt::parseConfig<LocalizationParams>([&node] { return parseParams(node); });
+  return rt::parseConfig<LocalizationParams>([&node] { return localizationFields().parse(node); });
 }
 
 }  // namespace aerotrack::localization

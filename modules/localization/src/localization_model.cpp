@@ -406,41 +406,63 @@ Eigen::Vector3d predict(const LocalizationParams& params, double torso_px, doubl
   return {x_m, y_m, params.z_m};
 }
 
+const rt::FieldTable<PaperModelParams>& paperModelFields() {
+  using P = PaperModelParams;
+  const rt::Range any = rt::Range::finite();
+  static const rt::FieldTable<P> kTable({
+      rt::number("l1_m", &P::l1_m, any),
+      rt::number("k1_per_px", &P::k1_per_px, any),
+      rt::number("l2_m", &P::l2_m, any),
+      rt::number("k2_per_px", &P::k2_per_px, any),
+      rt::number("l3", &P::l3, any),
+      rt::number("k3_per_px", &P::k3_per_px, any),
+      rt::number("l4", &P::l4, any),
+      rt::number("k4_per_px", &P::k4_per_px, any),
+      rt::number("b_m", &P::b_m, any),
+  });
+  return kTable;
+}
+
+const rt::FieldTable<PinholeModelParams>& pinholeModelFields() {
+  using P = PinholeModelParams;
+  const rt::Range any = rt::Range::finite();
+  static const rt::FieldTable<P> kTable({
+      rt::number("fx_px", &P::fx_px, rt::Range::greaterThan(0.0)),
+      rt::number("fy_px", &P::fy_px, rt::Range::greaterThan(0.0)),
+      rt::number("cx_px", &P::cx_px, any),
+      rt::number("torso_m", &P::torso_m, any),
+      rt::number("x_offset_m", &P::x_offset_m, any),
+      rt::number("x_inv_sq_m_px2", &P::x_inv_sq_m_px2, any),
+      rt::number("y_scale_correction", &P::y_scale_correction, any),
+      rt::number("y_offset_m", &P::y_offset_m, any),
+  });
+  return kTable;
+}
+
+const rt::FieldTable<LocalizationParams>& localizationFields() {
+  using P = LocalizationParams;
+  const auto is = [](LocalizationModel model) { return [model](const P& p) { return p.model == model; }; };
+  static const rt::FieldTable<P> kTable({
+      rt::choice("model", &P::model,
+                 {{std::string(toString(LocalizationModel::kPaper)), LocalizationModel::kPaper},
+                  {std::string(toString(LocalizationModel::kPinhole)), LocalizationModel::kPinhole}}),
+      rt::number("z_m", &P::z_m, rt::Range::finite()),
+      rt::count("fit_samples", &P::fit_samples),
+      rt::number("fit_mean_error_m", &P::fit_mean_error_m, rt::Range::atLeast(0.0)),
+      rt::section("paper", &P::paper, paperModelFields())
+          .when(is(LocalizationModel::kPaper))
+          .withComment("x = l1_m e^(k1_per_px L) + l2_m e^(k2_per_px L); y = (l3 e^(k3_per_px u) + l4 e^(k4_per_px u)) "
+                       "(x + b_m)"),
+      rt::section("pinhole", &P::pinhole, pinholeModelFields())
+          .when(is(LocalizationModel::kPinhole))
+          .withComment("x = fy_px torso_m / L + x_offset_m + x_inv_sq_m_px2 / L^2;\n"
+                       "y = -x (u - cx_px) / fx_px (1 + y_scale_correction) + y_offset_m"),
+  });
+  return kTable;
+}
+
 rt::Status validate(const LocalizationParams& params) {
-  const auto finite = [](std::initializer_list<std::pair<const char*, double>> fields) -> rt::Status {
-    for (const auto& [name, value] : fields) {
-      if (!std::isfinite(value)) return rt::Error{std::string(name) + " is not finite"};
-    }
-    return rt::ok();
-  };
-  if (rt::Status s = finite({{"z_m", params.z_m}}); !s) return s;
-  if (params.model == LocalizationModel::kPaper) {
-    const PaperModelParams& p = params.paper;
-    return finite({{"l1_m", p.l1_m},
-                   {"k1_per_px", p.k1_per_px},
-                   {"l2_m", p.l2_m},
-                   {"k2_per_px", p.k2_per_px},
-                   {"l3", p.l3},
-                   {"k3_per_px", p.k3_per_px},
-                   {"l4", p.l4},
-                   {"k4_per_px", p.k4_per_px},
-                   {"b_m", p.b_m}});
-  }
-  const PinholeModelParams& p = params.pinhole;
-  if (rt::Status s = finite({{"fx_px", p.fx_px},
-                             {"fy_px", p.fy_px},
-                             {"cx_px", p.cx_px},
-                             {"torso_m", p.torso_m},
-                             {"x_offset_m", p.x_offset_m},
-                             {"x_inv_sq_m_px2", p.x_inv_sq_m_px2},
-                             {"y_scale_correction", p.y_scale_correction},
-                             {"y_offset_m", p.y_offset_m}});
-      !s) {
-    return s;
-  }
-  if (!(p.fx_px > 0.0)) return rt::Error{"fx_px must be > 0"};
-  if (!(p.fy_px > 0.0)) return rt::Error{"fy_px must be > 0"};
-  return rt::ok();
+  return localizationFields().validate(params);
 }
 
 }  // namespace aerotrack::localization

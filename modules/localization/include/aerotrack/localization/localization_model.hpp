@@ -29,6 +29,7 @@
 
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/field_table.hpp"
 
 namespace aerotrack::localization {
 
@@ -103,7 +104,16 @@ rt::Expected<LocalizationParams> fit(LocalizationModel model, std::span<const Lo
 /// centre is at u_px. Pure, allocation-free, reentrant. A non-positive torso gives NaN.
 Eigen::Vector3d predict(const LocalizationParams& params, double torso_px, double u_px);
 
-/// Checks the values (finite; pinhole focal lengths > 0). Error names the field.
+/// The parameter file's keys (localization_io.hpp): model, z_m, fit_samples, fit_mean_error_m and the
+/// model's section (`paper:` or `pinhole:`, the other one is an unknown key), all required. The one list
+/// of keys and ranges that reading, validate() and writing share (rt/field_table.hpp): every value
+/// finite, the pinhole focal lengths > 0, fit_mean_error_m >= 0.
+const rt::FieldTable<LocalizationParams>& localizationFields();
+const rt::FieldTable<PaperModelParams>& paperModelFields();
+const rt::FieldTable<PinholeModelParams>& pinholeModelFields();
+
+/// Checks the values against localizationFields() (the active model's section only). Error names the key
+/// path ("pinhole.fx_px must be in (0, inf), got 0").
 rt::Status validate(const LocalizationParams& params);
 
 }  // namespace aerotrack::localization
