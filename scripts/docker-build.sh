@@ -1,10 +1,18 @@
 #!/usr/bin/env bash
-# Build the aerotrack container image with podman and smoke-test it (`aerotrack --help`).
+# Build the aerotrack container image with podman, check that it holds none of the host's
+# proxy CAs or proxy settings, and smoke-test it: `aerotrack --help`, the sharp_turn demo
+# (`aerotrack sim --scenario sharp_turn`, must print "success") and one MoveNet detection on the
+# sprite photo (the models and the photo are in the image).
 #
 # No Docker engine and no container registry are needed: the `debian:bookworm` base image is
 # bootstrapped locally with debootstrap (minbase, same Debian mirror as this host's apt
 # sources) and imported into podman. Every step is idempotent; a second run only rebuilds what
-# changed (podman layer cache).
+# changed (podman layer cache) and prints each phase's time.
+#
+# Behind a TLS-inspecting proxy: the host's CA bundle (plus $NODE_EXTRA_CA_CERTS if set) reaches
+# the build as the build secret `build-ca` (podman build --secret; the Dockerfile mounts it with
+# RUN --mount=type=secret for apt and npm only), never as a layer; http_proxy, https_proxy and
+# no_proxy (either case) are passed to every RUN by podman and are not kept in the image.
 #
 # Usage: scripts/docker-build.sh            (from any directory; needs root or sudo)
 #
@@ -14,6 +22,8 @@
 #                              (default /var/tmp/aerotrack-docker)
 #   AEROTRACK_STORAGE_DRIVER   overlay | vfs (default: overlay if it can be mounted here, else vfs)
 #   AEROTRACK_BUILD_ISOLATION  oci | chroot (default oci, i.e. runc)
+#   AEROTRACK_BUILD_CA         PEM bundle the build trusts (default: $SSL_CERT_FILE or
+#                              /etc/ssl/certs/ca-certificates.crt, plus $NODE_EXTRA_CA_CERTS)
 #   DEBIAN_MIRROR              Debian mirror for debootstrap (default: taken from apt sources)
 #
 # To use the same podman storage by hand afterwards:
@@ -36,7 +46,7 @@ SUDO=()
 if [[ $(id -u) -ne 0 ]]; then
   command -v sudo >/dev/null || { echo "error: run as root (or install sudo)" >&2; exit 1; }
   # shellcheck disable=SC2054  # the comma is sudo syntax, not an array separator
-  SUDO=(sudo --preserve-env=CONTAINERS_CONF,CONTAINERS_STORAGE_CONF)
+  SUDO=(sudo --preserve-env=CONTAINERS_CONF,CONTAINERS_STORAGE_CONF,http_proxy,https_proxy,no_proxy,HTTP_PROXY,HTTPS_PROXY,NO_PROXY)
 fi
 
 T_START=$SECONDS
@@ -190,23 +200,101 @@ fi
 
 # --- 4. build ---------------------------------------------------------------------------------
 phase build
-"${PODMAN[@]}" build --pull=never --isolation "$ISOLATION" --network host \
+# The CAs the build trusts, handed over as a build secret (mounted only into the RUNs that fetch:
+# apt and npm), so a TLS-inspecting proxy's CA works inside without ever entering a layer. The
+# secret's content is not part of the layer cache key: changing the CAs rebuilds nothing.
+ca_bundle=$STATE_DIR/build-ca.pem
+ca_sources=()
+if [[ -n ${AEROTRACK_BUILD_CA:-} ]]; then
+  [[ -r $AEROTRACK_BUILD_CA ]] || { echo "error: AEROTRACK_BUILD_CA=$AEROTRACK_BUILD_CA: not readable" >&2; exit 1; }
+  ca_sources=("$AEROTRACK_BUILD_CA")
+else
+  for f in "${SSL_CERT_FILE:-/etc/ssl/certs/ca-certificates.crt}" "${NODE_EXTRA_CA_CERTS:-}"; do
+    [[ -n $f && -r $f ]] || continue
+    for g in "${ca_sources[@]}"; do [[ $f -ef $g ]] && continue 2; done
+    ca_sources+=("$f")
+  done
+fi
+secret_args=()
+if ((${#ca_sources[@]})); then
+  cat "${ca_sources[@]}" | "${SUDO[@]}" install -m 600 /dev/stdin "$ca_bundle"
+  secret_args=(--secret "id=build-ca,src=$ca_bundle")
+  echo "build secret build-ca: ${ca_sources[*]} ($(cat "${ca_sources[@]}" | grep -c 'BEGIN CERTIFICATE') certificates)"
+else
+  echo "no CA bundle found: the build uses the image's stock CAs"
+fi
+proxies=$(env | grep -iE '^(https?|no)_proxy=' | cut -d= -f1 | tr '\n' ' ' || true)
+echo "proxy variables passed to the build: ${proxies:-none}"
+"${PODMAN[@]}" build --pull=never --isolation "$ISOLATION" --network host "${secret_args[@]}" \
   -f "$REPO_ROOT/Dockerfile" -t "$IMAGE" "$REPO_ROOT"
 "${PODMAN[@]}" image ls "$IMAGE"
 
-# --- 5. smoke test ----------------------------------------------------------------------------
-phase run
-set +e
-"${PODMAN[@]}" run --rm "$IMAGE" --help
-rc=$?
-set -e
-if ((rc != 0)); then
-  echo "error: 'podman run --rm $IMAGE --help' exited with $rc" >&2
-  exit "$rc"
+# --- 5. verify: no host CA and no proxy setting in the image -------------------------------------
+phase verify
+image_id=$("${PODMAN[@]}" image inspect --format '{{.Id}}' "$IMAGE")
+# The host's own CAs (the proxy's among them): certificates of the bundle that are not in
+# Debian's ca-certificates, each known by the 2nd base64 line of its PEM body.
+pem_line2() { awk '/-----BEGIN CERTIFICATE-----/ { n = 0; next } /-----END/ { next } ++n == 2' "$@"; }
+local_cas=$STATE_DIR/local-ca-lines.txt
+if ((${#ca_sources[@]})); then
+  pem_line2 "${ca_sources[@]}" | grep -vxF -f <(pem_line2 /usr/share/ca-certificates/mozilla/*.crt 2>/dev/null || true) \
+    | "${SUDO[@]}" tee "$local_cas" >/dev/null || true
+else
+  "${SUDO[@]}" truncate -s 0 "$local_cas"
 fi
-echo "'aerotrack --help' in $IMAGE exited 0"
+stamp="$image_id $(sha256sum <"$local_cas" | cut -d' ' -f1)"
+if [[ -f $STATE_DIR/verified && $(<"$STATE_DIR/verified") == "$stamp" ]]; then
+  echo "image $image_id already verified"
+else
+  image_env=$("${PODMAN[@]}" image inspect --format '{{range .Config.Env}}{{println .}}{{end}}' "$IMAGE")
+  if grep -iE '^(https?_proxy|no_proxy|node_extra_ca_certs|ssl_cert_file|npm_config_[a-z_]*)=' <<<"$image_env"; then
+    echo "error: $IMAGE keeps the build's proxy/CA environment (above)" >&2; exit 1
+  fi
+  n_local=$(grep -c . "$local_cas" || true)
+  if ((n_local > 0)); then
+    mnt=$("${PODMAN[@]}" image mount "$IMAGE")
+    set +e
+    found=$("${SUDO[@]}" grep -rlF -f "$local_cas" "$mnt")
+    set -e
+    "${PODMAN[@]}" image unmount "$IMAGE" >/dev/null
+    if [[ -n $found ]]; then
+      echo "error: $IMAGE holds a CA of this host's bundle that is not in Debian's ca-certificates:" >&2
+      echo "${found//$mnt/}" >&2
+      exit 1
+    fi
+  fi
+  echo "$IMAGE: no proxy/CA variable in its ENV, none of this host's $n_local own CA(s) in its files"
+  echo "$stamp" | "${SUDO[@]}" tee "$STATE_DIR/verified" >/dev/null
+fi
+
+# --- 6. smoke test ----------------------------------------------------------------------------
+phase run
+smoke() {  # smoke ARGS...: run the image with ARGS, print its output, fail on a non-zero exit
+  local out rc=0
+  out=$("${PODMAN[@]}" run --rm "$IMAGE" "$@" 2>&1) || rc=$?
+  printf '%s\n' "$out"
+  if ((rc != 0)); then
+    echo "error: 'podman run --rm $IMAGE $*' exited with $rc" >&2
+    exit "$rc"
+  fi
+  SMOKE_OUT=$out
+}
+smoke --help >/dev/null
+echo "'aerotrack --help' exited 0"
+smoke sim --scenario sharp_turn --out /tmp/demo
+first=$(head -n1 <<<"$SMOKE_OUT")
+if [[ ! $first =~ ^sharp_turn\ seed\ [0-9]+\ \(.*\):\ success$ ]]; then
+  echo "error: the sharp_turn demo in $IMAGE did not report success: $first" >&2
+  exit 1
+fi
+smoke detect /usr/share/doc/opencv-doc/examples/data/basketball1.png
+grep -q '1 person(s)' <<<"$SMOKE_OUT" \
+  || { echo "error: the detector in $IMAGE found no person in basketball1.png" >&2; exit 1; }
+echo "smoke test: $first"
 
 phase ""
+size=$("${PODMAN[@]}" image inspect --format '{{.Size}}' "$IMAGE")
+echo "=== $IMAGE: $image_id, $((size / 1000000)) MB"
 echo "=== timings"
 printf '  %s\n' "${SUMMARY[@]}"
 printf '  %-12s %4ds\n' total $((SECONDS - T_START))
