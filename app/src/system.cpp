@@ -1,6 +1,7 @@
 // Wiring: see system.hpp.
 #include "system.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -10,12 +11,6 @@
 #include "paths.hpp"
 
 namespace aerotrack::app {
-
-std::vector<std::string> System::knownTasks() {
-  return {"sim_world",       "odometry",     "gimbal_camera", "depth_camera",  "gimbal",
-          "mapping",         "detection",    "target",        "target_check",  "trajectory_server",
-          "baseline_follow", "truth_gimbal", "planning",      "gimbal_control"};
-}
 
 rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, const hal::sim::ScenarioInstance* scenario,
                                                     rt::TimeNs start_ns) {
@@ -76,131 +71,197 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
   return system;
 }
 
+namespace {
+
+template <class T>
+System::TaskResult made(std::unique_ptr<T> task) {
+  return System::TaskResult(std::unique_ptr<rt::Task>(std::move(task)));
+}
+
+}  // namespace
+
+// The registry: one row per task name the table may use. A row says whether the task needs the
+// simulator (sim-only tasks are refused on real or replayed devices) and how it is built from the
+// devices, the channels and the config sections. knownTasks() and addTask() both read it, so a task
+// cannot be buildable and missing from the list (or listed and unbuildable).
+std::span<const System::TaskKind> System::taskKinds() {
+  static const TaskKind kKinds[] = {
+      {"sim_world", true,
+       [](System& s, const std::string& /*where*/) { return made(std::make_unique<SimWorldTask>(s.devices_.simulation)); }},
+      {"odometry", false,
+       [](System& s, const std::string& /*where*/) {
+         return made(std::make_unique<OdometryTask>(*s.devices_.odometry, s.channels_.odometry,
+                                                    s.channels_.odometry_stream, s.channels_.odometry_target_stream));
+       }},
+      {"gimbal_camera", false,
+       [](System& s, const std::string& /*where*/) {
+         Channels& c = s.channels_;
+         return made(std::make_unique<GimbalCameraTask>(*s.devices_.gimbal_camera, c.detections, c.images,
+                                                        c.newest_camera_frame_ns, c.newest_detection));
+       }},
+      {"depth_camera", false,
+       [](System& s, const std::string& /*where*/) {
+         return made(std::make_unique<DepthCameraTask>(*s.devices_.depth_camera, s.channels_.depth));
+       }},
+      {"gimbal", false,
+       [](System& s, const std::string& /*where*/) {
+         return made(std::make_unique<GimbalEncoderTask>(*s.devices_.gimbal, s.channels_.gimbal_state,
+                                                         s.channels_.gimbal_stream));
+       }},
+      {"mapping", false, &System::makeMappingTask},
+      {"detection", false, &System::makeDetectionTask},
+      {"target", false, &System::makeTargetTask},
+      {"target_check", true,
+       [](System& s, const std::string& /*where*/) {
+         auto check = std::make_unique<TargetTruthCheckTask>(s.devices_.simulation, s.channels_.target);
+         s.target_check_task_ = check.get();
+         return made(std::move(check));
+       }},
+      {"trajectory_server", false, &System::makeTrajectoryServerTask},
+      // The paper's baseline (the body faces the person, the camera fixed), and a perception-free check of the
+      // loop that only points the gimbal at the true person.
+      {"baseline_follow", true, [](System& s, const std::string& /*where*/) { return makeSimFollower(s, true); }},
+      {"truth_gimbal", true, [](System& s, const std::string& /*where*/) { return makeSimFollower(s, false); }},
+      {"planning", false, &System::makePlanningTask},
+      {"gimbal_control", false, &System::makeGimbalControlTask},
+      {"supervisor", false, &System::makeSupervisorTask},
+      {"camera_strip", true, &System::makeCameraStripTask},
+  };
+  return kKinds;
+}
+
+std::vector<std::string> System::knownTasks() {
+  std::vector<std::string> names;
+  for (const TaskKind& kind : taskKinds()) names.emplace_back(kind.name);
+  return names;
+}
+
+System::TaskResult System::makeSimFollower(System& s, bool command_vehicle) {
+  return made(std::make_unique<BaselineFollowTask>(s.devices_.simulation, *s.devices_.vehicle_link,
+                                                   *s.devices_.gimbal, command_vehicle));
+}
+
+System::TaskResult System::makeCameraStripTask(System& s, const std::string& /*where*/) {
+  const hal::CameraIntrinsics& k = s.devices_.simulation->scenario().spec.gimbal_camera.camera.intrinsics;
+  const double hfov_rad = 2.0 * std::atan2(k.cx_px, k.fx_px);
+  const Channels& c = s.channels_;
+  auto strip = std::make_unique<CameraStripTask>(
+      s.devices_.simulation, CameraStripSources{c.newest_detection, c.target, c.local_grid, c.trajectories},
+      /*every_s=*/4.0, hfov_rad);
+  s.camera_strip_task_ = strip.get();
+  return made(std::move(strip));
+}
+
+System::TaskResult System::makeMappingTask(System& s, const std::string& where) {
+  if (!s.config_.mapping) return rt::Error{where + ": task 'mapping' needs a mapping: section"};
+  auto mapper = mapping::Mapper::create(*s.config_.mapping);
+  if (!mapper) return rt::Error{s.config_.source + ": mapping: " + mapper.error().message};
+  Channels& c = s.channels_;
+  auto task = std::make_unique<mapping::MappingTask>(std::move(mapper.value()), c.odometry_stream, c.depth,
+                                                     c.local_grid, c.octree, s.stats_clock_);
+  s.mapping_task_ = task.get();
+  return made(std::move(task));
+}
+
+System::TaskResult System::makeDetectionTask(System& s, const std::string& where) {
+  if (!s.config_.perception) return rt::Error{where + ": task 'detection' needs a perception: section"};
+  perception::DetectorParams params = *s.config_.perception;
+  if (params.model_dir == "default") params.model_dir = modelDir();
+  auto detector = perception::Detector::create(params);
+  if (!detector) return rt::Error{s.config_.source + ": perception: " + detector.error().message};
+  auto task = std::make_unique<perception::DetectionTask>(std::move(detector.value()), s.channels_.images,
+                                                          s.channels_.detections, s.stats_clock_);
+  task->publishNewestTo(s.channels_.newest_detection);
+  s.detection_task_ = task.get();
+  return made(std::move(task));
+}
+
+System::TaskResult System::makeTargetTask(System& s, const std::string& where) {
+  if (!s.config_.estimation) return rt::Error{where + ": task 'target' needs an estimation: section"};
+  Channels& c = s.channels_;
+  auto target = estimation::TargetTask::create(s.config_.estimation->task, c.detections, c.odometry_target_stream,
+                                               c.gimbal_stream, c.target);
+  if (!target) return rt::Error{s.config_.source + ": estimation: " + target.error().message};
+  auto task = std::make_unique<estimation::TargetTask>(std::move(target.value()));
+  s.target_task_ = task.get();
+  return made(std::move(task));
+}
+
+System::TaskResult System::makeGimbalControlTask(System& s, const std::string& where) {
+  if (!s.config_.gimbal_control || !s.config_.estimation)
+    return rt::Error{where + ": task 'gimbal_control' needs gimbal_control: and estimation: sections"};
+  const gimbal_control::GimbalController controller(*s.config_.gimbal_control, s.config_.estimation->task.extrinsics);
+  Channels& c = s.channels_;
+  auto task = std::make_unique<gimbal_control::GimbalControlTask>(
+      controller, c.gimbal_state, c.odometry, c.target, c.gimbal_search_requested, *s.devices_.gimbal);
+  task->fixCamera(s.config_.baseline_mode);
+  return made(std::move(task));
+}
+
+System::TaskResult System::makeSupervisorTask(System& s, const std::string& where) {
+  if (!s.config_.supervisor) return rt::Error{where + ": task 'supervisor' needs a supervisor: section"};
+  Channels& c = s.channels_;
+  const supervisor::SupervisorChannels channels{c.odometry,
+                                                c.depth,
+                                                c.newest_camera_frame_ns,
+                                                c.target,
+                                                c.planner_failures_in_a_row,
+                                                c.deadline_misses,
+                                                c.vehicle_link_lost,
+                                                c.supervisor,
+                                                c.gimbal_search_requested};
+  auto task = std::make_unique<supervisor::SupervisorTask>(*s.config_.supervisor, s.start_ns_, channels,
+                                                           /*sweep_when_searching=*/!s.config_.baseline_mode);
+  s.supervisor_task_ = task.get();
+  return made(std::move(task));
+}
+
+System::TaskResult System::makePlanningTask(System& s, const std::string& where) {
+  if (!s.config_.planning) return rt::Error{where + ": task 'planning' needs a planning: section"};
+  auto planner = planning::TrackingPlanner::create(*s.config_.planning);
+  if (!planner) return rt::Error{s.config_.source + ": " + planner.error().message};
+  Channels& c = s.channels_;
+  const planning::PlanningChannels channels{c.odometry,    c.target,     c.local_grid,
+                                            c.octree,      c.trajectories, &c.supervisor,
+                                            &c.planner_failures_in_a_row};
+  if (s.config_.baseline_mode) planner->setOcclusionAware(false);
+  auto task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, s.stats_clock_);
+  s.planning_task_ = task.get();
+  return made(std::move(task));
+}
+
+System::TaskResult System::makeTrajectoryServerTask(System& s, const std::string& /*where*/) {
+  Channels& c = s.channels_;
+  auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(s.config_.trajectory_server, c.trajectories,
+                                                                          *s.devices_.vehicle_link, c.setpoints);
+  server->reportLinkLossTo(c.vehicle_link_lost);
+  if (s.config_.baseline_mode) {
+    // The fixed camera looks where the body looks: face the person's estimate, carried to now.
+    const rt::LatestSlot<estimation::TargetEstimate>& target = c.target;
+    server->faceTowards([&target](rt::TimeNs now_ns) -> std::optional<Eigen::Vector3d> {
+      const auto estimate = target.read();
+      if (!estimate || !estimate->initialised || estimate->lost) return std::nullopt;
+      return Eigen::Vector3d(estimate->p_WT_m + rt::nsToSeconds(now_ns - estimate->stamp_ns) * estimate->v_WT_mps);
+    });
+  }
+  s.server_task_ = server.get();
+  return made(std::move(server));
+}
+
 rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   const std::string where = config_.source + ": tasks[" + std::to_string(index) + "]";
-  std::unique_ptr<rt::Task> task;
-  if (spec.name == "sim_world" || spec.name == "baseline_follow" || spec.name == "truth_gimbal" ||
-      spec.name == "target_check" || spec.name == "camera_strip") {
-    if (!devices_.simulation) return rt::Error{where + ": task '" + spec.name + "' needs a sim backend in hal"};
-    if (spec.name == "sim_world") {
-      task = std::make_unique<SimWorldTask>(devices_.simulation);
-    } else if (spec.name == "camera_strip") {
-      const hal::CameraIntrinsics& k = devices_.simulation->scenario().spec.gimbal_camera.camera.intrinsics;
-      const double hfov_rad = 2.0 * std::atan2(k.cx_px, k.fx_px);
-      auto strip = std::make_unique<CameraStripTask>(devices_.simulation,
-                                                     CameraStripSources{channels_.newest_detection, channels_.target,
-                                                                        channels_.local_grid, channels_.trajectories},
-                                                     /*every_s=*/4.0, hfov_rad);
-      camera_strip_task_ = strip.get();
-      task = std::move(strip);
-    } else if (spec.name == "target_check") {
-      auto check = std::make_unique<TargetTruthCheckTask>(devices_.simulation, channels_.target);
-      target_check_task_ = check.get();
-      task = std::move(check);
-    } else {
-      const bool command_vehicle = spec.name == "baseline_follow";
-      task = std::make_unique<BaselineFollowTask>(devices_.simulation, *devices_.vehicle_link, *devices_.gimbal,
-                                                  command_vehicle);
-    }
-  } else if (spec.name == "odometry") {
-    task = std::make_unique<OdometryTask>(*devices_.odometry, channels_.odometry, channels_.odometry_stream,
-                                          channels_.odometry_target_stream);
-  } else if (spec.name == "gimbal_camera") {
-    task = std::make_unique<GimbalCameraTask>(*devices_.gimbal_camera, channels_.detections, channels_.images,
-                                              channels_.newest_camera_frame_ns, channels_.newest_detection);
-  } else if (spec.name == "depth_camera") {
-    task = std::make_unique<DepthCameraTask>(*devices_.depth_camera, channels_.depth);
-  } else if (spec.name == "mapping") {
-    if (!config_.mapping) return rt::Error{where + ": task 'mapping' needs a mapping: section"};
-    auto mapper = mapping::Mapper::create(*config_.mapping);
-    if (!mapper) return rt::Error{config_.source + ": mapping: " + mapper.error().message};
-    auto mapping_task =
-        std::make_unique<mapping::MappingTask>(std::move(mapper.value()), channels_.odometry_stream, channels_.depth,
-                                               channels_.local_grid, channels_.octree, stats_clock_);
-    mapping_task_ = mapping_task.get();
-    task = std::move(mapping_task);
-  } else if (spec.name == "detection") {
-    if (!config_.perception) return rt::Error{where + ": task 'detection' needs a perception: section"};
-    perception::DetectorParams params = *config_.perception;
-    if (params.model_dir == "default") params.model_dir = modelDir();
-    auto detector = perception::Detector::create(params);
-    if (!detector) return rt::Error{config_.source + ": perception: " + detector.error().message};
-    auto detection_task = std::make_unique<perception::DetectionTask>(std::move(detector.value()), channels_.images,
-                                                                      channels_.detections, stats_clock_);
-    detection_task->publishNewestTo(channels_.newest_detection);
-    detection_task_ = detection_task.get();
-    task = std::move(detection_task);
-  } else if (spec.name == "target") {
-    if (!config_.estimation) return rt::Error{where + ": task 'target' needs an estimation: section"};
-    auto target =
-        estimation::TargetTask::create(config_.estimation->task, channels_.detections, channels_.odometry_target_stream,
-                                       channels_.gimbal_stream, channels_.target);
-    if (!target) return rt::Error{config_.source + ": estimation: " + target.error().message};
-    auto target_task = std::make_unique<estimation::TargetTask>(std::move(target.value()));
-    target_task_ = target_task.get();
-    task = std::move(target_task);
-  } else if (spec.name == "gimbal") {
-    task = std::make_unique<GimbalEncoderTask>(*devices_.gimbal, channels_.gimbal_state, channels_.gimbal_stream);
-  } else if (spec.name == "gimbal_control") {
-    if (!config_.gimbal_control || !config_.estimation)
-      return rt::Error{where + ": task 'gimbal_control' needs gimbal_control: and estimation: sections"};
-    const gimbal_control::GimbalController controller(*config_.gimbal_control, config_.estimation->task.extrinsics);
-    auto gimbal_task = std::make_unique<gimbal_control::GimbalControlTask>(
-        controller, channels_.gimbal_state, channels_.odometry, channels_.target, channels_.gimbal_search_requested,
-        *devices_.gimbal);
-    gimbal_task->fixCamera(config_.baseline_mode);
-    task = std::move(gimbal_task);
-  } else if (spec.name == "supervisor") {
-    if (!config_.supervisor) return rt::Error{where + ": task 'supervisor' needs a supervisor: section"};
-    const supervisor::SupervisorChannels channels{channels_.odometry,
-                                                  channels_.depth,
-                                                  channels_.newest_camera_frame_ns,
-                                                  channels_.target,
-                                                  channels_.planner_failures_in_a_row,
-                                                  channels_.deadline_misses,
-                                                  channels_.vehicle_link_lost,
-                                                  channels_.supervisor,
-                                                  channels_.gimbal_search_requested};
-    auto supervisor_task =
-        std::make_unique<supervisor::SupervisorTask>(*config_.supervisor, start_ns_, channels,
-                                                     /*sweep_when_searching=*/!config_.baseline_mode);
-    supervisor_task_ = supervisor_task.get();
-    task = std::move(supervisor_task);
-  } else if (spec.name == "planning") {
-    if (!config_.planning) return rt::Error{where + ": task 'planning' needs a planning: section"};
-    auto planner = planning::TrackingPlanner::create(*config_.planning);
-    if (!planner) return rt::Error{config_.source + ": " + planner.error().message};
-    const planning::PlanningChannels channels{channels_.odometry,
-                                              channels_.target,
-                                              channels_.local_grid,
-                                              channels_.octree,
-                                              channels_.trajectories,
-                                              &channels_.supervisor,
-                                              &channels_.planner_failures_in_a_row};
-    if (config_.baseline_mode) planner->setOcclusionAware(false);
-    auto planning_task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, stats_clock_);
-    planning_task_ = planning_task.get();
-    task = std::move(planning_task);
-  } else if (spec.name == "trajectory_server") {
-    auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(
-        config_.trajectory_server, channels_.trajectories, *devices_.vehicle_link, channels_.setpoints);
-    server->reportLinkLossTo(channels_.vehicle_link_lost);
-    if (config_.baseline_mode) {
-      // The fixed camera looks where the body looks: face the person's estimate, carried to now.
-      const rt::LatestSlot<estimation::TargetEstimate>& target = channels_.target;
-      server->faceTowards([&target](rt::TimeNs now_ns) -> std::optional<Eigen::Vector3d> {
-        const auto estimate = target.read();
-        if (!estimate || !estimate->initialised || estimate->lost) return std::nullopt;
-        return Eigen::Vector3d(estimate->p_WT_m + rt::nsToSeconds(now_ns - estimate->stamp_ns) * estimate->v_WT_mps);
-      });
-    }
-    server_task_ = server.get();
-    task = std::move(server);
-  } else {
+  const std::span<const TaskKind> kinds = taskKinds();
+  const auto kind = std::find_if(kinds.begin(), kinds.end(), [&](const TaskKind& k) { return spec.name == k.name; });
+  if (kind == kinds.end()) {
     std::string known;
     for (const std::string& k : knownTasks()) known += (known.empty() ? "" : ", ") + k;
     return rt::Error{where + ".name: unknown task '" + spec.name + "' (known: " + known + ")"};
   }
+  if (kind->needs_sim && !devices_.simulation)
+    return rt::Error{where + ": task '" + spec.name + "' needs a sim backend in hal"};
+  TaskResult made_task = kind->make(*this, where);
+  if (!made_task) return made_task.error();
+  std::unique_ptr<rt::Task> task = std::move(made_task.value());
 
   rt::Doorbell* doorbell = nullptr;
   if (!spec.periodic()) {

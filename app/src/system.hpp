@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -100,10 +101,30 @@ class System {
   /// The planning task, if the table has one (for its statistics and the replan hand-over).
   const planning::PlanningTask* planningTask() const { return planning_task_; }
 
-  /// Names of the tasks this build knows, for messages and tests.
+  /// Names of the tasks the task table may use (the registry's rows, in order), for messages and tests.
   static std::vector<std::string> knownTasks();
 
+  using TaskResult = rt::Expected<std::unique_ptr<rt::Task>>;
+
  private:
+  /// A row of the task registry (system.cpp): the name a task-table row uses, whether the task needs the
+  /// simulator, and how it is built. `where` is the table row, for messages.
+  struct TaskKind {
+    const char* name;
+    bool needs_sim;
+    TaskResult (*make)(System& system, const std::string& where);
+  };
+  static std::span<const TaskKind> taskKinds();
+  static TaskResult makeSimFollower(System& s, bool command_vehicle);
+  static TaskResult makeCameraStripTask(System& s, const std::string& where);
+  static TaskResult makeMappingTask(System& s, const std::string& where);
+  static TaskResult makeDetectionTask(System& s, const std::string& where);
+  static TaskResult makeTargetTask(System& s, const std::string& where);
+  static TaskResult makeGimbalControlTask(System& s, const std::string& where);
+  static TaskResult makeSupervisorTask(System& s, const std::string& where);
+  static TaskResult makePlanningTask(System& s, const std::string& where);
+  static TaskResult makeTrajectoryServerTask(System& s, const std::string& where);
+
   explicit System(AppConfig config) : config_(std::move(config)) {}
   rt::Status addTask(const rt::TaskSpec& spec, std::size_t index);
 
