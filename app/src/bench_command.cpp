@@ -23,11 +23,6 @@
 namespace aerotrack::app {
 namespace {
 
-int fail(const std::string& message) {
-  std::fprintf(stderr, "aerotrack bench: %s\n", message.c_str());
-  return 1;
-}
-
 /// Starts `self sim ...` for one seed with its output in dir/log.txt; returns the pid or -1.
 pid_t launchTrial(const std::string& self, const ParsedArgs& args, std::int64_t seed, const std::string& dir) {
   std::vector<std::string> argv{
@@ -59,22 +54,22 @@ pid_t launchTrial(const std::string& self, const ParsedArgs& args, std::int64_t 
 int benchCommand(const ParsedArgs& args) {
   const std::string mode = args.valueOr("mode", "proposed");
   if (mode != "proposed" && mode != "baseline")
-    return fail("--mode: expected proposed or baseline, got '" + mode + "'");
+    return failCommand("bench", "--mode: expected proposed or baseline, got '" + mode + "'");
   const auto trials = parseInt("trials", args.values.at("trials"), 1, 100000);
-  if (!trials) return fail(trials.error().message);
+  if (!trials) return failCommand("bench", trials.error().message);
   const auto jobs = parseInt(
       "jobs", args.valueOr("jobs", std::to_string(std::max(1U, std::thread::hardware_concurrency()))), 1, 1024);
-  if (!jobs) return fail(jobs.error().message);
+  if (!jobs) return failCommand("bench", jobs.error().message);
   if (args.has("speed")) {
-    if (const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0); !s) return fail(s.error().message);
+    if (const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0); !s) return failCommand("bench", s.error().message);
   }
   std::error_code ec;
   const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string();
-  if (ec) return fail("cannot find the aerotrack binary: " + ec.message());
+  if (ec) return failCommand("bench", "cannot find the aerotrack binary: " + ec.message());
   std::string scenario_tag = std::filesystem::path(args.values.at("scenario")).stem().string();
   const std::string out_dir = args.valueOr("out", "out/bench-" + scenario_tag);
   std::filesystem::create_directories(out_dir, ec);
-  if (ec) return fail(out_dir + ": cannot create directory: " + ec.message());
+  if (ec) return failCommand("bench", out_dir + ": cannot create directory: " + ec.message());
 
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);
@@ -86,7 +81,7 @@ int benchCommand(const ParsedArgs& args) {
       const std::string dir = out_dir + "/trial-" + std::to_string(next_seed);
       std::filesystem::create_directories(dir, ec);
       const pid_t pid = launchTrial(self, args, next_seed, dir);
-      if (pid < 0) return fail("cannot start a trial process");
+      if (pid < 0) return failCommand("bench", "cannot start a trial process");
       running[pid] = next_seed++;
     }
     int status = 0;
@@ -166,7 +161,7 @@ int benchCommand(const ParsedArgs& args) {
   std::ofstream file(out_dir + "/bench.json");
   file << bench.dump(2) << "\n";
   file.close();
-  if (!file) return fail(out_dir + "/bench.json: write failed");
+  if (!file) return failCommand("bench", out_dir + "/bench.json: write failed");
   std::printf("%s: %d/%lld successful (%.0f%%), %d collisions, person visible %.0f%% on average; %s/bench.json\n",
               args.values.at("scenario").c_str(), successes, static_cast<long long>(*trials),
               100.0 * successes / static_cast<double>(*trials), collisions, 100.0 * visible_sum / n, out_dir.c_str());

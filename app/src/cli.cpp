@@ -3,8 +3,11 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
+
+#include "commands.hpp"
 
 namespace aerotrack::app {
 
@@ -222,6 +225,11 @@ rt::Expected<std::int64_t> parseInt(const std::string& option, const std::string
     return rt::Error{"--" + option + ": " + std::to_string(v) + " is out of range [" + std::to_string(min) + ", " +
                      std::to_string(max) + "]"};
   return static_cast<std::int64_t>(v);
+}
+
+int failCommand(const char* command, const std::string& message) {
+  std::fprintf(stderr, "aerotrack %s: %s\n", command, message.c_str());
+  return 1;
 }
 
 }  // namespace aerotrack::app

@@ -2,6 +2,8 @@
 // one-line errors (the app is where printing happens, DESIGN.md rule 6).
 #pragma once
 
+#include <string>
+
 #include "cli.hpp"
 
 namespace aerotrack::app {
@@ -15,5 +17,8 @@ int detectCommand(const ParsedArgs& args);
 int datasetCommand(const ParsedArgs& args);
 int calibrateCommand(const ParsedArgs& args);
 int evalLocalizationCommand(const ParsedArgs& args);
+
+/// Prints "aerotrack <command>: <message>" on stderr and returns the failing exit status, 1.
+int failCommand(const char* command, const std::string& message);
 
 }  // namespace aerotrack::app

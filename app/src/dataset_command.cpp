@@ -21,11 +21,6 @@
 namespace aerotrack::app {
 namespace {
 
-int fail(const std::string& message) {
-  std::fprintf(stderr, "aerotrack dataset: %s\n", message.c_str());
-  return 1;
-}
-
 /// What the camera reports of one view: the detection, or nothing.
 class ViewObserver {
  public:
@@ -76,19 +71,19 @@ class ImageObserver final : public ViewObserver {
 
 int datasetCommand(const ParsedArgs& args) {
   const auto samples = parseInt("samples", args.valueOr("samples", "2000"), 1, 1'000'000);
-  if (!samples) return fail(samples.error().message);
+  if (!samples) return failCommand("dataset", samples.error().message);
   const auto seed = parseInt("seed", args.valueOr("seed", "1"), 0, INT64_MAX);
-  if (!seed) return fail(seed.error().message);
+  if (!seed) return failCommand("dataset", seed.error().message);
   const std::string camera_mode = args.valueOr("camera", "keypoints");
   if (camera_mode != "keypoints" && camera_mode != "image")
-    return fail("--camera: expected keypoints or image, got '" + camera_mode + "'");
+    return failCommand("dataset", "--camera: expected keypoints or image, got '" + camera_mode + "'");
   const std::string out_path = args.values.at("out");
 
   auto trial = loadTrial(args.valueOr("scenario", "open"), static_cast<std::uint64_t>(*seed), std::nullopt);
-  if (!trial) return fail(trial.error().message);
+  if (!trial) return failCommand("dataset", trial.error().message);
   const hal::sim::ScenarioSpec& spec = trial->spec;
   auto person = hal::sim::WalkingPerson::create(spec.person, spec.path);
-  if (!person) return fail(person.error().message);
+  if (!person) return failCommand("dataset", person.error().message);
   const hal::CameraIntrinsics& intrinsics = spec.gimbal_camera.camera.intrinsics;
 
   std::unique_ptr<ViewObserver> observer;
@@ -98,20 +93,20 @@ int datasetCommand(const ParsedArgs& args) {
     hal::sim::SceneRenderParams render_params;
     render_params.intrinsics = intrinsics;
     auto renderer = hal::sim::SceneRenderer::create(render_params, spec.gimbal_camera.person_sprite);
-    if (!renderer) return fail(renderer.error().message);
+    if (!renderer) return failCommand("dataset", renderer.error().message);
     auto world = hal::sim::ObstacleWorld::create({}, {});
-    if (!world) return fail(world.error().message);
+    if (!world) return failCommand("dataset", world.error().message);
     perception::DetectorParams detector_params;
     detector_params.model_dir = modelDir();
     auto detector = perception::Detector::create(detector_params);
-    if (!detector) return fail(detector.error().message);
+    if (!detector) return failCommand("dataset", detector.error().message);
     observer = std::make_unique<ImageObserver>(std::move(renderer.value()), std::move(world.value()),
                                                std::move(detector.value()));
   }
 
   hal::sim::CalibrationViewParams view_params;
   view_params.horizontal_fov_rad = 2.0 * std::atan(0.5 * intrinsics.width_px / intrinsics.fx_px);
-  if (const rt::Status s = hal::sim::validate(view_params); !s) return fail(s.error().message);
+  if (const rt::Status s = hal::sim::validate(view_params); !s) return failCommand("dataset", s.error().message);
   const perception::TorsoFeatureParams torso_params;
   std::mt19937_64 rng(static_cast<std::uint64_t>(*seed));
   std::vector<localization::LocalizationSample> out;
@@ -123,7 +118,7 @@ int datasetCommand(const ParsedArgs& args) {
     const hal::sim::CalibrationView view =
         hal::sim::sampleCalibrationView(*person, person->durationS(), view_params, rng);
     auto detection = observer->observe(view, rng);
-    if (!detection) return fail(detection.error().message);
+    if (!detection) return failCommand("dataset", detection.error().message);
     if (!*detection) continue;
     const perception::TorsoFeatures f =
         perception::torsoFeatures((*detection)->keypoints, intrinsics.width_px, intrinsics.height_px, torso_params);
@@ -131,9 +126,9 @@ int datasetCommand(const ParsedArgs& args) {
     out.push_back({f.torso_px, f.u_px, view.p_C_flu_m.x(), view.p_C_flu_m.y(), view.p_C_flu_m.z()});
   }
   if (out.size() < static_cast<std::size_t>(*samples))
-    return fail("only " + std::to_string(out.size()) + " of " + std::to_string(*samples) +
+    return failCommand("dataset", "only " + std::to_string(out.size()) + " of " + std::to_string(*samples) +
                 " views gave a reliable torso in " + std::to_string(views) + " tries");
-  if (const rt::Status s = localization::writeSamplesCsv(out, out_path); !s) return fail(s.error().message);
+  if (const rt::Status s = localization::writeSamplesCsv(out, out_path); !s) return failCommand("dataset", s.error().message);
   std::printf("%s: %zu samples (%s camera, %zu views, seed %lld)\n", out_path.c_str(), out.size(), camera_mode.c_str(),
               views, static_cast<long long>(*seed));
   return 0;

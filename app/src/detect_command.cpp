@@ -23,11 +23,6 @@
 namespace aerotrack::app {
 namespace {
 
-int fail(const std::string& message) {
-  std::fprintf(stderr, "aerotrack detect: %s\n", message.c_str());
-  return 1;
-}
-
 std::string reasonText(const perception::TorsoFeatures& torso) {
   if (torso.reliable) return "ok";
   std::string text(perception::toString(torso.reason));
@@ -138,8 +133,8 @@ int detectCommand(const ParsedArgs& args) {
   const auto draw_path = args.values.count("draw") ? std::optional(args.values.at("draw")) : std::nullopt;
   bool known = false;
   for (const std::string& n : perception::knownModelNames()) known = known || n == model_name;
-  if (!known) return fail("--model: expected lightning, thunder or multipose, got '" + model_name + "'");
-  if (!std::filesystem::is_regular_file(input)) return fail(input + ": no such file");
+  if (!known) return failCommand("detect", "--model: expected lightning, thunder or multipose, got '" + model_name + "'");
+  if (!std::filesystem::is_regular_file(input)) return failCommand("detect", input + ": no such file");
 
   perception::DetectorParams params;
   params.model_dir = modelDir();
@@ -147,24 +142,24 @@ int detectCommand(const ParsedArgs& args) {
   params.tracking_model = multipose ? "lightning" : model_name;
   params.search_model = model_name;
   auto detector = perception::Detector::create(params);
-  if (!detector) return fail(detector.error().message);
+  if (!detector) return failCommand("detect", detector.error().message);
 
   const rt::MonotonicClock clock;
   cv::Mat last;
   perception::DetectorOutput last_out;
   if (!looksLikeVideo(input)) {
-    if (const std::string truncated = truncationOf(input); !truncated.empty()) return fail(input + ": " + truncated);
+    if (const std::string truncated = truncationOf(input); !truncated.empty()) return failCommand("detect", input + ": " + truncated);
     cv::Mat image;
     try {
       image = cv::imread(input, cv::IMREAD_COLOR);
     } catch (const cv::Exception&) {
       image.release();
     }
-    if (image.empty()) return fail(input + ": cannot decode the image (corrupt or not an image)");
+    if (image.empty()) return failCommand("detect", input + ": cannot decode the image (corrupt or not an image)");
     const rt::TimeNs begin = clock.now();
     auto out = detector->detectFrame(image, model_name);
     const double latency_ms = rt::nsToMilliseconds(clock.now() - begin);
-    if (!out) return fail(input + ": " + out.error().message);
+    if (!out) return failCommand("detect", input + ": " + out.error().message);
     if (json)
       std::printf("%s\n", toJson(*out, image, latency_ms).dump().c_str());
     else
@@ -179,7 +174,7 @@ int detectCommand(const ParsedArgs& args) {
       video.open(input, cv::CAP_FFMPEG);
     } catch (const cv::Exception&) {
     }
-    if (!video.isOpened()) return fail(input + ": cannot open the video");
+    if (!video.isOpened()) return failCommand("detect", input + ": cannot open the video");
     const double fps = video.get(cv::CAP_PROP_FPS) > 0.0 ? video.get(cv::CAP_PROP_FPS) : 30.0;
     cv::Mat frame;
     std::size_t index = 0;
@@ -188,7 +183,7 @@ int detectCommand(const ParsedArgs& args) {
       const rt::TimeNs begin = clock.now();
       auto out = multipose ? detector->detectFrame(frame, model_name) : detector->track(frame, stamp_ns);
       const double latency_ms = rt::nsToMilliseconds(clock.now() - begin);
-      if (!out) return fail(input + ": frame " + std::to_string(index) + ": " + out.error().message);
+      if (!out) return failCommand("detect", input + ": frame " + std::to_string(index) + ": " + out.error().message);
       if (json) {
         nlohmann::json j = toJson(*out, frame, latency_ms);
         j["frame"] = index;
@@ -199,7 +194,7 @@ int detectCommand(const ParsedArgs& args) {
       last = frame;
       last_out = *out;
     }
-    if (index == 0) return fail(input + ": the video has no readable frame");
+    if (index == 0) return failCommand("detect", input + ": the video has no readable frame");
   }
   if (draw_path) {
     draw(last, last_out);
@@ -209,7 +204,7 @@ int detectCommand(const ParsedArgs& args) {
     } catch (const cv::Exception&) {
       written = false;
     }
-    if (!written) return fail(*draw_path + ": cannot write the image");
+    if (!written) return failCommand("detect", *draw_path + ": cannot write the image");
   }
   return 0;
 }

@@ -8,42 +8,33 @@
 #include "commands.hpp"
 
 namespace aerotrack::app {
-namespace {
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "aerotrack import-video: %s\n", message.c_str());
-  return 1;
-}
-
-}  // namespace
-
 int importVideoCommand(const ParsedArgs& args) {
   hal::replay::VideoImportOptions options;
   options.video = *args.positional;
   options.dir = args.values.at("out");
   const auto hfov = parseDouble("hfov-deg", args.values.at("hfov-deg"), 1.0, 179.0);
-  if (!hfov) return fail(hfov.error().message);
+  if (!hfov) return failCommand("import-video", hfov.error().message);
   options.hfov_deg = *hfov;
   if (args.has("fps")) {
     const auto fps = parseDouble("fps", args.values.at("fps"), 0.1, 1000.0);
-    if (!fps) return fail(fps.error().message);
+    if (!fps) return failCommand("import-video", fps.error().message);
     options.fps = *fps;
   }
   if (args.has("start-s")) {
     const auto start = parseDouble("start-s", args.values.at("start-s"), 0.0, 1e6);
-    if (!start) return fail(start.error().message);
+    if (!start) return failCommand("import-video", start.error().message);
     options.start_s = *start;
   }
   if (args.has("max-frames")) {
     const auto n = parseInt("max-frames", args.values.at("max-frames"), 1, INT64_MAX);
-    if (!n) return fail(n.error().message);
+    if (!n) return failCommand("import-video", n.error().message);
     options.max_frames = static_cast<std::uint64_t>(*n);
   }
   options.image_format = args.valueOr("format", "jpg");
   if (options.image_format != "jpg" && options.image_format != "png")
-    return fail("--format: expected jpg or png, got '" + options.image_format + "'");
+    return failCommand("import-video", "--format: expected jpg or png, got '" + options.image_format + "'");
   const auto report = hal::replay::importVideo(options);
-  if (!report) return fail(report.error().message);
+  if (!report) return failCommand("import-video", report.error().message);
   const hal::CameraIntrinsics& k = report->intrinsics;
   std::printf(
       "imported %s into %s: %llu frames at %.3g fps, %d x %d px, fx = fy = %.1f px (%.0f deg across)%s\n",

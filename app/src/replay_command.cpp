@@ -26,11 +26,6 @@ namespace {
 
 constexpr int kDiffers = 3;  // the exit status when --compare finds a difference (cli.cpp's usage)
 
-int fail(const std::string& message) {
-  std::fprintf(stderr, "aerotrack replay: %s\n", message.c_str());
-  return 1;
-}
-
 bool simulatorOnly(const std::string& task) {
   return task == "sim_world" || task == "target_check" || task == "truth_gimbal" || task == "baseline_follow" ||
          task == "camera_strip";
@@ -56,18 +51,18 @@ int replayCommand(const ParsedArgs& args) {
   namespace fs = std::filesystem;
   const std::string dir = *args.positional;
   auto manifest = hal::replay::readManifest((fs::path(dir) / "manifest.yaml").string());
-  if (!manifest) return fail(manifest.error().message);
+  if (!manifest) return failCommand("replay", manifest.error().message);
   const std::string config_path = args.valueOr("config", (fs::path(dir) / "config.yaml").string());
   auto config = loadAppConfig(config_path);
-  if (!config) return fail(config.error().message);
+  if (!config) return failCommand("replay", config.error().message);
   const std::string mode = args.valueOr("mode", "proposed");
   if (mode != "proposed" && mode != "baseline")
-    return fail("--mode: expected proposed or baseline, got '" + mode + "'");
+    return failCommand("replay", "--mode: expected proposed or baseline, got '" + mode + "'");
   config->baseline_mode = mode == "baseline";
   double offset_s = 0.0;
   if (args.has("offset-s")) {
     const auto o = parseDouble("offset-s", args.values.at("offset-s"), 0.0, 1e7);
-    if (!o) return fail(o.error().message);
+    if (!o) return failCommand("replay", o.error().message);
     offset_s = *o;
   }
 
@@ -103,10 +98,10 @@ int replayCommand(const ParsedArgs& args) {
   const bool compare = args.flags.count("compare") != 0;
   const std::string out_dir = args.valueOr("out", "out/replay-" + fs::path(dir).filename().string());
   const bool realtime = args.flags.count("realtime") != 0;
-  if (compare && args.has("record")) return fail("--record: --compare records the replay itself (OUT/replayed)");
+  if (compare && args.has("record")) return failCommand("replay", "--record: --compare records the replay itself (OUT/replayed)");
   if (compare) {
     config->record_dir = (fs::path(out_dir) / "replayed").string();
-    if (rt::Status s = clearPreviousReplay(config->record_dir); !s) return fail(s.error().message);
+    if (rt::Status s = clearPreviousReplay(config->record_dir); !s) return failCommand("replay", s.error().message);
   } else {
     config->record_dir = args.valueOr("record", "");
   }
@@ -118,9 +113,9 @@ int replayCommand(const ParsedArgs& args) {
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);
   auto system = System::build(*config, nullptr, start_ns);
-  if (!system) return fail(system.error().message);
+  if (!system) return failCommand("replay", system.error().message);
   // The run ends with the recording: its last record of any stream, shown at start + (end - first).
-  if (!(*system)->devices().recording) return fail(dir + ": no device replays the recording");
+  if (!(*system)->devices().recording) return failCommand("replay", dir + ": no device replays the recording");
   const hal::replay::ReplayTimeline& t = (*system)->devices().recording->timeline();
   // As long as the recorded run, if its manifest says; else (a kill -9, an import) one longest task
   // period after the last record, so that every task is released after it was shown.
@@ -137,7 +132,7 @@ int replayCommand(const ParsedArgs& args) {
   info.executor = realtime ? "realtime" : "lockstep";
   const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info, "replay")
                                   : runLockstep(**system, replay_clock, end_ns, stop, info);
-  if (!ran) return fail(ran.error().message);
+  if (!ran) return failCommand("replay", ran.error().message);
   std::printf("replay %s (%s, recorded by %s): %.1f s of recording in %.2f s wall (%s)\n", dir.c_str(),
               manifest->source.c_str(), manifest->software_version.c_str(), info.sim_time_s, info.wall_time_s,
               info.executor.c_str());
@@ -151,15 +146,15 @@ int replayCommand(const ParsedArgs& args) {
   }
   std::fputs(deviceHealthReport((*system)->devices(), end_ns - 1).c_str(), stdout);
   auto recorded = (*system)->finishRecording(realtime ? mono_clock.now() : replay_clock.now());
-  if (!recorded) return fail(recorded.error().message);
+  if (!recorded) return failCommand("replay", recorded.error().message);
   if (!recorded->empty()) std::printf("%s\n", recorded->c_str());
   if (stop.load()) return 130;
   if (!compare) return 0;
   // An imported video has no delivery times to compare with: only what the modules produced is.
   auto comparison = compareDatasets(dir, config->record_dir, /*inputs=*/manifest->source != "import");
-  if (!comparison) return fail(comparison.error().message);
+  if (!comparison) return failCommand("replay", comparison.error().message);
   std::printf("compare with the recording:\n%s", formatComparison(*comparison).c_str());
-  if (comparison->empty()) return fail(dir + ": nothing to compare (no outputs recorded)");
+  if (comparison->empty()) return failCommand("replay", dir + ": nothing to compare (no outputs recorded)");
   for (const StreamComparison& c : *comparison) {
     if (!c.same()) {
       std::printf("replay differs from the recording (first: %s)\n", c.first_difference.c_str());

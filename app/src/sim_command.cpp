@@ -21,39 +21,30 @@
 #include "system.hpp"
 
 namespace aerotrack::app {
-namespace {
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "aerotrack sim: %s\n", message.c_str());
-  return 1;
-}
-
-}  // namespace
-
 int simCommand(const ParsedArgs& args) {
   const std::string mode = args.valueOr("mode", "proposed");
   if (mode != "proposed" && mode != "baseline")
-    return fail("--mode: expected proposed or baseline, got '" + mode + "'");
+    return failCommand("sim", "--mode: expected proposed or baseline, got '" + mode + "'");
   const auto seed = parseInt("seed", args.valueOr("seed", "1"), 0, INT64_MAX);
-  if (!seed) return fail(seed.error().message);
+  if (!seed) return failCommand("sim", seed.error().message);
   std::optional<double> speed;
   if (args.has("speed")) {
     const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0);
-    if (!s) return fail(s.error().message);
+    if (!s) return failCommand("sim", s.error().message);
     speed = *s;
   }
   auto config = loadAppConfig(args.valueOr("config", configDir() + "/sim.yaml"));
-  if (!config) return fail(config.error().message);
-  if (!config->hal.usesSim()) return fail(config->source + ": hal: no device uses the sim backend");
+  if (!config) return failCommand("sim", config.error().message);
+  if (!config->hal.usesSim()) return failCommand("sim", config->source + ": hal: no device uses the sim backend");
   config->baseline_mode = mode == "baseline";
   config->record_dir = args.valueOr("record", "");
   const std::string scenario_name = args.values.at("scenario");
   auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
-  if (!trial) return fail(trial.error().message);
+  if (!trial) return failCommand("sim", trial.error().message);
   if (args.has("camera")) {
     const std::string camera = args.values.at("camera");
     if (camera != "keypoints" && camera != "image")
-      return fail("--camera: expected keypoints or image, got '" + camera + "'");
+      return failCommand("sim", "--camera: expected keypoints or image, got '" + camera + "'");
     trial->spec.gimbal_camera.mode =
         camera == "image" ? hal::sim::GimbalCameraMode::kImage : hal::sim::GimbalCameraMode::kKeypoints;
   }
@@ -62,7 +53,7 @@ int simCommand(const ParsedArgs& args) {
   const std::string out_dir = args.valueOr("out", "out/sim-" + trial->spec.name + "-" + std::to_string(*seed));
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
-  if (ec) return fail(out_dir + ": cannot create directory: " + ec.message());
+  if (ec) return failCommand("sim", out_dir + ": cannot create directory: " + ec.message());
 
   const bool realtime = args.flags.count("realtime") != 0;
   config->record_lossless = !realtime;
@@ -72,7 +63,7 @@ int simCommand(const ParsedArgs& args) {
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);
   auto system = System::build(*config, &trial.value(), start_ns);
-  if (!system) return fail(system.error().message);
+  if (!system) return failCommand("sim", system.error().message);
 
   RunInfo info;
   info.executor = realtime ? "realtime" : "lockstep";
@@ -82,7 +73,7 @@ int simCommand(const ParsedArgs& args) {
   const rt::TimeNs end_ns = start_ns + rt::secondsToNs(trial->duration_s);
   const rt::Status ran = realtime ? runRealtime(**system, mono_clock, start_ns, end_ns, stop, info, "sim")
                                   : runLockstep(**system, sim_clock, end_ns, stop, info);
-  if (!ran) return fail(ran.error().message);
+  if (!ran) return failCommand("sim", ran.error().message);
   info.interrupted = stop.load();
   info.map = mapSummary((*system)->mappingTask(), info.timings);
   info.perception = perceptionSummary((*system)->detectionTask());
@@ -101,13 +92,13 @@ int simCommand(const ParsedArgs& args) {
   std::ofstream file(summary_path);
   file << summary.dump(2) << "\n";
   file.close();
-  if (!file) return fail(summary_path + ": write failed");
+  if (!file) return failCommand("sim", summary_path + ": write failed");
   const std::string topdown_path = out_dir + "/topdown.png";
-  if (const rt::Status s = drawTopdown(sim, topdown_path); !s) return fail(s.error().message);
+  if (const rt::Status s = drawTopdown(sim, topdown_path); !s) return failCommand("sim", s.error().message);
   std::string strip_path;
   if (const CameraStripTask* strip = (*system)->cameraStripTask(); strip != nullptr && strip->panels() > 0) {
     strip_path = out_dir + "/camera_strip.png";
-    if (const rt::Status s = strip->write(strip_path); !s) return fail(s.error().message);
+    if (const rt::Status s = strip->write(strip_path); !s) return failCommand("sim", s.error().message);
   }
 
   const hal::sim::SimMetrics& m = sim.metrics();

@@ -25,11 +25,6 @@ std::size_t xIndex(int k) {
   return 2 * static_cast<std::size_t>(k) + 1;
 }
 
-bool sameGrid(const HeadView& a, const HeadView& b) {
-  return a.data != nullptr && b.data != nullptr && a.height == b.height && a.width == b.width && a.height > 0 &&
-         a.width > 0;
-}
-
 struct Box {
   float ymin, xmin, ymax, xmax;  ///< Grid cells, clipped to [0, H] and [0, W].
   bool contains(int y, int x) const {
@@ -60,8 +55,8 @@ bool shapesValid(const MultiPoseHeads& heads) {
   const auto& h = heads;
   return h.heatmap.channels == kJoints && h.center.channels == 1 && h.regress.channels == 2 * kJoints &&
          h.offset.channels == 2 * kJoints && h.box_scale.channels == 2 && h.box_offset.channels == 2 &&
-         sameGrid(h.heatmap, h.center) && sameGrid(h.heatmap, h.regress) && sameGrid(h.heatmap, h.offset) &&
-         sameGrid(h.heatmap, h.box_scale) && sameGrid(h.heatmap, h.box_offset);
+         h.heatmap.sameGridAs(h.center) && h.heatmap.sameGridAs(h.regress) && h.heatmap.sameGridAs(h.offset) &&
+         h.heatmap.sameGridAs(h.box_scale) && h.heatmap.sameGridAs(h.box_offset);
 }
 
 MultiPoseResult decodeMultiPose(const MultiPoseHeads& heads, const DecodeConstants& c) {

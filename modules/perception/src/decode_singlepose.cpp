@@ -7,20 +7,11 @@
 
 namespace aerotrack::perception {
 
-namespace {
-
-bool sameGrid(const HeadView& a, const HeadView& b) {
-  return a.data != nullptr && b.data != nullptr && a.height == b.height && a.width == b.width && a.height > 0 &&
-         a.width > 0;
-}
-
-}  // namespace
-
 bool shapesValid(const SinglePoseHeads& heads) {
   return heads.heatmap.channels == static_cast<int>(hal::kNumKeypoints) && heads.center.channels == 1 &&
          heads.regress.channels == 2 * static_cast<int>(hal::kNumKeypoints) &&
-         heads.offset.channels == 2 * static_cast<int>(hal::kNumKeypoints) && sameGrid(heads.heatmap, heads.center) &&
-         sameGrid(heads.heatmap, heads.regress) && sameGrid(heads.heatmap, heads.offset);
+         heads.offset.channels == 2 * static_cast<int>(hal::kNumKeypoints) && heads.heatmap.sameGridAs(heads.center) &&
+         heads.heatmap.sameGridAs(heads.regress) && heads.heatmap.sameGridAs(heads.offset);
 }
 
 NormalisedPose decodeSinglePose(const SinglePoseHeads& heads, const DecodeConstants& constants) {

@@ -19,10 +19,6 @@ double uniform01(std::mt19937_64& rng) {
   return static_cast<double>((rng() >> 11) + 1) * 0x1.0p-53;
 }
 
-std::size_t idx(CocoKeypoint k) {
-  return index(k);
-}
-
 }  // namespace
 
 Eigen::Matrix3d opticalAxesInFlu() {
@@ -91,8 +87,8 @@ std::optional<PersonDetection> observe(const std::array<Eigen::Vector3d, kNumKey
 
   // Noise scale: the true projected torso, as the localizer would measure it from 2D keypoints.
   using K = CocoKeypoint;
-  const std::size_t ls = idx(K::kLeftShoulder), rs = idx(K::kRightShoulder);
-  const std::size_t lh = idx(K::kLeftHip), rh = idx(K::kRightHip);
+  const std::size_t ls = index(K::kLeftShoulder), rs = index(K::kRightShoulder);
+  const std::size_t lh = index(K::kLeftHip), rh = index(K::kRightHip);
   double torso_px = 0.0;
   if (uv[ls] && uv[rs] && uv[lh] && uv[rh]) {
     torso_px = (0.5 * (*uv[ls] + *uv[rs]) - 0.5 * (*uv[lh] + *uv[rh])).norm();

@@ -39,10 +39,6 @@ constexpr double kEyeHalfSpacingH = 0.018;
 constexpr double kEarHalfSpacingH = 0.044;
 constexpr double kMaxGaitScale = 2.0;  // Cap on the amplitude scale at very high speeds.
 
-std::size_t idx(CocoKeypoint k) {
-  return index(k);
-}
-
 double wrapAngle(double a_rad) {
   a_rad = std::remainder(a_rad, 2.0 * kPi);  // [-pi, pi]
   return a_rad <= -kPi ? a_rad + 2.0 * kPi : a_rad;
@@ -218,25 +214,25 @@ std::array<Eigen::Vector3d, kNumKeypoints> WalkingPerson::bodyKeypoints(double s
 
   std::array<Eigen::Vector3d, kNumKeypoints> kp;
   using K = CocoKeypoint;
-  kp[idx(K::kLeftHip)] = {0.0, hy, pelvis_z};
-  kp[idx(K::kRightHip)] = {0.0, -hy, pelvis_z};
-  kp[idx(K::kLeftShoulder)] = {0.0, sy, shoulder_z};
-  kp[idx(K::kRightShoulder)] = {0.0, -sy, shoulder_z};
+  kp[index(K::kLeftHip)] = {0.0, hy, pelvis_z};
+  kp[index(K::kRightHip)] = {0.0, -hy, pelvis_z};
+  kp[index(K::kLeftShoulder)] = {0.0, sy, shoulder_z};
+  kp[index(K::kRightShoulder)] = {0.0, -sy, shoulder_z};
   const Eigen::Vector3d neck(0.0, 0.0, shoulder_z);
   const auto mirror = [](const Eigen::Vector3d& q) { return Eigen::Vector3d(q.x(), -q.y(), q.z()); };
-  kp[idx(K::kNose)] = neck + b.nose_N_m;
-  kp[idx(K::kLeftEye)] = neck + b.left_eye_N_m;
-  kp[idx(K::kRightEye)] = neck + mirror(b.left_eye_N_m);
-  kp[idx(K::kLeftEar)] = neck + b.left_ear_N_m;
-  kp[idx(K::kRightEar)] = neck + mirror(b.left_ear_N_m);
-  placeLeg(b, kp[idx(K::kLeftHip)], theta_l, kappa_l, kp[idx(K::kLeftKnee)], kp[idx(K::kLeftAnkle)]);
-  placeLeg(b, kp[idx(K::kRightHip)], theta_r, kappa_r, kp[idx(K::kRightKnee)], kp[idx(K::kRightAnkle)]);
+  kp[index(K::kNose)] = neck + b.nose_N_m;
+  kp[index(K::kLeftEye)] = neck + b.left_eye_N_m;
+  kp[index(K::kRightEye)] = neck + mirror(b.left_eye_N_m);
+  kp[index(K::kLeftEar)] = neck + b.left_ear_N_m;
+  kp[index(K::kRightEar)] = neck + mirror(b.left_ear_N_m);
+  placeLeg(b, kp[index(K::kLeftHip)], theta_l, kappa_l, kp[index(K::kLeftKnee)], kp[index(K::kLeftAnkle)]);
+  placeLeg(b, kp[index(K::kRightHip)], theta_r, kappa_r, kp[index(K::kRightKnee)], kp[index(K::kRightAnkle)]);
 
   // Each arm swings against the leg on its side: forward while that foot is behind.
   const double swing_l = -k * params_.arm_swing_ref_rad * std::cos(2.0 * kPi * psi_l);
   const double flex = k * params_.elbow_flex_ref_rad;
-  placeArm(b, kp[idx(K::kLeftShoulder)], swing_l, flex, kp[idx(K::kLeftElbow)], kp[idx(K::kLeftWrist)]);
-  placeArm(b, kp[idx(K::kRightShoulder)], -swing_l, flex, kp[idx(K::kRightElbow)], kp[idx(K::kRightWrist)]);
+  placeArm(b, kp[index(K::kLeftShoulder)], swing_l, flex, kp[index(K::kLeftElbow)], kp[index(K::kLeftWrist)]);
+  placeArm(b, kp[index(K::kRightShoulder)], -swing_l, flex, kp[index(K::kRightElbow)], kp[index(K::kRightWrist)]);
   return kp;
 }
 

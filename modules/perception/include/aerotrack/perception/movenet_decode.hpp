@@ -28,6 +28,11 @@ struct HeadView {
                     static_cast<std::size_t>(width) +
                 static_cast<std::size_t>(x)];
   }
+  /// Both views hold data on the same non-empty grid (the heads of one model output do).
+  bool sameGridAs(const HeadView& other) const {
+    return data != nullptr && other.data != nullptr && height == other.height && width == other.width && height > 0 &&
+           width > 0;
+  }
 };
 
 /// The constants of the decoding, read from the model's sidecar.
