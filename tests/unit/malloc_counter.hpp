@@ -1,8 +1,9 @@
 // Counting allocations in a test binary (the "no allocation once warm" claims of the modules). malloc is
 // interposed (Eigen allocates through malloc, not operator new) and counts calls while a MallocCount is
-// alive. Exactly one translation unit of a test binary defines AEROTRACK_DEFINE_MALLOC_COUNTER before
-// including this header; it holds the interposer. Under AddressSanitizer or ThreadSanitizer, which own
-// malloc, nothing is interposed and kMallocCounted is false: tests skip.
+// alive. The interposer is tests/unit/malloc_counter.cpp, which tests/CMakeLists.txt links into every
+// binary declared COUNTS_MALLOCS (and a fresh configure refuses a binary that includes this header
+// without it). Under AddressSanitizer or ThreadSanitizer, which own malloc, nothing is interposed and
+// kMallocCounted is false: tests skip.
 #pragma once
 
 #include <atomic>
@@ -42,13 +43,3 @@ inline long mallocsOfAHeapBuffer() {
 }
 
 }  // namespace aerotrack::test
-
-#if defined(AEROTRACK_DEFINE_MALLOC_COUNTER) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-extern "C" void* __libc_malloc(std::size_t size);  // NOLINT: glibc's own allocator
-
-extern "C" void* malloc(std::size_t size) {  // NOLINT: interposes the C library's malloc
-  if (aerotrack::test::g_counting_mallocs.load(std::memory_order_relaxed))
-    aerotrack::test::g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(size);
-}
-#endif

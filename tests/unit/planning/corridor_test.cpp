@@ -28,7 +28,6 @@
 #include "search_test_util.hpp"
 #include "support/require.hpp"
 
-#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "../malloc_counter.hpp"
 
 namespace aerotrack::planning {

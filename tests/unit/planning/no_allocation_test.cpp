@@ -11,7 +11,6 @@
 #include "aerotrack/planning/kinodynamic_search.hpp"
 #include "search_test_util.hpp"
 
-#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "../malloc_counter.hpp"
 
 namespace aerotrack::planning {

@@ -3,7 +3,6 @@
 // and starts exactly at the start state; a failed cycle publishes nothing and the old trajectory goes on;
 // a failed cycle whose old trajectory is blocked publishes a stop (also when the drone is already inside
 // the margin of a surface seen late, and the trajectory stays in it); on the ground it takes off first.
-#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "aerotrack/planning/tracking_planner.hpp"
 
 #include <gtest/gtest.h>

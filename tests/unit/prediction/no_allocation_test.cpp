@@ -12,7 +12,6 @@
 #include "aerotrack/prediction/dense_qp.hpp"
 #include "aerotrack/prediction/target_predictor.hpp"
 
-#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "../malloc_counter.hpp"
 
 namespace aerotrack::prediction {

@@ -8,7 +8,6 @@
 #include <memory>
 #include <vector>
 
-#define AEROTRACK_DEFINE_MALLOC_COUNTER  // NOLINT(cppcoreguidelines-macro-usage): this binary's interposer
 #include "../malloc_counter.hpp"
 
 namespace aerotrack::rt {
