@@ -1,10 +1,58 @@
 #!/usr/bin/env bash
-# Configures (once) and builds aerotrack into build/ (Release, warnings are errors); the binary is
-# build/bin/aerotrack. Incremental: a second run with nothing changed takes about a second.
-# usage: scripts/build.sh [extra cmake -D options for the first configure]
+# Configures (once) and builds one of the project's build trees; warnings are errors in all of them.
+#   release  build/       Release: what flies and what the demo runs (build/bin/aerotrack)
+#   asan     build-asan/  AddressSanitizer + UndefinedBehaviorSanitizer: the whole test suite (scripts/test.sh)
+#   tsan     build-tsan/  ThreadSanitizer: the concurrency tests (scripts/check.sh tsan)
+# Every tree is a CMake unity build (AEROTRACK_UNITY_BUILD, docs/testing.md: about half the cold build
+# time). ccache is used when it is installed (scripts/setup.sh --dev installs it); nothing depends on it.
+# Incremental: a second run with nothing changed takes about a second.
+# usage: scripts/build.sh [--tree release|asan|tsan] [-DOPTION=VALUE...] [TARGET...]
+#   TARGETs default to `aerotrack` for release and to everything for asan and tsan; -D options apply to
+#   the first configure of a tree only.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-if [[ ! -f build/build.ninja ]]; then
-  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DAEROTRACK_WERROR=ON "$@" >/dev/null
+
+tree=release
+options=()
+targets=()
+while (($#)); do
+  case $1 in
+    --tree) tree=${2:?--tree needs release, asan or tsan}; shift 2 ;;
+    -D*) options+=("$1"); shift ;;
+    *) targets+=("$1"); shift ;;
+  esac
+done
+
+# The sanitizer trees: line tables (-g1) are all the sanitizers' stack traces need, and full debug info
+# of the Eigen-heavy translation units costs a fifth of their compile time. UBSan's checks make -O2 twice
+# as slow to compile as ASan alone, so the ASan + UBSan tree is built at -O1 (what ASan's documentation
+# recommends): a third less compile time for the suite's largest build (docs/testing.md, "CI time budget").
+# Benchmarks measure optimised code; the sanitizer trees have no use for them.
+case $tree in
+  release) dir=build; options+=(-DCMAKE_BUILD_TYPE=Release) ;;
+  asan)
+    dir=build-asan
+    options+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DAEROTRACK_SANITIZE=address,undefined -DAEROTRACK_BUILD_BENCHMARKS=OFF
+      "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
+    ;;
+  tsan)
+    dir=build-tsan
+    options+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DAEROTRACK_SANITIZE=thread -DAEROTRACK_BUILD_BENCHMARKS=OFF
+      "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG")
+    ;;
+  *) echo "build.sh: unknown tree '$tree' (release, asan, tsan)" >&2; exit 1 ;;
+esac
+if command -v ccache >/dev/null; then  # CCACHE_DISABLE=1 turns it off for a cold measurement
+  options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
-cmake --build build -j "$(nproc)"
+
+if [[ ! -f $dir/build.ninja ]]; then
+  cmake -S . -B "$dir" -G Ninja -DAEROTRACK_WERROR=ON "${options[@]}" >/dev/null
+fi
+if ((${#targets[@]})); then
+  cmake --build "$dir" -j "$(nproc)" --target "${targets[@]}"
+elif [[ $tree == release ]]; then
+  cmake --build "$dir" -j "$(nproc)" --target aerotrack
+else
+  cmake --build "$dir" -j "$(nproc)"
+fi
