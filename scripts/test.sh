@@ -14,5 +14,5 @@ scripts/build.sh --tree asan
 echo "test.sh: ASan + UBSan build done in $((SECONDS - step)) s"
 step=$SECONDS
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build-asan -j "$(nproc)" --output-on-failure --timeout 300
+  ctest --test-dir build-asan -j "$(nproc)" --output-on-failure --no-tests=error --timeout 300
 echo "test.sh: tests done in $((SECONDS - step)) s (total $((SECONDS - start)) s)"
