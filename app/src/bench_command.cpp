@@ -61,7 +61,8 @@ int benchCommand(const ParsedArgs& args) {
       "jobs", args.valueOr("jobs", std::to_string(std::max(1U, std::thread::hardware_concurrency()))), 1, 1024);
   if (!jobs) return failCommand("bench", jobs.error().message);
   if (args.has("speed")) {
-    if (const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0); !s) return failCommand("bench", s.error().message);
+    if (const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0); !s)
+      return failCommand("bench", s.error().message);
   }
   std::error_code ec;
   const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string();

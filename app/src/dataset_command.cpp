@@ -127,8 +127,9 @@ int datasetCommand(const ParsedArgs& args) {
   }
   if (out.size() < static_cast<std::size_t>(*samples))
     return failCommand("dataset", "only " + std::to_string(out.size()) + " of " + std::to_string(*samples) +
-                " views gave a reliable torso in " + std::to_string(views) + " tries");
-  if (const rt::Status s = localization::writeSamplesCsv(out, out_path); !s) return failCommand("dataset", s.error().message);
+                                      " views gave a reliable torso in " + std::to_string(views) + " tries");
+  if (const rt::Status s = localization::writeSamplesCsv(out, out_path); !s)
+    return failCommand("dataset", s.error().message);
   std::printf("%s: %zu samples (%s camera, %zu views, seed %lld)\n", out_path.c_str(), out.size(), camera_mode.c_str(),
               views, static_cast<long long>(*seed));
   return 0;

@@ -133,7 +133,8 @@ int detectCommand(const ParsedArgs& args) {
   const auto draw_path = args.values.count("draw") ? std::optional(args.values.at("draw")) : std::nullopt;
   bool known = false;
   for (const std::string& n : perception::knownModelNames()) known = known || n == model_name;
-  if (!known) return failCommand("detect", "--model: expected lightning, thunder or multipose, got '" + model_name + "'");
+  if (!known)
+    return failCommand("detect", "--model: expected lightning, thunder or multipose, got '" + model_name + "'");
   if (!std::filesystem::is_regular_file(input)) return failCommand("detect", input + ": no such file");
 
   perception::DetectorParams params;
@@ -148,7 +149,8 @@ int detectCommand(const ParsedArgs& args) {
   cv::Mat last;
   perception::DetectorOutput last_out;
   if (!looksLikeVideo(input)) {
-    if (const std::string truncated = truncationOf(input); !truncated.empty()) return failCommand("detect", input + ": " + truncated);
+    if (const std::string truncated = truncationOf(input); !truncated.empty())
+      return failCommand("detect", input + ": " + truncated);
     cv::Mat image;
     try {
       image = cv::imread(input, cv::IMREAD_COLOR);

@@ -98,7 +98,8 @@ int replayCommand(const ParsedArgs& args) {
   const bool compare = args.flags.count("compare") != 0;
   const std::string out_dir = args.valueOr("out", "out/replay-" + fs::path(dir).filename().string());
   const bool realtime = args.flags.count("realtime") != 0;
-  if (compare && args.has("record")) return failCommand("replay", "--record: --compare records the replay itself (OUT/replayed)");
+  if (compare && args.has("record"))
+    return failCommand("replay", "--record: --compare records the replay itself (OUT/replayed)");
   if (compare) {
     config->record_dir = (fs::path(out_dir) / "replayed").string();
     if (rt::Status s = clearPreviousReplay(config->record_dir); !s) return failCommand("replay", s.error().message);

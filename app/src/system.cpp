@@ -87,7 +87,9 @@ System::TaskResult made(std::unique_ptr<T> task) {
 std::span<const System::TaskKind> System::taskKinds() {
   static const TaskKind kKinds[] = {
       {"sim_world", true,
-       [](System& s, const std::string& /*where*/) { return made(std::make_unique<SimWorldTask>(s.devices_.simulation)); }},
+       [](System& s, const std::string& /*where*/) {
+         return made(std::make_unique<SimWorldTask>(s.devices_.simulation));
+       }},
       {"odometry", false,
        [](System& s, const std::string& /*where*/) {
          return made(std::make_unique<OdometryTask>(*s.devices_.odometry, s.channels_.odometry,
@@ -137,8 +139,8 @@ std::vector<std::string> System::knownTasks() {
 }
 
 System::TaskResult System::makeSimFollower(System& s, bool command_vehicle) {
-  return made(std::make_unique<BaselineFollowTask>(s.devices_.simulation, *s.devices_.vehicle_link,
-                                                   *s.devices_.gimbal, command_vehicle));
+  return made(std::make_unique<BaselineFollowTask>(s.devices_.simulation, *s.devices_.vehicle_link, *s.devices_.gimbal,
+                                                   command_vehicle));
 }
 
 System::TaskResult System::makeCameraStripTask(System& s, const std::string& /*where*/) {
@@ -192,8 +194,8 @@ System::TaskResult System::makeGimbalControlTask(System& s, const std::string& w
     return rt::Error{where + ": task 'gimbal_control' needs gimbal_control: and estimation: sections"};
   const gimbal_control::GimbalController controller(*s.config_.gimbal_control, s.config_.estimation->task.extrinsics);
   Channels& c = s.channels_;
-  auto task = std::make_unique<gimbal_control::GimbalControlTask>(
-      controller, c.gimbal_state, c.odometry, c.target, c.gimbal_search_requested, *s.devices_.gimbal);
+  auto task = std::make_unique<gimbal_control::GimbalControlTask>(controller, c.gimbal_state, c.odometry, c.target,
+                                                                  c.gimbal_search_requested, *s.devices_.gimbal);
   task->fixCamera(s.config_.baseline_mode);
   return made(std::move(task));
 }
@@ -221,9 +223,8 @@ System::TaskResult System::makePlanningTask(System& s, const std::string& where)
   auto planner = planning::TrackingPlanner::create(*s.config_.planning);
   if (!planner) return rt::Error{s.config_.source + ": " + planner.error().message};
   Channels& c = s.channels_;
-  const planning::PlanningChannels channels{c.odometry,    c.target,     c.local_grid,
-                                            c.octree,      c.trajectories, &c.supervisor,
-                                            &c.planner_failures_in_a_row};
+  const planning::PlanningChannels channels{
+      c.odometry, c.target, c.local_grid, c.octree, c.trajectories, &c.supervisor, &c.planner_failures_in_a_row};
   if (s.config_.baseline_mode) planner->setOcclusionAware(false);
   auto task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, s.stats_clock_);
   s.planning_task_ = task.get();
