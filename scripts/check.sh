@@ -3,7 +3,7 @@
 # step prints its own time; docs/testing.md keeps the budget.
 #   format   clang-format finds nothing to change
 #   release  the Release tree (build/): the binary, the benchmarks (compiled, not run: they are measured by
-#            hand) and the vcan test binary; runs the tests labelled `unsanitized` -- they count mallocs, and
+#            hand) and the vcan test binary; runs the tests labelled `unit-unsanitized` -- they count mallocs, and
 #            a sanitizer owns malloc, so under test.sh they skip
 #   vcan     the CAN gimbal driver over real SocketCAN (vcan0) in QEMU (scripts/vcan_test.sh, ~10 s once the
 #            kernel is cached; the first run downloads Debian's kernel package, 70 MB)
