@@ -160,9 +160,17 @@ void Simulation::sampleDueSensors() {
     truth_.person = personAt(now_ns_);
     truth_.T_WC = cameraPose(truth_.drone, truth_.gimbal_angle_rad);
     const double t_s = rt::nsToSeconds(now_ns_ - start_ns_);
-    metrics_.record(t_s, truth_.drone.p_W_m, truth_.person.p_W_m, obstacles_.distance(truth_.drone.p_W_m),
-                    personSight(truth_.T_WC, truth_.person), t_s >= personStartS(),
-                    rt::nsToSeconds(metrics_period_ns_));
+    MetricsSample sample;
+    sample.t_s = t_s;
+    sample.dt_s = rt::nsToSeconds(metrics_period_ns_);
+    sample.drone_m = truth_.drone.p_W_m;
+    sample.person_m = truth_.person.p_W_m;
+    sample.person_speed_mps = truth_.person.speed_mps;
+    sample.tracking = t_s >= personStartS();
+    sample.person_walking = sample.tracking && t_s - personStartS() < person_.durationS();
+    sample.clearance_m = obstacles_.distance(truth_.drone.p_W_m);
+    sample.sight = personSight(truth_.T_WC, truth_.person);
+    metrics_.record(sample);
     next_metrics_ns_ += metrics_period_ns_;
   }
 }

@@ -80,13 +80,26 @@ ScenarioSpec specWithSuccess(double distance_m) {
   return s;
 }
 
+MetricsSample sampleOf(double t_s, const Eigen::Vector3d& drone_m, const Eigen::Vector3d& person_m, double clearance_m,
+                       Sight sight, bool tracking, double dt_s) {
+  MetricsSample s;
+  s.t_s = t_s;
+  s.dt_s = dt_s;
+  s.drone_m = drone_m;
+  s.person_m = person_m;
+  s.clearance_m = clearance_m;
+  s.sight = sight;
+  s.tracking = tracking;
+  return s;
+}
+
 TEST(SimMetrics, GivenCleanRunThenSuccessAndRatios) {
   SimMetrics m(specWithSuccess(2.5));
   const Eigen::Vector3d person(0, 0, 0), drone(2.5, 0, 1.5);
   // Hidden for samples 50-59: out of the image for the first 4, then behind an obstacle.
   for (int i = 0; i < 100; ++i) {
     const Sight sight = i < 50 || i >= 60 ? Sight::kVisible : i < 54 ? Sight::kOutOfImage : Sight::kOccluded;
-    m.record(0.02 * i, drone, person, 3.0, sight, i >= 10, 0.02);
+    m.record(sampleOf(0.02 * i, drone, person, 3.0, sight, i >= 10, 0.02));
   }
   EXPECT_TRUE(m.success()) << m.failureReason();
   EXPECT_EQ(m.collisions(), 0);
@@ -103,7 +116,8 @@ TEST(SimMetrics, GivenCleanRunThenSuccessAndRatios) {
 TEST(SimMetrics, GivenContactThenOneCollisionPerContactAndFailure) {
   SimMetrics m(specWithSuccess(2.5));
   const Eigen::Vector3d p(2.5, 0, 1.5), q(0, 0, 0);
-  for (double clearance : {1.0, 0.2, 0.1, 1.0, 0.2, 1.0}) m.record(0, p, q, clearance, Sight::kVisible, true, 0.02);
+  for (double clearance : {1.0, 0.2, 0.1, 1.0, 0.2, 1.0})
+    m.record(sampleOf(0, p, q, clearance, Sight::kVisible, true, 0.02));
   EXPECT_EQ(m.collisions(), 2);
   EXPECT_FALSE(m.success());
   EXPECT_NE(m.failureReason().find("2 collision(s)"), std::string::npos);
@@ -111,11 +125,11 @@ TEST(SimMetrics, GivenContactThenOneCollisionPerContactAndFailure) {
 
 TEST(SimMetrics, GivenLossNeverRecoveredOrFarAtTheEndThenFailure) {
   SimMetrics lost(specWithSuccess(2.5));
-  lost.record(1.0, {2, 0, 1}, {0, 0, 0}, 5, Sight::kVisible, true, 0.02);
-  lost.record(1.5, {2, 0, 1}, {0, 0, 0}, 5, Sight::kOccluded, true, 0.02);
+  lost.record(sampleOf(1.0, {2, 0, 1}, {0, 0, 0}, 5, Sight::kVisible, true, 0.02));
+  lost.record(sampleOf(1.5, {2, 0, 1}, {0, 0, 0}, 5, Sight::kOccluded, true, 0.02));
   EXPECT_NE(lost.failureReason().find("never re-acquired"), std::string::npos);
   SimMetrics far(specWithSuccess(2.5));
-  far.record(1.0, {6, 0, 1}, {0, 0, 0}, 5, Sight::kVisible, true, 0.02);
+  far.record(sampleOf(1.0, {6, 0, 1}, {0, 0, 0}, 5, Sight::kVisible, true, 0.02));
   EXPECT_NE(far.failureReason().find("final distance 6.0 m exceeds 5.0 m"), std::string::npos);
 }
 

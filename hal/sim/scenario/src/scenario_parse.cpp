@@ -265,6 +265,11 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
   const ConfigNode success = root.child("success");
   s.success.tracking_distance_m = success.getDouble("tracking_distance_m", 0.5, 50.0);
   s.success.final_distance_factor = success.getDouble("final_distance_factor", 1.0, 100.0);
+  s.success.max_loss_s = success.getDoubleOr("max_loss_s", s.success.max_loss_s, 0.1, 600.0);
+  s.success.max_distance_m = success.getDoubleOr("max_distance_m", 0.0, 0.5, 1000.0);
+  if (s.success.max_distance_m > 0.0 && s.success.max_distance_m <= s.success.tracking_distance_m)
+    success.fail("max_distance_m", "must be greater than tracking_distance_m (" +
+                                       rt::formatConfigNumber(s.success.tracking_distance_m) + " m)");
   success.finish();
   root.finish();
   return s;

@@ -1,6 +1,11 @@
 // Ground-truth metrics of a simulated run, the numbers summary.json reports and the verdict of
 // success (issue 3): no collision, the person re-acquired after every loss of sight, and at the
 // end the drone within final_distance_factor times the tracking distance of the person.
+// Beside it, the paper's stricter verdict (Fast-Tracker 2.0, Sect. V-B, Table I: "a test fails when
+// the quadrotor cannot follow the target all the way"), made measurable (issue 20 item 5):
+// followed_all_the_way = no collision, no loss of sight longer than success.max_loss_s, and never
+// farther than success.max_distance_m for longer than max_loss_s. And the identity metrics: how often
+// the followed detection changed from one true person to another, and how long it was a bystander.
 // "Visible" means the person's torso (mid-shoulders and mid-hips) is inside the gimbal camera's
 // image and in its line of sight -- what a detector needs, independent of what it then found.
 #pragma once
@@ -39,19 +44,65 @@ struct LossEvent {
   Sight cause = Sight::kOccluded;                     ///< Why sight was lost (its first sample).
 };
 
+/// One metrics sample (the simulation takes one every metrics period). A struct so that later
+/// additions do not change record()'s signature.
+struct MetricsSample {
+  double t_s = 0.0;   ///< Since the start of the run.
+  double dt_s = 0.0;  ///< The metrics period: the time this sample stands for.
+  Eigen::Vector3d drone_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d person_m = Eigen::Vector3d::Zero();
+  double person_speed_mps = 0.0;  ///< PersonState::speed_mps.
+  /// The person is on the path: from the start delay until they stop at its end (pauses on the way
+  /// included); the person's mean speed is taken over these samples.
+  bool person_walking = false;
+  double clearance_m = std::numeric_limits<double>::infinity();  ///< Drone centre to the nearest obstacle.
+  Sight sight = Sight::kVisible;
+  bool tracking = false;  ///< The person has started walking: losses and distances count from then on.
+};
+
+/// The person id recordFollowed() takes when there is no followed detection, or it matches nobody.
+inline constexpr int kNoPerson = -1;
+
 class SimMetrics {
  public:
   explicit SimMetrics(const ScenarioSpec& spec = {}) : drone_radius_m_(spec.drone.radius_m), success_(spec.success) {}
 
-  /// Records one sample. tracking: the person has started walking (losses and distances count
-  /// from then on). clearance_m: distance from the drone's centre to the nearest obstacle.
-  void record(double t_s, const Eigen::Vector3d& drone_m, const Eigen::Vector3d& person_m, double clearance_m,
-              Sight sight, bool tracking, double dt_s);
+  /// Records one sample, in time order.
+  void record(const MetricsSample& sample);
+
+  /// Records which true person the followed detection of one detection frame belongs to: 0 the
+  /// target, k >= 1 bystander k, kNoPerson (-1) no followed detection or one that matches nobody.
+  /// Called once per detection frame, in time order, interleaved with record() by time; the id holds
+  /// until the next call (time_on_wrong_person_s integrates it over the metrics samples).
+  void recordFollowed(double t_s, int person_id);
 
   /// The verdict at the end of the run; final distance is the last sample's.
   bool success() const;
   /// Null-like empty string when successful, else the first reason.
   std::string failureReason() const;
+
+  /// The paper's verdict (see the top of this file).
+  bool followedAllTheWay() const { return followFailureReason().empty(); }
+  /// Empty when followed all the way, else the first reason (collision, long loss, long excursion).
+  std::string followFailureReason() const;
+  /// The longest time the drone was continuously farther than success.max_distance_m, seconds.
+  double longestExcursionS() const;
+  /// The excursion limit in metres: success.max_distance_m, or its default (see SuccessSpec).
+  double maxDistanceM() const;
+
+  /// Times the followed id changed from one person (>= 0) to a different person (>= 0); frames
+  /// without a followed detection (-1) between them are ignored (0, -1, 0 is no switch; 0, -1, 2 is one).
+  int identitySwitches() const { return identity_switches_; }
+  /// Tracked time during which the latest recordFollowed() id was a bystander (>= 1), seconds.
+  double timeOnWrongPersonS() const { return time_on_wrong_person_s_; }
+  /// recordFollowed() calls so far (0: the run reported no identities; the metrics mean nothing).
+  long long followedFrames() const { return followed_frames_; }
+
+  /// The person's fastest speed over the run, m/s.
+  double personTopSpeedMps() const { return person_top_speed_mps_; }
+  /// The person's mean speed while on the path (start delay to the end of the path, pauses
+  /// included), m/s; 0 if they never walked.
+  double personMeanSpeedMps() const { return walking_s_ > 0.0 ? walking_distance_m_ / walking_s_ : 0.0; }
 
   int collisions() const { return collisions_; }
   /// Infinity when there is no obstacle in the world.
@@ -78,6 +129,14 @@ class SimMetrics {
   double last_t_s_ = 0.0;
   int samples_tracked_ = 0;
   bool was_visible_ = true;
+  double excursion_start_s_ = -1.0;  // -1 while within max_distance_m
+  double longest_excursion_s_ = 0.0, longest_excursion_start_s_ = 0.0;
+  int last_person_id_ = kNoPerson;       // the latest recordFollowed() id
+  int last_real_person_id_ = kNoPerson;  // the latest id >= 0 (switches skip -1 gaps)
+  int identity_switches_ = 0;
+  long long followed_frames_ = 0;
+  double time_on_wrong_person_s_ = 0.0;
+  double person_top_speed_mps_ = 0.0, walking_s_ = 0.0, walking_distance_m_ = 0.0;
   std::vector<LossEvent> losses_;
   std::vector<TrackSample> track_;
 };
