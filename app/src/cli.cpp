@@ -66,10 +66,14 @@ std::vector<CommandSpec> commandTable() {
         {"format", "jpg|png", false, "frame files (default jpg)"}},
        ""},
       {"bench",
-       "seeds 1..N of a scenario in parallel processes; bench.json and a table",
+       "seeds 1..N of a scenario, or a suite's matrix, in parallel processes; bench.json and a table, or "
+       "suite.json, report.md and plots",
        "",
-       {{"scenario", "NAME|FILE", true, "scenario name in config/scenarios/ or a YAML file"},
-        {"trials", "N", true, "number of seeds (1..N)"},
+       {{"scenario", "NAME|FILE", false, "scenario name in config/scenarios/ or a YAML file (or --suite)"},
+        {"trials", "N", false, "number of seeds (1..N; with --scenario)"},
+        {"suite", "FILE", false,
+         "run a suite (config/suites/*.yaml: scenarios x speeds x modes x cameras x seeds); resumable: a trial "
+         "with a complete summary.json is not run again (default --out out/suite-<name>)"},
         {"speed", "MPS", false, "the person's walking speed (as sim --speed)"},
         {"camera", "keypoints|image", false, "gimbal camera mode (as sim --camera)"},
         {"mode", "proposed|baseline", false,

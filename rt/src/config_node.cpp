@@ -170,6 +170,29 @@ std::string ConfigNode::getEnum(const std::string& key, const std::vector<std::s
   fail(key, "'" + v + "' is not one of: " + list);
 }
 
+bool ConfigNode::isList(const std::string& key) const {
+  return node_.IsMap() && node_[key].IsDefined() && node_[key].IsSequence();
+}
+
+std::vector<std::string> ConfigNode::getEnumList(const std::string& key,
+                                                 const std::vector<std::string>& allowed) const {
+  const YAML::Node value = require(key);
+  if (!value.IsSequence() || value.size() == 0)
+    fail(key, "expected a non-empty list of names, got " + shortValue(value));
+  std::string names;
+  for (const std::string& a : allowed) names += names.empty() ? a : ", " + a;
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string v = scalarAs<std::string>(key + "[" + std::to_string(i) + "]", value[i], "a name");
+    if (std::find(allowed.begin(), allowed.end(), v) == allowed.end())
+      fail(key, "item " + std::to_string(i) + ": '" + v + "' is not one of: " + names);
+    if (std::find(out.begin(), out.end(), v) != out.end())
+      fail(key, "item " + std::to_string(i) + ": '" + v + "' is repeated");
+    out.push_back(v);
+  }
+  return out;
+}
+
 std::vector<double> ConfigNode::getDoubleList(const std::string& key, std::size_t size, double min, double max) const {
   return getDoubleList(key, size, Range::closed(min, max));
 }

@@ -66,6 +66,8 @@ class ConfigNode {
   static Expected<ConfigNode> fromString(const std::string& text, const std::string& source_name);
 
   bool has(const std::string& key) const;
+  /// Whether the key is present and a list (for keys that take a scalar or a list).
+  bool isList(const std::string& key) const;
 
   // Required scalars. Throw ConfigError if missing, of the wrong type or outside [min, max].
   double getDouble(const std::string& key, double min, double max) const;
@@ -78,6 +80,8 @@ class ConfigNode {
   /// A string that must be one of `allowed`. If "null" is allowed, a YAML null means "null".
   std::string getEnum(const std::string& key, std::initializer_list<const char*> allowed) const;
   std::string getEnum(const std::string& key, const std::vector<std::string>& allowed) const;
+  /// A non-empty list of strings, each one of `allowed`, no repeats ("modes: [proposed, baseline]").
+  std::vector<std::string> getEnumList(const std::string& key, const std::vector<std::string>& allowed) const;
   /// A list of exactly `size` numbers (any size if size == 0), each in [min, max].
   std::vector<double> getDoubleList(const std::string& key, std::size_t size, double min, double max) const;
   /// As above, each in `range`.

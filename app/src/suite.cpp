@@ -1,0 +1,410 @@
+// Benchmark suites: see suite.hpp.
+#include "suite.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+#include "bench_stats.hpp"
+#include "paths.hpp"
+
+namespace aerotrack::app {
+namespace {
+
+std::string suiteSpeedText(double speed_mps) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", speed_mps);
+  return text;
+}
+
+std::string suiteScenarioTag(const std::string& scenario) {
+  return std::filesystem::path(scenario).stem().string();
+}
+
+SuiteSpec parseSuiteRoot(const rt::ConfigNode& root) {
+  SuiteSpec s;
+  s.source = root.sourceName();
+  s.name = root.getString("name");
+  if (root.isList("seeds")) {
+    const std::vector<double> range = root.getDoubleList("seeds", 2, 0.0, 1e9);
+    if (range[0] != std::floor(range[0]) || range[1] != std::floor(range[1]) || range[1] < range[0])
+      root.fail("seeds", "expected whole numbers [first, last] with first <= last");
+    s.first_seed = static_cast<std::int64_t>(range[0]);
+    s.last_seed = static_cast<std::int64_t>(range[1]);
+  } else {
+    s.first_seed = 1;
+    s.last_seed = root.getInt("seeds", 1, 100000);
+  }
+  if (root.has("targets")) {
+    const rt::ConfigNode t = root.child("targets");
+    if (t.has("followed_rate")) s.targets.followed_rate = t.getDouble("followed_rate", 0.0, 1.0);
+    if (t.has("success_rate")) s.targets.success_rate = t.getDouble("success_rate", 0.0, 1.0);
+    if (t.has("visible_ratio")) s.targets.visible_ratio = t.getDouble("visible_ratio", 0.0, 1.0);
+    t.finish();
+  }
+  const std::vector<rt::ConfigNode> cells = root.childList("cells");
+  if (cells.empty()) root.fail("cells", "expected at least one cell");
+  std::set<std::string> ids;
+  for (const rt::ConfigNode& c : cells) {
+    SuiteCell cell;
+    cell.scenario = c.getString("scenario");
+    if (cell.scenario.empty()) c.fail("scenario", "must not be empty");
+    std::vector<std::optional<double>> speeds{std::nullopt};
+    if (c.has("speeds")) {
+      speeds.clear();
+      // The range of `aerotrack sim --speed`.
+      for (double v : c.getDoubleList("speeds", 0, 0.05, 20.0)) speeds.emplace_back(v);
+      if (speeds.empty()) c.fail("speeds", "expected at least one speed (or leave the key out)");
+    }
+    const std::vector<std::string> modes = c.getEnumList("modes", {"proposed", "baseline"});
+    cell.camera = c.has("camera") ? c.getEnum("camera", {"keypoints", "image"}) : "keypoints";
+    cell.config = c.getStringOr("config", "");
+    c.finish();
+    for (const std::optional<double>& speed : speeds) {
+      for (const std::string& mode : modes) {
+        SuiteCell expanded = cell;
+        expanded.speed_mps = speed;
+        expanded.mode = mode;
+        expanded.id = suiteScenarioTag(cell.scenario) + "-" + (speed ? suiteSpeedText(*speed) + "mps" : "own") + "-" +
+                      mode + "-" + cell.camera;
+        if (!cell.config.empty()) expanded.id += "-" + suiteScenarioTag(cell.config);
+        if (!ids.insert(expanded.id).second) c.fail("scenario", "cell " + expanded.id + " appears twice");
+        s.cells.push_back(expanded);
+      }
+    }
+  }
+  root.finish();
+  return s;
+}
+
+bool suiteNumber(const nlohmann::json& object, const char* key, double& out) {
+  const auto it = object.find(key);
+  if (it == object.end() || !it->is_number()) return false;
+  out = it->get<double>();
+  return true;
+}
+
+/// "0.80 [0.49, 0.94]", flagged when under the target.
+std::string suiteRateCell(const nlohmann::json& stats, const char* rate_key, const char* ci_key,
+                          const std::optional<double>& target) {
+  const double rate = stats.value(rate_key, 0.0);
+  char text[96];
+  std::snprintf(text, sizeof(text), "%s%d/%d = %.2f [%.2f, %.2f]", target && rate < *target ? "🔴 " : "",
+                stats.value(rate_key == std::string("followed_rate") ? "followed_all_the_way" : "successes", 0),
+                stats.value("completed", 0), rate, stats[ci_key][0].get<double>(), stats[ci_key][1].get<double>());
+  return text;
+}
+
+/// The number with `decimals` decimals and a unit, or "-" when null.
+std::string suiteNumberCell(const nlohmann::json& value, int decimals, const char* unit, double scale = 1.0) {
+  if (!value.is_number()) return "-";
+  char text[48];
+  std::snprintf(text, sizeof(text), "%.*f%s", decimals, scale * value.get<double>(), unit);
+  return text;
+}
+
+/// The x of a cell in the plots: the speed asked, or else the person's measured top speed.
+std::optional<double> suitePlotSpeed(const CellResult& r, const nlohmann::json& stats) {
+  if (r.cell.speed_mps) return r.cell.speed_mps;
+  double measured = 0.0;
+  if (suiteNumber(stats, "person_top_speed_mps_mean", measured)) return measured;
+  return std::nullopt;
+}
+
+std::string suiteSeriesName(const SuiteCell& cell) {
+  std::string name = cell.mode;
+  if (cell.camera != "keypoints") name += "/" + cell.camera;
+  if (!cell.config.empty()) name += "/" + suiteScenarioTag(cell.config);
+  return name;
+}
+
+}  // namespace
+
+rt::Expected<SuiteSpec> parseSuite(const rt::Expected<rt::ConfigNode>& root) {
+  if (!root) return root.error();
+  return rt::parseConfig<SuiteSpec>([&] { return parseSuiteRoot(*root); });
+}
+
+rt::Expected<SuiteSpec> loadSuite(const std::string& path) {
+  return parseSuite(rt::ConfigNode::loadFile(path));
+}
+
+std::string trialDir(const std::string& out_dir, const SuiteCell& cell, std::int64_t seed) {
+  return out_dir + "/" + cell.id + "/trial-" + std::to_string(seed);
+}
+
+bool trialComplete(const std::string& trial_dir) {
+  std::ifstream in(trial_dir + "/summary.json");
+  if (!in) return false;
+  const nlohmann::json s = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  return s.is_object() && s.contains("success") && s["success"].is_boolean() && !s.value("interrupted", false);
+}
+
+std::vector<std::int64_t> remainingSeeds(const std::string& out_dir, const SuiteCell& cell, std::int64_t first_seed,
+                                         std::int64_t last_seed) {
+  std::vector<std::int64_t> out;
+  for (std::int64_t seed = first_seed; seed <= last_seed; ++seed)
+    if (!trialComplete(trialDir(out_dir, cell, seed))) out.push_back(seed);
+  return out;
+}
+
+std::string cellError(const SuiteCell& cell) {
+  const std::string scenario = resolveScenario(cell.scenario);
+  if (!std::filesystem::exists(scenario)) return "scenario file " + scenario + " does not exist";
+  if (!cell.config.empty() && !std::filesystem::exists(cell.config))
+    return "config file " + cell.config + " does not exist";
+  return "";
+}
+
+std::vector<CellResult> collectResults(const std::string& out_dir, const SuiteSpec& suite,
+                                       const std::vector<std::string>& errors) {
+  std::vector<CellResult> results;
+  for (std::size_t i = 0; i < suite.cells.size(); ++i) {
+    CellResult r;
+    r.cell = suite.cells[i];
+    r.error = i < errors.size() ? errors[i] : "";
+    if (r.error.empty()) {
+      for (std::int64_t seed = suite.first_seed; seed <= suite.last_seed; ++seed) {
+        const std::string dir = trialDir(out_dir, r.cell, seed);
+        if (!trialComplete(dir)) {
+          r.missing_seeds.push_back(seed);
+          continue;
+        }
+        std::ifstream in(dir + "/summary.json");
+        r.summaries.push_back(nlohmann::json::parse(in, nullptr, false));
+      }
+    }
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+nlohmann::json suiteJson(const SuiteSpec& suite, const std::vector<CellResult>& results) {
+  nlohmann::json cells = nlohmann::json::array();
+  for (const CellResult& r : results) {
+    nlohmann::json trials = nlohmann::json::array();
+    for (const nlohmann::json& s : r.summaries)
+      trials.push_back({{"seed", s.value("seed", nlohmann::json(nullptr))},
+                        {"success", s.value("success", false)},
+                        {"failure_reason", s.value("failure_reason", nlohmann::json(nullptr))},
+                        {"followed_all_the_way", s.value("followed_all_the_way", false)},
+                        {"follow_failure_reason", s.value("follow_failure_reason", nlohmann::json(nullptr))},
+                        {"trace_hash", s.value("trace_hash", nlohmann::json(nullptr))}});
+    cells.push_back({{"id", r.cell.id},
+                     {"scenario", r.cell.scenario},
+                     {"speed_mps", r.cell.speed_mps ? nlohmann::json(*r.cell.speed_mps) : nlohmann::json(nullptr)},
+                     {"mode", r.cell.mode},
+                     {"camera", r.cell.camera},
+                     {"config", r.cell.config.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.cell.config)},
+                     {"error", r.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.error)},
+                     {"missing_seeds", r.missing_seeds},
+                     {"stats", aggregateSummaries(r.summaries)},
+                     {"trials", trials}});
+  }
+  const auto target = [](const std::optional<double>& t) { return t ? nlohmann::json(*t) : nlohmann::json(nullptr); };
+  return {{"name", suite.name},
+          {"source", suite.source},
+          {"seeds", {suite.first_seed, suite.last_seed}},
+          {"targets",
+           {{"followed_rate", target(suite.targets.followed_rate)},
+            {"success_rate", target(suite.targets.success_rate)},
+            {"visible_ratio", target(suite.targets.visible_ratio)}}},
+          {"cells", cells}};
+}
+
+std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& results,
+                        const std::vector<std::string>& plot_files) {
+  std::string md = "# Suite " + suite.name + "\n\n";
+  md += "From `" + suite.source + "`, seeds " + std::to_string(suite.first_seed) + ".." +
+        std::to_string(suite.last_seed) + " in every cell (`aerotrack bench --suite`).\n\n";
+  md +=
+      "- **followed**: the paper's verdict (`followed_all_the_way`: no collision, no loss of sight longer than "
+      "`success.max_loss_s`, never farther than `success.max_distance_m` for longer than that); **ours**: "
+      "`success` (no collision, every loss re-acquired, final distance within the limit). `k/n = rate [lo, hi]`: "
+      "over the completed trials, with the 95 % Wilson score interval.\n"
+      "- visible: mean ratio of the tracked time the person was visible; distance: mean drone-person distance; "
+      "clearance: the smallest over the cell's trials; no switch: trials without an identity switch / trials "
+      "that reported identities; wrong: mean time on a bystander; person: measured top / mean speed (the mean "
+      "over the walk, pauses included), averaged over trials.\n";
+  if (suite.targets.followed_rate || suite.targets.success_rate || suite.targets.visible_ratio) {
+    md += "- 🔴 marks a value under the suite's target:";
+    if (suite.targets.followed_rate) md += " followed " + suiteSpeedText(*suite.targets.followed_rate);
+    if (suite.targets.success_rate) md += " ours " + suiteSpeedText(*suite.targets.success_rate);
+    if (suite.targets.visible_ratio) md += " visible " + suiteSpeedText(*suite.targets.visible_ratio);
+    md += ".\n";
+  }
+  std::vector<std::string> scenarios;
+  for (const CellResult& r : results)
+    if (std::find(scenarios.begin(), scenarios.end(), r.cell.scenario) == scenarios.end())
+      scenarios.push_back(r.cell.scenario);
+  for (const std::string& scenario : scenarios) {
+    md += "\n## " + scenario + "\n\n";
+    md +=
+        "| speed | mode | camera | followed | ours | visible | distance | clearance | no switch | wrong | person "
+        "top / mean |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+    std::string errors;
+    for (const CellResult& r : results) {
+      if (r.cell.scenario != scenario) continue;
+      const std::string speed = r.cell.speed_mps ? suiteSpeedText(*r.cell.speed_mps) + " m/s" : "scenario's";
+      const std::string mode = r.cell.mode + (r.cell.config.empty() ? "" : " (" + r.cell.config + ")");
+      if (!r.error.empty()) {
+        errors += "- **error** " + r.cell.id + ": " + r.error + "\n";
+        continue;
+      }
+      if (!r.missing_seeds.empty())
+        errors += "- " + r.cell.id + ": " + std::to_string(r.missing_seeds.size()) +
+                  " trial(s) without a result (see their log.txt; run the suite again to retry them)\n";
+      const nlohmann::json stats = aggregateSummaries(r.summaries);
+      std::string visible = suiteNumberCell(stats["visible_ratio_mean"], 0, " %", 100.0);
+      if (suite.targets.visible_ratio && stats["visible_ratio_mean"].is_number() &&
+          stats["visible_ratio_mean"].get<double>() < *suite.targets.visible_ratio)
+        visible = "🔴 " + visible;
+      const nlohmann::json& id = stats["identity"];
+      const std::string no_switch = id.value("trials_reported", 0) > 0
+                                        ? std::to_string(id.value("trials_without_switch", 0)) + "/" +
+                                              std::to_string(id.value("trials_reported", 0))
+                                        : "-";
+      md += "| " + speed + " | " + mode + " | " + r.cell.camera + " | " +
+            suiteRateCell(stats, "followed_rate", "followed_ci95", suite.targets.followed_rate) + " | " +
+            suiteRateCell(stats, "success_rate", "success_ci95", suite.targets.success_rate) + " | " + visible + " | " +
+            suiteNumberCell(stats["distance_mean_m"], 2, " m") + " | " +
+            suiteNumberCell(stats["min_clearance_m"], 2, " m") + " | " + no_switch + " | " +
+            suiteNumberCell(id["time_on_wrong_person_s_mean"], 1, " s") + " | " +
+            suiteNumberCell(stats["person_top_speed_mps_mean"], 2, "") + " / " +
+            suiteNumberCell(stats["person_mean_speed_mps_mean"], 2, " m/s") + " |\n";
+    }
+    if (!errors.empty()) md += "\n" + errors;
+    const std::string plot = "plot-" + suiteScenarioTag(scenario) + ".png";
+    if (std::find(plot_files.begin(), plot_files.end(), plot) != plot_files.end())
+      md += "\n![" + scenario + "](" + plot + ")\n";
+  }
+  return md;
+}
+
+namespace {
+
+/// One panel of a plot: axes from the data, a series per mode.
+struct PlotPanel {
+  std::string title;
+  double y_lo = 0.0, y_hi = 1.0;
+};
+
+struct PlotPoint {
+  double x = 0.0, y = 0.0, lo = 0.0, hi = 0.0, y2 = std::nan("");  // y2: ours, in the success panel
+};
+
+void drawSuitePanel(cv::Mat& image, const cv::Rect& area, const PlotPanel& panel, double x_lo, double x_hi,
+                    const std::map<std::string, std::vector<PlotPoint>>& series, bool band) {
+  static const cv::Scalar kColours[] = {{200, 110, 30}, {30, 120, 230}, {60, 160, 60}, {160, 60, 160}, {40, 40, 200}};
+  const int left = area.x + 55, right = area.x + area.width - 15, top = area.y + 30, bottom = area.y + area.height - 40;
+  const auto px = [&](double x, double y) {
+    const double fx = x_hi > x_lo ? (x - x_lo) / (x_hi - x_lo) : 0.5;
+    const double fy = panel.y_hi > panel.y_lo ? (y - panel.y_lo) / (panel.y_hi - panel.y_lo) : 0.5;
+    return cv::Point(static_cast<int>(std::lround(left + fx * (right - left))),
+                     static_cast<int>(std::lround(bottom - fy * (bottom - top))));
+  };
+  cv::rectangle(image, cv::Point(left, top), cv::Point(right, bottom), cv::Scalar(0, 0, 0), 1);
+  cv::putText(image, panel.title, cv::Point(left, area.y + 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  char text[32];
+  for (int i = 0; i <= 4; ++i) {
+    const double y = panel.y_lo + (panel.y_hi - panel.y_lo) * i / 4.0;
+    std::snprintf(text, sizeof(text), "%.2f", y);
+    cv::putText(image, text, px(x_lo, y) + cv::Point(-50, 4), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
+    const double x = x_lo + (x_hi - x_lo) * i / 4.0;
+    std::snprintf(text, sizeof(text), "%.2f", x);
+    cv::putText(image, text, px(x, panel.y_lo) + cv::Point(-14, 16), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0),
+                1, cv::LINE_AA);
+  }
+  cv::putText(image, "person speed, m/s", cv::Point((left + right) / 2 - 60, bottom + 34), cv::FONT_HERSHEY_SIMPLEX,
+              0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  int k = 0;
+  for (const auto& [name, points] : series) {
+    const cv::Scalar colour = kColours[k % 5];
+    if (band && !points.empty()) {  // the 95 % Wilson band, translucent
+      std::vector<cv::Point> polygon;
+      for (const PlotPoint& p : points) polygon.push_back(px(p.x, p.hi));
+      for (auto it = points.rbegin(); it != points.rend(); ++it) polygon.push_back(px(it->x, it->lo));
+      cv::Mat overlay = image.clone();
+      cv::fillPoly(overlay, std::vector<std::vector<cv::Point>>{polygon}, colour);
+      cv::addWeighted(overlay, 0.2, image, 0.8, 0.0, image);
+    }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (i > 0)
+        cv::line(image, px(points[i - 1].x, points[i - 1].y), px(points[i].x, points[i].y), colour, 2, cv::LINE_AA);
+      cv::circle(image, px(points[i].x, points[i].y), 4, colour, cv::FILLED, cv::LINE_AA);
+      if (!std::isnan(points[i].y2))  // ours: hollow squares
+        cv::drawMarker(image, px(points[i].x, points[i].y2), colour, cv::MARKER_SQUARE, 9, 1, cv::LINE_AA);
+    }
+    cv::putText(image, name, cv::Point(right - 130, top + 18 + 16 * k), cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1,
+                cv::LINE_AA);
+    ++k;
+  }
+}
+
+}  // namespace
+
+rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_dir, const SuiteSpec& suite,
+                                                       const std::vector<CellResult>& results) {
+  std::vector<std::string> files;
+  std::vector<std::string> scenarios;
+  for (const CellResult& r : results)
+    if (std::find(scenarios.begin(), scenarios.end(), r.cell.scenario) == scenarios.end())
+      scenarios.push_back(r.cell.scenario);
+  for (const std::string& scenario : scenarios) {
+    std::map<std::string, std::vector<PlotPoint>> success, visible, distance;
+    double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, d_hi = 0.0;
+    for (const CellResult& r : results) {
+      if (r.cell.scenario != scenario || !r.error.empty() || r.summaries.empty()) continue;
+      const nlohmann::json stats = aggregateSummaries(r.summaries);
+      const std::optional<double> x = suitePlotSpeed(r, stats);
+      if (!x) continue;
+      x_lo = std::min(x_lo, *x);
+      x_hi = std::max(x_hi, *x);
+      const std::string name = suiteSeriesName(r.cell);
+      success[name].push_back({*x, stats["followed_rate"].get<double>(), stats["followed_ci95"][0].get<double>(),
+                               stats["followed_ci95"][1].get<double>(), stats["success_rate"].get<double>()});
+      double v = 0.0, d = 0.0;
+      if (suiteNumber(stats, "visible_ratio_mean", v)) visible[name].push_back({*x, v, v, v});
+      if (suiteNumber(stats, "distance_mean_m", d)) {
+        distance[name].push_back({*x, d, d, d});
+        d_hi = std::max(d_hi, d);
+      }
+    }
+    if (success.empty()) continue;
+    for (auto* m : {&success, &visible, &distance})
+      for (auto& [name, points] : *m)
+        std::sort(points.begin(), points.end(), [](const PlotPoint& a, const PlotPoint& b) { return a.x < b.x; });
+    if (x_hi <= x_lo) {  // a single speed: a unit-wide axis around it
+      x_lo -= 0.5;
+      x_hi += 0.5;
+    }
+    const int w = 480, h = 360;
+    cv::Mat image(h + 30, 3 * w, CV_8UC3, cv::Scalar(255, 255, 255));
+    cv::putText(image, suite.name + ": " + scenario, cv::Point(10, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    drawSuitePanel(image, cv::Rect(0, 30, w, h),
+                   {"followed all the way (line, 95% Wilson band); ours (squares)", 0.0, 1.0}, x_lo, x_hi, success,
+                   true);
+    drawSuitePanel(image, cv::Rect(w, 30, w, h), {"visible ratio", 0.0, 1.0}, x_lo, x_hi, visible, false);
+    drawSuitePanel(image, cv::Rect(2 * w, 30, w, h), {"mean distance, m", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo,
+                   x_hi, distance, false);
+    const std::string file = "plot-" + suiteScenarioTag(scenario) + ".png";
+    try {
+      if (!cv::imwrite(out_dir + "/" + file, image)) return rt::Error{out_dir + "/" + file + ": cannot write image"};
+    } catch (const cv::Exception& e) {
+      return rt::Error{out_dir + "/" + file + ": cannot write image: " + e.what()};
+    }
+    files.push_back(file);
+  }
+  return files;
+}
+
+}  // namespace aerotrack::app
