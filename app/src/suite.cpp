@@ -310,7 +310,7 @@ void drawSuitePanel(cv::Mat& image, const cv::Rect& area, const PlotPanel& panel
                      static_cast<int>(std::lround(bottom - fy * (bottom - top))));
   };
   cv::rectangle(image, cv::Point(left, top), cv::Point(right, bottom), cv::Scalar(0, 0, 0), 1);
-  cv::putText(image, panel.title, cv::Point(left, area.y + 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
+  cv::putText(image, panel.title, cv::Point(left, area.y + 20), cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0), 1,
               cv::LINE_AA);
   char text[32];
   for (int i = 0; i <= 4; ++i) {
@@ -340,6 +340,11 @@ void drawSuitePanel(cv::Mat& image, const cv::Rect& area, const PlotPanel& panel
       if (i > 0)
         cv::line(image, px(points[i - 1].x, points[i - 1].y), px(points[i].x, points[i].y), colour, 2, cv::LINE_AA);
       cv::circle(image, px(points[i].x, points[i].y), 4, colour, cv::FILLED, cv::LINE_AA);
+      if (band) {  // the interval as an error bar too, visible where a series has a single point
+        cv::line(image, px(points[i].x, points[i].lo), px(points[i].x, points[i].hi), colour, 1, cv::LINE_AA);
+        for (const double y : {points[i].lo, points[i].hi})
+          cv::line(image, px(points[i].x, y) + cv::Point(-4, 0), px(points[i].x, y) + cv::Point(4, 0), colour, 1);
+      }
       if (!std::isnan(points[i].y2))  // ours: hollow squares
         cv::drawMarker(image, px(points[i].x, points[i].y2), colour, cv::MARKER_SQUARE, 9, 1, cv::LINE_AA);
     }
@@ -391,8 +396,7 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
     cv::putText(image, suite.name + ": " + scenario, cv::Point(10, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     drawSuitePanel(image, cv::Rect(0, 30, w, h),
-                   {"followed all the way (line, 95% Wilson band); ours (squares)", 0.0, 1.0}, x_lo, x_hi, success,
-                   true);
+                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0}, x_lo, x_hi, success, true);
     drawSuitePanel(image, cv::Rect(w, 30, w, h), {"visible ratio", 0.0, 1.0}, x_lo, x_hi, visible, false);
     drawSuitePanel(image, cv::Rect(2 * w, 30, w, h), {"mean distance, m", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo,
                    x_hi, distance, false);
