@@ -2,6 +2,9 @@
 // (issue 20 items 1 and 5) against synthetic runs whose answers are known by construction.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
 #include "aerotrack/hal/sim/metrics.hpp"
 
 namespace aerotrack::hal::sim {
@@ -141,6 +144,42 @@ TEST(PersonSpeed, GivenSpeedsThenTopIsTheMaxAndMeanCoversTheWalkPausesIncluded) 
   }
   EXPECT_DOUBLE_EQ(m.personTopSpeedMps(), 4.0);
   EXPECT_NEAR(m.personMeanSpeedMps(), 2.0, 1e-9);  // 6 m in 3 s
+}
+
+/// sharp_turn.yaml with extra lines under `success:`.
+rt::Expected<ScenarioSpec> sharpTurnWithSuccess(const std::string& extra) {
+  std::ifstream in(AEROTRACK_SOURCE_DIR "/config/scenarios/sharp_turn.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string anchor = "  final_distance_factor: 2.0\n";
+  yaml.replace(yaml.find(anchor), anchor.size(), anchor + extra);
+  return parseScenarioSpec(yaml, "s.yaml");
+}
+
+TEST(FollowedAllTheWayKeys, GivenAbsentThenDefaultsAndGivenPresentThenRead) {
+  const auto defaults = sharpTurnWithSuccess("");
+  ASSERT_TRUE(defaults) << defaults.error().message;
+  EXPECT_DOUBLE_EQ(defaults->success.max_loss_s, 3.0);
+  EXPECT_DOUBLE_EQ(defaults->success.max_distance_m, 0.0);  // 0: factor x tracking distance
+  EXPECT_DOUBLE_EQ(SimMetrics(*defaults).maxDistanceM(), 5.0);
+  const auto set = sharpTurnWithSuccess("  max_loss_s: 2.0\n  max_distance_m: 6.5\n");
+  ASSERT_TRUE(set) << set.error().message;
+  EXPECT_DOUBLE_EQ(set->success.max_loss_s, 2.0);
+  EXPECT_DOUBLE_EQ(SimMetrics(*set).maxDistanceM(), 6.5);
+}
+
+TEST(FollowedAllTheWayKeys, GivenOutOfRangeThenOneLineNamingFileLineAndKey) {
+  for (const auto& [extra, expected] :
+       {std::pair<std::string, std::string>{"  max_loss_s: 0\n", "success.max_loss_s: 0 is out of range"},
+        {"  max_loss_s: -1\n", "success.max_loss_s: -1 is out of range"},
+        {"  max_distance_m: 0.1\n", "success.max_distance_m: 0.1 is out of range"},
+        {"  max_distance_m: 2.0\n", "success.max_distance_m: must be greater than tracking_distance_m (2.5 m)"}}) {
+    const auto spec = sharpTurnWithSuccess(extra);
+    ASSERT_FALSE(spec) << extra;
+    EXPECT_NE(spec.error().message.find("s.yaml:"), std::string::npos) << spec.error().message;
+    EXPECT_NE(spec.error().message.find(expected), std::string::npos) << spec.error().message;
+  }
 }
 
 }  // namespace
