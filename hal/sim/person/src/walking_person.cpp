@@ -303,9 +303,8 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
     // lateral acceleration (wide_corners); a walker keeps corner_radius_m.
     const double v_legs_mps = std::min(path[i - 1].speed_mps, path[i].speed_mps);
     const double r_want =
-        params.wide_corners
-            ? std::max(params.corner_radius_m, v_legs_mps * v_legs_mps / params.max_lateral_accel_mps2)
-            : params.corner_radius_m;
+        params.wide_corners ? std::max(params.corner_radius_m, v_legs_mps * v_legs_mps / params.max_lateral_accel_mps2)
+                            : params.corner_radius_m;
     const double cut_m = std::max(params.corner_radius_m, params.max_corner_cut_m);
     // Arc midpoint to corner distance: r (1 / cos(half) - 1) <= cut_m.
     double r = std::min({r_want, budget / std::tan(half), cut_m / (1.0 / std::cos(half) - 1.0)});
@@ -354,8 +353,7 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
       arc.length_m = radius[v] * std::abs(turn[v]);
       const double v_corner =
           std::min(std::sqrt(params.max_lateral_accel_mps2 * radius[v]), params.max_yaw_rate_radps * radius[v]);
-      add_piece(arc, std::min({path[i].speed_mps, path[v].speed_mps, v_corner}),
-                std::min(leg_accel[i], leg_accel[v]));
+      add_piece(arc, std::min({path[i].speed_mps, path[v].speed_mps, v_corner}), std::min(leg_accel[i], leg_accel[v]));
     }
     if (v + 1 == n || corner[v] == Corner::kStop) {
       run_end_pieces.push_back(w.pieces_.size());

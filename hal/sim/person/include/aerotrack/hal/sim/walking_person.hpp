@@ -117,8 +117,8 @@ class WalkingPerson {
  public:
   /// Validates the parameters and the path (at least one point, finite values, consecutive points at
   /// least 1 mm apart, leg speeds in (0, 6] m/s, backward legs' speeds at most
-  /// params.max_backward_speed_mps, leg accelerations 0 or in (0, 10] m/s^2, pauses >= 0) and precomputes the arc-length
-  /// parameterisation and the timed speed profile. Allocates; O(n).
+  /// params.max_backward_speed_mps, leg accelerations 0 or in (0, 10] m/s^2, pauses >= 0) and precomputes the
+  /// arc-length parameterisation and the timed speed profile. Allocates; O(n).
   static rt::Expected<WalkingPerson> create(const PersonParams& params, std::vector<PathPoint> path);
 
   /// The person at time t_s (seconds since the start of the walk). Before 0: standing at the start,
