@@ -515,5 +515,41 @@ TEST(WalkingPerson, GivenReversalThenBackwardLegWhenWalkingThenFacingFollowsTheS
   EXPECT_NEAR(w.durationS(), leg(10, 3) + 1.0 + leg(15, 3) + 1.0 + leg(5, 1) + 1.0 + leg(4, 1.4), 1e-9);
 }
 
+// Keypoints stay continuous (< 1 cm per ms) where backward walking begins and ends, through a
+// reversal, a mid-leg speed change and wide runner's corners.
+TEST(WalkingPerson, GivenBackwardLegsAndWideCornersWhenSampledFinelyThenKeypointsAreContinuous) {
+  PersonParams params;
+  params.wide_corners = true;
+  params.max_lateral_accel_mps2 = 4.0;
+  params.max_corner_cut_m = 0.6;
+  params.max_accel_mps2 = 2.5;
+  PathPoint back_up{{4, 2}, 1.0};
+  back_up.backwards = true;
+  PathPoint back_corner{{8, 2}, 1.0};
+  back_corner.backwards = true;
+  const WalkingPerson w = make({{{0, 0}, 2.0},
+                                {{4, 0}, 3.0},  // speed change mid-line
+                                {{10, 0}, 3.0},
+                                {{10, 6}, 2.0},  // reversal
+                                {{10, 2}, 2.0},
+                                back_up,        // reversal into a backward leg: no turn
+                                back_corner,    // backward legs joined by an arc
+                                {{8, 5}, 1.4},  // backward -> forward: stop and turn
+                                {{4, 5}, 1.4}},
+                               params);
+  const double dt = 0.001;
+  PersonState prev = w.state(-dt);
+  double worst = 0.0;
+  for (double t = 0.0; t <= w.durationS() + 0.1; t += dt) {
+    const PersonState s = w.state(t);
+    for (std::size_t k = 0; k < kNumKeypoints; ++k) {
+      worst = std::max(worst, (s.keypoints_W_m[k] - prev.keypoints_W_m[k]).norm());
+    }
+    EXPECT_LE((s.p_W_m - prev.p_W_m).norm(), 3.0 * dt + 1e-9);
+    prev = s;
+  }
+  EXPECT_LT(worst, 0.01);
+}
+
 }  // namespace
 }  // namespace aerotrack::hal::sim
