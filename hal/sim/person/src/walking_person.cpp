@@ -13,6 +13,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kMaxLegSpeedMps = 6.0;
+constexpr double kMaxBackwardSpeedMps = 3.0;
+constexpr double kMaxLegAccelMps2 = 10.0;
 constexpr double kMinLegLengthM = 1e-3;
 constexpr double kMinArcRadiusM = 0.05;  // Tighter corners: stop and turn on the spot.
 constexpr double kStraightRad = 1e-9;    // Smaller turns at a vertex are no corner at all.
@@ -69,6 +71,8 @@ rt::Status validateParams(const PersonParams& p) {
       {"corner_radius_m", p.corner_radius_m, 0.0, 10.0},
       {"max_lateral_accel_mps2", p.max_lateral_accel_mps2, 1e-3, 20.0},
       {"max_yaw_rate_radps", p.max_yaw_rate_radps, 1e-3, 20.0},
+      {"max_corner_cut_m", p.max_corner_cut_m, 0.0, 10.0},
+      {"max_backward_speed_mps", p.max_backward_speed_mps, 1e-3, kMaxBackwardSpeedMps},
       {"cadence_ref_hz", p.cadence_ref_hz, 0.1, 5.0},
       {"gait_ref_speed_mps", p.gait_ref_speed_mps, 0.1, kMaxLegSpeedMps},
       {"cadence_speed_exponent", p.cadence_speed_exponent, 0.0, 0.99},
@@ -84,7 +88,7 @@ rt::Status validateParams(const PersonParams& p) {
   return rt::ok();
 }
 
-rt::Status validatePath(const std::vector<PathPoint>& path) {
+rt::Status validatePath(const PersonParams& params, const std::vector<PathPoint>& path) {
   if (path.empty()) return rt::Error{"WalkingPerson: the path has no points"};
   for (std::size_t i = 0; i < path.size(); ++i) {
     const PathPoint& q = path[i];
@@ -94,6 +98,13 @@ rt::Status validatePath(const std::vector<PathPoint>& path) {
     if (i + 1 == path.size()) break;
     if (!finite(q.speed_mps) || q.speed_mps <= 0.0 || q.speed_mps > kMaxLegSpeedMps) {
       return rt::Error{at + ".speed_mps: " + std::to_string(q.speed_mps) + " is outside (0, 6]"};
+    }
+    if (q.backwards && q.speed_mps > params.max_backward_speed_mps) {
+      return rt::Error{at + ".speed_mps: " + std::to_string(q.speed_mps) + " is above max_backward_speed_mps (" +
+                       std::to_string(params.max_backward_speed_mps) + ") on a backward leg"};
+    }
+    if (!finite(q.accel_mps2) || q.accel_mps2 < 0.0 || q.accel_mps2 > kMaxLegAccelMps2) {
+      return rt::Error{at + ".accel_mps2: " + std::to_string(q.accel_mps2) + " is outside [0, 10]"};
     }
     if ((path[i + 1].p_W_m - q.p_W_m).norm() < kMinLegLengthM) {
       return rt::Error{at + " and the next point are less than 1 mm apart"};
@@ -238,7 +249,7 @@ std::array<Eigen::Vector3d, kNumKeypoints> WalkingPerson::bodyKeypoints(double s
 
 rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, std::vector<PathPoint> path) {
   if (auto s = validateParams(params); !s) return s.error();
-  if (auto s = validatePath(path); !s) return s.error();
+  if (auto s = validatePath(params, path); !s) return s.error();
 
   WalkingPerson w;
   w.params_ = params;
@@ -260,7 +271,12 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
     len[i] = d.norm();
     dir[i] = d / len[i];
   }
-  w.start_heading_rad_ = std::atan2(dir[0].y(), dir[0].x());
+  // Facing along each leg's direction, or against it on a backward leg; each leg's acceleration bound.
+  const auto facing_offset = [&](std::size_t leg) { return path[leg].backwards ? kPi : 0.0; };
+  std::vector<double> leg_accel(legs);
+  for (std::size_t i = 0; i < legs; ++i)
+    leg_accel[i] = path[i].accel_mps2 > 0.0 ? path[i].accel_mps2 : params.max_accel_mps2;
+  w.start_heading_rad_ = std::atan2(dir[0].y(), dir[0].x()) + facing_offset(0);
 
   // Corners at the interior vertices: none (straight on), an arc, or a stop (turn on the spot).
   enum class Corner { kNone, kArc, kStop };
@@ -272,7 +288,7 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
     const double delta = std::atan2(a.x() * c.y() - a.y() * c.x(), a.dot(c));  // (-pi, pi]
     turn[i] = delta;
     const double abs_delta = std::abs(delta);
-    if (path[i].pause_s > 0.0) {
+    if (path[i].pause_s > 0.0 || path[i - 1].backwards != path[i].backwards) {
       corner[i] = Corner::kStop;
       continue;
     }
@@ -283,9 +299,15 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
     }
     const double budget = std::min(i == 1 ? len[0] : 0.5 * len[i - 1], i + 2 == n ? len[i] : 0.5 * len[i]);
     const double half = 0.5 * abs_delta;
-    // Arc midpoint to corner distance: r (1 / cos(half) - 1) <= corner_radius_m.
-    double r = std::min(
-        {params.corner_radius_m, budget / std::tan(half), params.corner_radius_m / (1.0 / std::cos(half) - 1.0)});
+    // A runner widens the corner so that the slower leg's speed needs no more than the allowed
+    // lateral acceleration (wide_corners); a walker keeps corner_radius_m.
+    const double v_legs_mps = std::min(path[i - 1].speed_mps, path[i].speed_mps);
+    const double r_want =
+        params.wide_corners ? std::max(params.corner_radius_m, v_legs_mps * v_legs_mps / params.max_lateral_accel_mps2)
+                            : params.corner_radius_m;
+    const double cut_m = std::max(params.corner_radius_m, params.max_corner_cut_m);
+    // Arc midpoint to corner distance: r (1 / cos(half) - 1) <= cut_m.
+    double r = std::min({r_want, budget / std::tan(half), cut_m / (1.0 / std::cos(half) - 1.0)});
     if (!(r >= kMinArcRadiusM)) {
       corner[i] = Corner::kStop;
       continue;
@@ -297,16 +319,18 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
 
   // Geometry pieces, their speed limits, and where the person must stop (run boundaries).
   std::vector<double> limit;                  // per piece, m/s
+  std::vector<double> accel;                  // per piece, m/s^2
   std::vector<std::size_t> run_end_pieces;    // a run ends after this many pieces
   std::vector<std::size_t> run_end_vertices;  // at this path vertex
   std::vector<double> run_end_s;              // at this arc length
   double s = 0.0;
-  const auto add_piece = [&](Piece piece, double v_limit) {
+  const auto add_piece = [&](Piece piece, double v_limit, double a_limit) {
     if (piece.length_m <= kTinyM) return;
     piece.s0_m = s;
     s += piece.length_m;
     w.pieces_.push_back(piece);
     limit.push_back(v_limit);
+    accel.push_back(a_limit);
   };
   for (std::size_t i = 0; i < legs; ++i) {
     Piece line;
@@ -314,7 +338,8 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
     line.dir_W = dir[i];
     line.heading0_rad = std::atan2(dir[i].y(), dir[i].x());
     line.length_m = std::max(0.0, len[i] - tangent[i] - tangent[i + 1]);
-    add_piece(line, path[i].speed_mps);
+    line.backwards = path[i].backwards;
+    add_piece(line, path[i].speed_mps, leg_accel[i]);
     const std::size_t v = i + 1;
     if (corner[v] == Corner::kArc) {
       Piece arc;
@@ -322,12 +347,13 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
       arc.radius_m = radius[v];
       arc.turn_sign = turn[v] > 0.0 ? 1.0 : -1.0;
       arc.heading0_rad = line.heading0_rad;
+      arc.backwards = line.backwards;  // an arc joins legs of the same facing (else: a stop)
       const Eigen::Vector2d start = path[v].p_W_m - dir[i] * tangent[v];
       arc.centre_W_m = start + arc.turn_sign * radius[v] * Eigen::Vector2d(-dir[i].y(), dir[i].x());
       arc.length_m = radius[v] * std::abs(turn[v]);
       const double v_corner =
           std::min(std::sqrt(params.max_lateral_accel_mps2 * radius[v]), params.max_yaw_rate_radps * radius[v]);
-      add_piece(arc, std::min({path[i].speed_mps, path[v].speed_mps, v_corner}));
+      add_piece(arc, std::min({path[i].speed_mps, path[v].speed_mps, v_corner}), std::min(leg_accel[i], leg_accel[v]));
     }
     if (v + 1 == n || corner[v] == Corner::kStop) {
       run_end_pieces.push_back(w.pieces_.size());
@@ -340,13 +366,13 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
   for (const Piece& p : w.pieces_) w.piece_s0_m_.push_back(p.s0_m);
 
   // Timeline: optional start pause, then runs (each from rest to rest) separated by stop dwells.
-  const double a = params.max_accel_mps2;
   double t = 0.0;
   double stride = 0.0;
   const auto add_phase = [&](Phase ph) {
     ph.t0_s = t;
     ph.stride0_cycles = stride;
-    if (!ph.dwell) stride += w.strideCycles(ph.v0_mps, ph.a_mps2, ph.duration_s);
+    // Backward legs play the gait in reverse.
+    if (!ph.dwell) stride += (ph.backwards ? -1.0 : 1.0) * w.strideCycles(ph.v0_mps, ph.a_mps2, ph.duration_s);
     t += ph.duration_s;
     w.phases_.push_back(ph);
   };
@@ -368,10 +394,13 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
       u[k] = std::min(limit[first + k - 1], limit[first + k]);
       u[k] *= u[k];
     }
-    for (std::size_t k = 1; k <= m; ++k) u[k] = std::min(u[k], u[k - 1] + 2.0 * a * w.pieces_[first + k - 1].length_m);
-    for (std::size_t k = m; k-- > 0;) u[k] = std::min(u[k], u[k + 1] + 2.0 * a * w.pieces_[first + k].length_m);
+    for (std::size_t k = 1; k <= m; ++k)
+      u[k] = std::min(u[k], u[k - 1] + 2.0 * accel[first + k - 1] * w.pieces_[first + k - 1].length_m);
+    for (std::size_t k = m; k-- > 0;)
+      u[k] = std::min(u[k], u[k + 1] + 2.0 * accel[first + k] * w.pieces_[first + k].length_m);
     for (std::size_t k = 0; k < m; ++k) {
       const Piece& piece = w.pieces_[first + k];
+      const double a = accel[first + k];
       const double lim2 = limit[first + k] * limit[first + k];
       const double len_k = piece.length_m;
       const double u0 = u[k], u1 = u[k + 1];
@@ -397,6 +426,7 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
         ph.v0_mps = v0;
         ph.duration_s = 2.0 * dist / (v0 + v1);
         ph.a_mps2 = (v1 - v0) / ph.duration_s;
+        ph.backwards = piece.backwards;
         add_phase(ph);
         s_part += dist;
         u_start = u_end;
@@ -409,8 +439,11 @@ rt::Expected<WalkingPerson> WalkingPerson::create(const PersonParams& params, st
       Phase ph;
       ph.dwell = true;
       ph.s0_m = run_end_s[r];
-      ph.heading0_rad = std::atan2(dir[vtx - 1].y(), dir[vtx - 1].x());
-      ph.turn_rad = std::abs(turn[vtx]) > kPi - 1e-6 ? kPi : turn[vtx];  // reversals turn left
+      ph.heading0_rad = std::atan2(dir[vtx - 1].y(), dir[vtx - 1].x()) + facing_offset(vtx - 1);
+      // The facing turns by the path's turn, plus half a turn where backward walking starts or ends.
+      double facing_turn = turn[vtx];
+      if (path[vtx - 1].backwards != path[vtx].backwards) facing_turn = wrapAngle(facing_turn + kPi);
+      ph.turn_rad = std::abs(facing_turn) > kPi - 1e-6 ? kPi : facing_turn;  // reversals turn left
       ph.turn_s = std::abs(ph.turn_rad) / params.max_yaw_rate_radps;
       ph.duration_s = ph.turn_s + path[vtx].pause_s;
       if (ph.duration_s > 0.0) add_phase(ph);
@@ -426,7 +459,8 @@ PersonState WalkingPerson::state(double t_s) const {
   PersonState out;
   out.t_s = t_s;
   Eigen::Vector2d p = start_W_m_;
-  double heading = start_heading_rad_;
+  double heading = start_heading_rad_;  // facing
+  double motion_heading = heading;      // direction of travel (speed 0 where it differs from the path's)
   double speed = 0.0;
   double stride = 0.0;
   if (!phases_.empty()) {
@@ -440,7 +474,7 @@ PersonState WalkingPerson::state(double t_s) const {
     if (!ph.dwell) {
       speed = std::max(0.0, ph.v0_mps + ph.a_mps2 * tau);
       s += ph.v0_mps * tau + 0.5 * ph.a_mps2 * tau * tau;
-      stride += strideCycles(ph.v0_mps, ph.a_mps2, tau);
+      stride += (ph.backwards ? -1.0 : 1.0) * strideCycles(ph.v0_mps, ph.a_mps2, tau);
     }
     s = std::clamp(s, 0.0, length_m_);
     const auto pit = std::upper_bound(piece_s0_m_.begin(), piece_s0_m_.end(), s);
@@ -456,13 +490,19 @@ PersonState WalkingPerson::state(double t_s) const {
       heading = piece.heading0_rad;
       p = piece.p0_W_m + sigma * piece.dir_W;
     }
-    if (ph.dwell) heading = ph.heading0_rad + ph.turn_rad * (ph.turn_s > 0.0 ? smoothstep(tau / ph.turn_s) : 0.0);
+    motion_heading = heading;
+    if (ph.dwell) {
+      heading = ph.heading0_rad + ph.turn_rad * (ph.turn_s > 0.0 ? smoothstep(tau / ph.turn_s) : 0.0);
+    } else if (ph.backwards) {
+      heading += kPi;
+    }
   }
   heading = wrapAngle(heading);
   const double c = std::cos(heading), sn = std::sin(heading);
   out.p_W_m = {p.x(), p.y(), 0.0};
   out.speed_mps = speed;
-  out.v_W_mps = {speed * c, speed * sn, 0.0};
+  motion_heading = wrapAngle(motion_heading);  // == heading (same bits) unless walking backwards
+  out.v_W_mps = {speed * std::cos(motion_heading), speed * std::sin(motion_heading), 0.0};
   out.heading_rad = heading;
   const std::array<Eigen::Vector3d, kNumKeypoints> kp = bodyKeypoints(speed, stride);
   for (std::size_t k = 0; k < kNumKeypoints; ++k) {

@@ -11,7 +11,7 @@
 namespace aerotrack::hal::sim {
 namespace {
 
-enum class Stream : std::uint64_t { kPath = 1, kSpeed, kMirror, kJitter, kForest, kClutter };
+enum class Stream : std::uint64_t { kPath = 1, kSpeed, kMirror, kJitter, kForest, kClutter, kBehaviour };
 
 /// SplitMix64 of (seed, stream): well-mixed, independent seeds for each stream.
 std::mt19937_64 makeRng(std::uint64_t seed, Stream stream) {
@@ -81,6 +81,68 @@ rt::Expected<std::vector<PathPoint>> generatePath(const RandomPathGenerator& g, 
   }
   path.push_back({p, 0.0});
   return path;
+}
+
+/// The random walk's behaviours (PathBehaviours): sprints, speed changes, pauses, reversals and
+/// backward walks added to the legs of `in`. Every new point lies on the walk's polyline, so what
+/// was cleared along the walk (trees) stays clear. Each leg draws the same eleven numbers whatever is
+/// decided, so one probability's value does not shift the others' draws.
+std::vector<PathPoint> applyBehaviours(const std::vector<PathPoint>& in, const PathBehaviours& b,
+                                       std::mt19937_64& rng) {
+  std::vector<PathPoint> out;
+  double pause_at_start_s = in.front().pause_s;
+  for (std::size_t i = 0; i + 1 < in.size(); ++i) {
+    const bool sprint = uniform(rng, 0.0, 1.0) < b.sprint_probability;
+    const double sprint_mps = uniform(rng, b.sprint_speed_min_mps, b.sprint_speed_max_mps);
+    const bool change = uniform(rng, 0.0, 1.0) < b.speed_change_probability;
+    const double change_at = uniform(rng, 0.3, 0.7);
+    const double change_mps = uniform(rng, b.speed_change_min_mps, b.speed_change_max_mps);
+    const bool pause = uniform(rng, 0.0, 1.0) < b.pause_probability;
+    const double pause_s = uniform(rng, b.pause_min_s, b.pause_max_s);
+    const bool reversal = uniform(rng, 0.0, 1.0) < b.reversal_probability;
+    const double reversal_m = uniform(rng, b.reversal_min_m, b.reversal_max_m);
+    const bool backwards = uniform(rng, 0.0, 1.0) < b.backwards_probability;
+    const double backwards_mps = uniform(rng, b.backwards_speed_min_mps, b.backwards_speed_max_mps);
+
+    PathPoint start = in[i];
+    start.pause_s = pause_at_start_s;
+    if (sprint) {
+      start.speed_mps = sprint_mps;
+      start.accel_mps2 = b.sprint_accel_mps2;
+    }
+    out.push_back(start);
+    const Eigen::Vector2d leg = in[i + 1].p_W_m - start.p_W_m;
+    if (change) {
+      PathPoint mid = start;
+      mid.p_W_m = start.p_W_m + change_at * leg;
+      mid.pause_s = 0.0;
+      mid.speed_mps = change_mps;
+      out.push_back(mid);
+    }
+    pause_at_start_s = 0.0;
+    if (i + 2 == in.size()) break;  // the last point is added below
+    const double end_pause_s = pause ? pause_s : 0.0;
+    if (!reversal) {
+      pause_at_start_s = end_pause_s;
+      continue;
+    }
+    // Pause (if drawn), walk back along the leg (turned round, or backwards facing on), then return.
+    const double back_m = std::min(reversal_m, 0.8 * leg.norm());
+    PathPoint end = out.back();
+    end.p_W_m = in[i + 1].p_W_m;
+    end.pause_s = end_pause_s;
+    end.backwards = backwards;
+    if (backwards) end.speed_mps = backwards_mps;
+    out.push_back(end);
+    PathPoint turn = out[out.size() - 2];
+    turn.p_W_m = in[i + 1].p_W_m - back_m * leg.normalized();
+    turn.pause_s = 0.0;
+    turn.backwards = false;
+    out.push_back(turn);
+  }
+  PathPoint last = in.back();
+  out.push_back(last);
+  return out;
 }
 
 /// Trees by rejection sampling, kept clear of the person's path and the drone's start.
@@ -226,14 +288,20 @@ rt::Expected<ScenarioInstance> instantiate(const ScenarioSpec& spec, std::uint64
     auto path = generatePath(*s.random_path, rng);
     if (!path) return rt::Error{spec.source + ": " + path.error().message};
     s.path = std::move(path.value());
+    if (s.random_path->behaviours) {
+      auto behaviour_rng = makeRng(seed, Stream::kBehaviour);
+      s.path = applyBehaviours(s.path, *s.random_path->behaviours, behaviour_rng);
+    }
     s.random_path.reset();
   }
   auto speed_rng = makeRng(seed, Stream::kSpeed);
   inst.speed_scale =
       uniform(speed_rng, 1.0 - s.randomize.speed_jitter_fraction, 1.0 + s.randomize.speed_jitter_fraction);
   for (std::size_t i = 0; i + 1 < s.path.size(); ++i) {
-    if (speed_override_mps) s.path[i].speed_mps = *speed_override_mps;
-    s.path[i].speed_mps *= inst.speed_scale;
+    PathPoint& q = s.path[i];
+    if (speed_override_mps && !q.backwards) q.speed_mps = *speed_override_mps;
+    q.speed_mps *= inst.speed_scale;
+    if (q.backwards) q.speed_mps = std::min(q.speed_mps, s.person.max_backward_speed_mps);
     if (!(s.path[i].speed_mps > 0.0)) return rt::Error{spec.source + ": person.path: every leg needs a speed > 0"};
   }
 

@@ -2,6 +2,7 @@
 // (rt::ConfigNode); optional sections keep the defaults written in scenario.hpp.
 #include <array>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "aerotrack/hal/sim/scenario.hpp"
@@ -96,6 +97,33 @@ CorridorGenerator parseCorridor(const ConfigNode& n) {
   return c;
 }
 
+/// An optional [min, max] range with min <= max, each in [lo, hi].
+void rangeOr(const ConfigNode& n, const std::string& key, double lo, double hi, double& min_out, double& max_out) {
+  if (!n.has(key)) return;
+  const auto r = n.getDoubleList(key, 2, lo, hi);
+  if (r[1] < r[0]) n.fail(key, "a range is [min, max] with min <= max");
+  min_out = r[0];
+  max_out = r[1];
+}
+
+/// person.random_path.behaviours: every key optional (defaults in scenario.hpp, PathBehaviours).
+PathBehaviours parseBehaviours(const ConfigNode& n) {
+  PathBehaviours b;
+  b.sprint_probability = n.getDoubleOr("sprint_probability", 0.0, 0.0, 1.0);
+  rangeOr(n, "sprint_speed_mps", 0.1, 6.0, b.sprint_speed_min_mps, b.sprint_speed_max_mps);
+  b.sprint_accel_mps2 = n.getDoubleOr("sprint_accel_mps2", 0.0, 0.1, 10.0);
+  b.speed_change_probability = n.getDoubleOr("speed_change_probability", 0.0, 0.0, 1.0);
+  rangeOr(n, "speed_change_mps", 0.1, 6.0, b.speed_change_min_mps, b.speed_change_max_mps);
+  b.pause_probability = n.getDoubleOr("pause_probability", 0.0, 0.0, 1.0);
+  rangeOr(n, "pause_s", 0.0, 600.0, b.pause_min_s, b.pause_max_s);
+  b.reversal_probability = n.getDoubleOr("reversal_probability", 0.0, 0.0, 1.0);
+  rangeOr(n, "reversal_m", 0.5, 1000.0, b.reversal_min_m, b.reversal_max_m);
+  b.backwards_probability = n.getDoubleOr("backwards_probability", 0.0, 0.0, 1.0);
+  rangeOr(n, "backwards_speed_mps", 0.1, 3.0, b.backwards_speed_min_mps, b.backwards_speed_max_mps);
+  n.finish();
+  return b;
+}
+
 RandomPathGenerator parseRandomPath(const ConfigNode& n) {
   RandomPathGenerator g;
   parseRegion(n, g.region_min_m, g.region_max_m);
@@ -108,19 +136,38 @@ RandomPathGenerator parseRandomPath(const ConfigNode& n) {
   g.speed_min_mps = speed[0];
   g.speed_max_mps = speed[1];
   if (g.leg_max_m < g.leg_min_m || g.speed_max_mps < g.speed_min_mps) n.fail("leg_m", "ranges are [min, max]");
+  if (n.has("behaviours")) g.behaviours = parseBehaviours(n.child("behaviours"));
   n.finish();
   return g;
+}
+
+/// person: the optional speed-profile keys (defaults and sources in walking_person.hpp, PersonParams).
+void parsePersonMotion(const ConfigNode& n, PersonParams& p) {
+  p.max_accel_mps2 = n.getDoubleOr("max_accel_mps2", p.max_accel_mps2, 0.1, 10.0);
+  p.corner_radius_m = n.getDoubleOr("corner_radius_m", p.corner_radius_m, 0.0, 10.0);
+  p.max_lateral_accel_mps2 = n.getDoubleOr("max_lateral_accel_mps2", p.max_lateral_accel_mps2, 0.1, 20.0);
+  p.max_yaw_rate_radps = n.getDoubleOr("max_yaw_rate_radps", p.max_yaw_rate_radps, 0.1, 20.0);
+  p.wide_corners = n.getBoolOr("wide_corners", p.wide_corners);
+  p.max_corner_cut_m = n.getDoubleOr("max_corner_cut_m", p.max_corner_cut_m, 0.0, 10.0);
+  p.max_backward_speed_mps = n.getDoubleOr("max_backward_speed_mps", p.max_backward_speed_mps, 0.1, 3.0);
 }
 
 void parsePerson(const ConfigNode& n, ScenarioSpec& s) {
   s.person.height_m = n.getDouble("height_m", 1.0, 2.5);
   s.person.torso_m = n.getDouble("torso_m", 0.2, 1.0);
   s.person_start_delay_s = n.getDouble("start_delay_s", 0.0, 600.0);
+  parsePersonMotion(n, s.person);
   if (n.has("path")) {
     for (const ConfigNode& p : n.childList("path")) {
       PathPoint point;
       point.p_W_m = vec2(p, "p_m");
       point.speed_mps = p.getDouble("speed_mps", 0.0, 20.0);
+      point.pause_s = p.getDoubleOr("pause_s", 0.0, 0.0, 3600.0);
+      point.backwards = p.getBoolOr("backwards", false);
+      point.accel_mps2 = p.getDoubleOr("accel_mps2", 0.0, 0.1, 10.0);
+      if (point.backwards && point.speed_mps > s.person.max_backward_speed_mps)
+        p.fail("speed_mps", "a backward leg's speed must not exceed person.max_backward_speed_mps (" +
+                                std::to_string(s.person.max_backward_speed_mps) + ")");
       p.finish();
       s.path.push_back(point);
     }

@@ -355,5 +355,201 @@ TEST(WalkingPerson, GivenFasterWalkWhenCountingStepsThenCadenceRisesAsPowerLaw) 
   EXPECT_GT(cadence[1], cadence[0] * 1.3);
 }
 
+// Issue 20: a runner's speed profile and scripted behaviours.
+
+// A long straight leg reaches its speed: accelerate v / a, cruise, brake v / a (closed form).
+TEST(WalkingPerson, GivenLongStraightLegAtRunningSpeedWhenRunningThenReachesTheLegSpeed) {
+  for (const double v : {5.0, 6.0}) {
+    const PersonParams params;  // a = 1.5 m/s^2: 8.3 m (5 m/s) or 12 m (6 m/s) to speed up
+    const double len = 60.0, a = params.max_accel_mps2;
+    const WalkingPerson w = make({{{0, 0}, v}, {{len, 0}, v}});
+    double top = 0.0;
+    for (double t = 0.0; t <= w.durationS(); t += 0.01) top = std::max(top, w.state(t).speed_mps);
+    EXPECT_NEAR(top, v, 1e-9) << v;
+    EXPECT_NEAR(w.durationS(), len / v + v / a, 1e-9) << v;
+    EXPECT_NEAR(w.state(0.5 * w.durationS()).v_W_mps.x(), v, 1e-9);
+  }
+}
+
+// A leg's own acceleration bound (a sprint start) replaces the person's.
+TEST(WalkingPerson, GivenLegAccelerationWhenStartingThenSpeedsUpAtThatRate) {
+  PathPoint start{{0, 0}, 6.0};
+  start.accel_mps2 = 4.0;
+  const WalkingPerson w = make({start, {{40, 0}, 6.0}});
+  EXPECT_NEAR(w.state(1.0).speed_mps, 4.0, 1e-9);
+  EXPECT_NEAR(w.state(1.0).p_W_m.x(), 2.0, 1e-9);  // a t^2 / 2
+  EXPECT_NEAR(w.durationS(), 40.0 / 6.0 + 6.0 / 4.0, 1e-9);
+  start.accel_mps2 = 11.0;
+  EXPECT_FALSE(WalkingPerson::create({}, {start, {{40, 0}, 6.0}}).has_value());
+}
+
+// A collinear point changes the speed mid-leg without stopping there.
+TEST(WalkingPerson, GivenSpeedChangeMidLegWhenRunningThenSpeedsUpWithoutStopping) {
+  const WalkingPerson w = make({{{0, 0}, 2.0}, {{20, 0}, 5.0}, {{50, 0}, 5.0}});
+  double speed_at_change = -1.0, top_first = 0.0, top = 0.0;
+  for (double t = 0.0; t <= w.durationS(); t += 0.005) {
+    const PersonState s = w.state(t);
+    if (s.p_W_m.x() < 20.0) top_first = std::max(top_first, s.speed_mps);
+    if (speed_at_change < 0.0 && s.p_W_m.x() >= 20.0) speed_at_change = s.speed_mps;
+    top = std::max(top, s.speed_mps);
+  }
+  EXPECT_NEAR(top_first, 2.0, 1e-9);
+  EXPECT_NEAR(speed_at_change, 2.0, 0.02);  // it speeds up only after the point
+  EXPECT_NEAR(top, 5.0, 1e-9);
+}
+
+// Runner's corners: the radius is v^2 / a_lat, so the corner is run at the leg speed.
+TEST(WalkingPerson, GivenWideCornersWhenRunningARightAngleThenKeepsTheLegSpeedOnTheArc) {
+  PersonParams params;
+  params.wide_corners = true;
+  params.max_lateral_accel_mps2 = 4.0;
+  params.max_corner_cut_m = 3.0;
+  params.max_accel_mps2 = 3.0;
+  const double v = 4.0, r = v * v / params.max_lateral_accel_mps2;  // 4 m
+  const WalkingPerson w = make({{{0, 0}, v}, {{20, 0}, v}, {{20, 20}, v}}, params);
+  const double t_reach = v / params.max_accel_mps2;
+  double closest_to_corner = 1e9;
+  for (double t = t_reach + 0.01; t < w.durationS() - t_reach - 0.01; t += 0.01) {
+    const PersonState s = w.state(t);
+    EXPECT_NEAR(s.speed_mps, v, 1e-9) << t;
+    closest_to_corner = std::min(closest_to_corner, (s.p_W_m.head<2>() - Eigen::Vector2d(20, 0)).norm());
+    // On the arc: centre (16, 4), radius 4.
+    if (s.p_W_m.x() > 16.0 + 1e-9 && s.p_W_m.y() < 4.0 - 1e-9) {
+      EXPECT_NEAR((s.p_W_m.head<2>() - Eigen::Vector2d(20.0 - r, r)).norm(), r, 1e-9) << t;
+    }
+  }
+  EXPECT_NEAR(closest_to_corner, r * (std::sqrt(2.0) - 1.0), 0.01);  // the arc's midpoint
+  // The walker's model (the default) slows to sqrt(a_lat * 0.5 m) on a 0.5 m arc instead.
+  params.wide_corners = false;
+  const WalkingPerson walker = make({{{0, 0}, v}, {{20, 0}, v}, {{20, 20}, v}}, params);
+  double slowest = 1e9;
+  for (double t = 3.0; t < walker.durationS() - 3.0; t += 0.01) slowest = std::min(slowest, walker.state(t).speed_mps);
+  EXPECT_NEAR(slowest, std::sqrt(4.0 * 0.5), 0.01);
+}
+
+// max_corner_cut_m keeps a widened corner near the corner point.
+TEST(WalkingPerson, GivenCornerCutLimitWhenRunningARightAngleThenTheArcStaysThatCloseToTheCorner) {
+  PersonParams params;
+  params.wide_corners = true;
+  params.max_lateral_accel_mps2 = 4.0;
+  params.max_corner_cut_m = 0.8;
+  const WalkingPerson w = make({{{0, 0}, 5.0}, {{20, 0}, 5.0}, {{20, 20}, 5.0}}, params);
+  const double r = 0.8 / (std::sqrt(2.0) - 1.0);  // 1.93 m, below v^2 / a_lat = 6.25 m
+  double closest = 1e9, slowest = 1e9;
+  for (double t = 3.0; t < w.durationS() - 3.0; t += 0.005) {
+    const PersonState s = w.state(t);
+    closest = std::min(closest, (s.p_W_m.head<2>() - Eigen::Vector2d(20, 0)).norm());
+    slowest = std::min(slowest, s.speed_mps);
+  }
+  EXPECT_NEAR(closest, 0.8, 0.01);
+  EXPECT_NEAR(slowest, std::sqrt(4.0 * r), 0.01);
+}
+
+// Walking backwards: facing against the motion, the gait reversed (the stance foot still does not
+// slip), and the speed limited.
+TEST(WalkingPerson, GivenBackwardLegWhenWalkingThenFacesAgainstTheMotionAndTheStanceFootStays) {
+  PathPoint start{{0, 0}, 1.0};
+  start.backwards = true;
+  const WalkingPerson w = make({start, {{0, 10}, 1.0}});  // moving +y, facing -y
+  EXPECT_NEAR(w.state(-1.0).heading_rad, -0.5 * kPi, 1e-12);
+  const double dt = 1e-3;
+  for (double t = 1.5; t < 8.0; t += 0.05) {
+    const PersonState s = w.state(t);
+    EXPECT_NEAR(s.speed_mps, 1.0, 1e-9);
+    EXPECT_NEAR(s.v_W_mps.y(), 1.0, 1e-9);
+    EXPECT_NEAR(s.heading_rad, -0.5 * kPi, 1e-12);
+    EXPECT_NEAR(w.state(t + dt).p_W_m.y() - s.p_W_m.y(), dt, 1e-9);
+    EXPECT_LT(kp(s, K::kNose).y(), s.p_W_m.y());  // the face looks back along the path
+    // The lower ankle (the stance foot) does not slip along the path while the body moves at 1 m/s.
+    const PersonState s1 = w.state(t + dt);
+    const K stance = kp(s, K::kLeftAnkle).z() < kp(s, K::kRightAnkle).z() ? K::kLeftAnkle : K::kRightAnkle;
+    EXPECT_LT(std::abs(kp(s1, stance).y() - kp(s, stance).y()) / dt, 0.05) << t;  // the gait runs in reverse
+  }
+  start.speed_mps = 2.5;  // above max_backward_speed_mps (2 m/s)
+  const auto too_fast = WalkingPerson::create({}, {start, {{0, 10}, 1.0}});
+  ASSERT_FALSE(too_fast.has_value());
+  EXPECT_NE(too_fast.error().message.find("backward"), std::string::npos);
+  PersonParams params;
+  params.max_backward_speed_mps = 2.5;
+  EXPECT_TRUE(WalkingPerson::create(params, {start, {{0, 10}, 1.0}}).has_value());
+}
+
+// Run out, turn back on the spot, run back past the start, stop and back up towards +x still facing
+// -x, then turn round and walk on: the facing turns at the reversal and where backing up ends.
+TEST(WalkingPerson, GivenReversalThenBackwardLegWhenWalkingThenFacingFollowsTheScript) {
+  PathPoint back_up{{-5, 0}, 1.0};
+  back_up.backwards = true;
+  back_up.pause_s = 1.0;
+  const WalkingPerson w = make({{{0, 0}, 3.0}, {{10, 0}, 3.0}, back_up, {{0, 0}, 1.4}, {{4, 0}, 1.4}});
+  enum Part { kOut, kBack, kBackingUp, kOn };
+  Part part = kOut;
+  int samples[4] = {0, 0, 0, 0};
+  double paused_s = 0.0;
+  const double dt = 0.01;
+  for (double t = 0.0; t <= w.durationS(); t += dt) {
+    const PersonState s = w.state(t);
+    EXPECT_NEAR(s.p_W_m.y(), 0.0, 1e-12);
+    if (std::abs(s.p_W_m.x() + 5.0) < 1e-9) paused_s += dt;
+    const double vx = s.v_W_mps.x();
+    if (vx == 0.0) continue;
+    if (part == kOut && vx < 0.0) part = kBack;
+    if (part == kBack && vx > 0.0) part = kBackingUp;
+    if (part == kBackingUp && s.p_W_m.x() > -1e-9) part = kOn;
+    ++samples[part];
+    EXPECT_NEAR(std::abs(vx), s.speed_mps, 1e-12);
+    const double facing_x = part == kOut || part == kOn ? 1.0 : -1.0;
+    EXPECT_NEAR(std::cos(s.heading_rad), facing_x, 1e-9) << t << " part " << part;
+    if (part == kBackingUp) {
+      EXPECT_LE(s.speed_mps, 1.0 + 1e-9);
+      EXPECT_LT(s.p_W_m.x(), 0.0);
+    }
+  }
+  for (const int n : samples) EXPECT_GT(n, 50);
+  // At x = -5 only the pause: the facing does not turn (backing up keeps facing -x).
+  EXPECT_NEAR(paused_s, 1.0, 0.03);
+  EXPECT_NEAR(w.state(w.durationS()).heading_rad, 0.0, 1e-12);
+  // Timeline: 10 m at 3 m/s (a = 1.5), turn pi at pi rad/s, 15 m at 3 m/s, pause, 5 m backing up at
+  // 1 m/s, turn pi, 4 m at 1.4 m/s.
+  const double a = PersonParams{}.max_accel_mps2;
+  const auto leg = [a](double len, double v) { return len / v + v / a; };
+  EXPECT_NEAR(w.durationS(), leg(10, 3) + 1.0 + leg(15, 3) + 1.0 + leg(5, 1) + 1.0 + leg(4, 1.4), 1e-9);
+}
+
+// Keypoints stay continuous (< 1 cm per ms) where backward walking begins and ends, through a
+// reversal, a mid-leg speed change and wide runner's corners.
+TEST(WalkingPerson, GivenBackwardLegsAndWideCornersWhenSampledFinelyThenKeypointsAreContinuous) {
+  PersonParams params;
+  params.wide_corners = true;
+  params.max_lateral_accel_mps2 = 4.0;
+  params.max_corner_cut_m = 0.6;
+  params.max_accel_mps2 = 2.5;
+  PathPoint back_up{{4, 2}, 1.0};
+  back_up.backwards = true;
+  PathPoint back_corner{{8, 2}, 1.0};
+  back_corner.backwards = true;
+  const WalkingPerson w = make({{{0, 0}, 2.0},
+                                {{4, 0}, 3.0},  // speed change mid-line
+                                {{10, 0}, 3.0},
+                                {{10, 6}, 2.0},  // reversal
+                                {{10, 2}, 2.0},
+                                back_up,        // reversal into a backward leg: no turn
+                                back_corner,    // backward legs joined by an arc
+                                {{8, 5}, 1.4},  // backward -> forward: stop and turn
+                                {{4, 5}, 1.4}},
+                               params);
+  const double dt = 0.001;
+  PersonState prev = w.state(-dt);
+  double worst = 0.0;
+  for (double t = 0.0; t <= w.durationS() + 0.1; t += dt) {
+    const PersonState s = w.state(t);
+    for (std::size_t k = 0; k < kNumKeypoints; ++k) {
+      worst = std::max(worst, (s.keypoints_W_m[k] - prev.keypoints_W_m[k]).norm());
+    }
+    EXPECT_LE((s.p_W_m - prev.p_W_m).norm(), 3.0 * dt + 1e-9);
+    prev = s;
+  }
+  EXPECT_LT(worst, 0.01);
+}
+
 }  // namespace
 }  // namespace aerotrack::hal::sim

@@ -35,6 +35,19 @@ struct PersonParams {
   double corner_radius_m = 0.5;
   double max_lateral_accel_mps2 = 2.0;           ///< On corner arcs v^2 / r stays below this.
   double max_yaw_rate_radps = std::numbers::pi;  ///< On arcs v / r stays below this; turning on the spot.
+  /// Runner's corners: a person who runs does not slow to walking pace at every corner but widens it.
+  /// When set, a corner between legs of speeds v1, v2 is an arc of radius max(corner_radius_m,
+  /// min(v1, v2)^2 / max_lateral_accel_mps2) -- the radius at which the slower leg's speed needs just
+  /// the allowed lateral acceleration -- still limited by half the legs and by max_corner_cut_m.
+  bool wide_corners = false;
+  /// How far a corner arc may pass from the corner point (the arc's midpoint to the vertex): the
+  /// larger of this and corner_radius_m, [0, 10] m. Keeps a widened corner off the obstacles the path
+  /// was cleared of.
+  double max_corner_cut_m = 0.0;
+  /// Legs walked backwards (PathPoint::backwards) are limited to this speed, (0, 3] m/s: people walk
+  /// backwards slower than forwards (preferred ~0.6-1 m/s against 1.4 m/s forwards); 2 m/s is a brisk
+  /// backward jog.
+  double max_backward_speed_mps = 2.0;
   // Gait. Cadence f(v) = cadence_ref_hz * (v / gait_ref_speed_mps)^cadence_speed_exponent steps/s
   // (Grieve 1968: step length ~ v^0.42), constant below cadence_floor_speed_mps (steps shorten in
   // proportion to speed there, so the gait fades in and out smoothly); step length v / f. At 1.4 m/s
@@ -57,6 +70,15 @@ struct PathPoint {
   Eigen::Vector2d p_W_m = Eigen::Vector2d::Zero();  ///< On the ground, world frame.
   double speed_mps = 1.4;  ///< Walking speed on the leg that starts here, (0, 6]; ignored at the last point.
   double pause_s = 0.0;    ///< Stand still here this long (first point: before walking; last: ignored).
+  /// The leg that starts here is walked backwards: facing opposite to the direction of motion (heading
+  /// = motion heading + pi), the gait played in reverse (backward walking is close to time-reversed
+  /// forward walking: Grasso, Bianchi & Lacquaniti 1998, J. Neurophysiol. 80:1868), at most
+  /// PersonParams::max_backward_speed_mps. Where the facing changes between legs the person stops and
+  /// turns on the spot.
+  bool backwards = false;
+  /// |dv/dt| bound on the leg that starts here, (0, 10] m/s^2; 0: PersonParams::max_accel_mps2. A
+  /// sprint start accelerates harder than a walker.
+  double accel_mps2 = 0.0;
 };
 
 /// Segment lengths and head geometry, derived once from PersonParams (metres).
@@ -82,8 +104,9 @@ struct PersonState {
   double t_s = 0.0;
   Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();    ///< Ground point under the pelvis (z = 0).
   Eigen::Vector3d v_W_mps = Eigen::Vector3d::Zero();  ///< Of p_W_m (horizontal).
-  double speed_mps = 0.0;                             ///< |v_W_mps|.
-  double heading_rad = 0.0;                           ///< Facing direction, from world +x towards +y, in (-pi, pi].
+  double speed_mps = 0.0;                             ///< |v_W_mps|, also when walking backwards.
+  /// Facing direction, from world +x towards +y, in (-pi, pi]; opposite to v_W_mps on backward legs.
+  double heading_rad = 0.0;
   /// COCO-17 order (hal::CocoKeypoint); "left" is the person's left.
   std::array<Eigen::Vector3d, kNumKeypoints> keypoints_W_m{};
 };
@@ -93,8 +116,9 @@ struct PersonState {
 class WalkingPerson {
  public:
   /// Validates the parameters and the path (at least one point, finite values, consecutive points at
-  /// least 1 mm apart, leg speeds in (0, 6] m/s, pauses >= 0) and precomputes the arc-length
-  /// parameterisation and the timed speed profile. Allocates; O(n).
+  /// least 1 mm apart, leg speeds in (0, 6] m/s, backward legs' speeds at most
+  /// params.max_backward_speed_mps, leg accelerations 0 or in (0, 10] m/s^2, pauses >= 0) and precomputes the
+  /// arc-length parameterisation and the timed speed profile. Allocates; O(n).
   static rt::Expected<WalkingPerson> create(const PersonParams& params, std::vector<PathPoint> path);
 
   /// The person at time t_s (seconds since the start of the walk). Before 0: standing at the start,
@@ -130,6 +154,7 @@ class WalkingPerson {
     double radius_m = 0.0;                                 ///< Arc: radius.
     double turn_sign = 0.0;                                ///< Arc: +1 left turn, -1 right turn.
     double heading0_rad = 0.0;                             ///< Tangent heading at the start.
+    bool backwards = false;                                ///< Walked facing against the motion.
   };
   struct Phase {  ///< A time interval of constant acceleration along the path, or standing still.
     double t0_s = 0.0;
@@ -142,6 +167,7 @@ class WalkingPerson {
     double heading0_rad = 0.0;
     double turn_rad = 0.0;
     double turn_s = 0.0;
+    bool backwards = false;  ///< Moving: the gait runs in reverse (stride phase decreases).
   };
 
   WalkingPerson() = default;

@@ -48,6 +48,32 @@ struct CorridorGenerator {
   double clutter_height_m = 1.2;
 };
 
+/// Behaviours a random walk may add to its legs (person.random_path.behaviours), drawn from their own
+/// seeded stream so that a walk without them is unchanged. Each leg draws, in this order: a sprint
+/// (the whole leg at sprint_speed_mps, accelerating at sprint_accel_mps2), a speed change mid-leg
+/// (from a point 30-70 % along the leg, at speed_change_mps), a pause at the leg's end, and a
+/// reversal at its end (the person turns on the spot and walks reversal_m back along the leg, past a
+/// drone following behind, then turns again and carries on; with backwards_probability the walk back is
+/// walked backwards instead, facing the way they came, towards the drone, at backwards_speed_mps).
+struct PathBehaviours {
+  double sprint_probability = 0.0;
+  double sprint_speed_min_mps = 4.5;
+  double sprint_speed_max_mps = 6.0;
+  double sprint_accel_mps2 = 0.0;  ///< 0: PersonParams::max_accel_mps2.
+  double speed_change_probability = 0.0;
+  double speed_change_min_mps = 1.0;
+  double speed_change_max_mps = 3.0;
+  double pause_probability = 0.0;
+  double pause_min_s = 1.0;
+  double pause_max_s = 3.0;
+  double reversal_probability = 0.0;
+  double reversal_min_m = 2.0;  ///< At most 80 % of the leg is walked back.
+  double reversal_max_m = 5.0;
+  double backwards_probability = 0.0;  ///< Of a reversal's walk back.
+  double backwards_speed_min_mps = 0.6;
+  double backwards_speed_max_mps = 1.2;
+};
+
 /// A random walk for the person: legs of random length and turn inside a region.
 struct RandomPathGenerator {
   Eigen::Vector2d region_min_m = Eigen::Vector2d::Zero();
@@ -58,6 +84,7 @@ struct RandomPathGenerator {
   double max_turn_rad = 1.6;
   double speed_min_mps = 1.0;
   double speed_max_mps = 1.5;
+  std::optional<PathBehaviours> behaviours;  ///< None: the plain walk (no draws from its stream).
 };
 
 /// Per-seed variation of a scenario.
@@ -161,7 +188,8 @@ rt::Expected<ScenarioSpec> loadScenarioSpec(const std::string& path);
 rt::Expected<ScenarioSpec> parseScenarioSpec(const std::string& yaml_text, const std::string& source_name);
 
 /// Resolves generators and randomisation for one seed. speed_override_mps, if set, replaces
-/// every leg's speed before jitter (`aerotrack bench --speed`). Error if a generator cannot
+/// every forward leg's speed before jitter (`aerotrack bench --speed`); backward legs keep theirs,
+/// and after jitter every backward leg is capped at person.max_backward_speed_mps. Error if a generator cannot
 /// place what it was asked to (e.g. the path leaves the region).
 rt::Expected<ScenarioInstance> instantiate(const ScenarioSpec& spec, std::uint64_t seed,
                                            std::optional<double> speed_override_mps = std::nullopt);
