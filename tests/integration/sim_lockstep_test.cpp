@@ -54,7 +54,8 @@ TEST_P(EveryScenario, RunsForSecondsWithTheDroneAirborneAndUnharmed) {
   EXPECT_GT(o.drone_m.z(), 1.0);  // took off towards 1.5 m
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenarios, EveryScenario, ::testing::Values("sharp_turn", "forest", "corridor", "open"));
+INSTANTIATE_TEST_SUITE_P(Scenarios, EveryScenario,
+                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "drift", "windy"));
 
 TEST(SimLockstep, GivenOpenFieldThenBaselineFollowerTracksThePersonToTheEnd) {
   const Outcome o = fly("open", 2, 1000.0);
