@@ -15,6 +15,16 @@ QuadrotorState inOdometryFrame(const OdometryFrameError& T_OW, const QuadrotorSt
   return s;
 }
 
+hal::Setpoint inOdometryFrame(const OdometryFrameError& T_OW, const hal::Setpoint& setpoint_W) {
+  const Eigen::Matrix3d R_OW = T_OW.R_OW();
+  hal::Setpoint s = setpoint_W;
+  s.p_W_m = R_OW * setpoint_W.p_W_m + T_OW.t_m;
+  s.v_W_mps = R_OW * setpoint_W.v_W_mps;
+  s.a_W_mps2 = R_OW * setpoint_W.a_W_mps2;
+  s.yaw_rad = setpoint_W.yaw_rad + T_OW.yaw_rad;
+  return s;
+}
+
 OdometryDrift::OdometryDrift(const OdometryDriftSpec& spec, std::mt19937_64 walk_rng, std::mt19937_64 jump_rng,
                              const Eigen::Vector3d& start_p_W_m)
     : spec_(spec), walk_rng_(walk_rng), jump_rng_(jump_rng), last_p_W_m_(start_p_W_m) {

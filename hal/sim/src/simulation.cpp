@@ -190,6 +190,9 @@ void Simulation::publishTruth() {
   t.camera_p_W_m = cameraPose(drone, gimbal_.angleRad()).translation();
   t.gimbal_angle_rad = gimbal_.angleRad();
   t.person_walking = rt::nsToSeconds(now_ns_ - start_ns_) >= personStartS();
+  const OdometryFrameError T_OW = odometryFrameError();
+  t.odom_t_OW_m = T_OW.t_m;
+  t.odom_yaw_OW_rad = T_OW.yaw_rad;
   truth_out_.write(t);
 }
 

@@ -309,6 +309,17 @@ TEST(SimulationDisturbances, GivenAJumpOfTheOdometryFrameThenTheControllerFliesT
   const auto odometry = sim->odometryOut().read();
   ASSERT_TRUE(odometry);
   EXPECT_LT((odometry->p_WB_m - s).norm(), 0.01);
+  // Other threads see T_OW in the truth snapshot; a world setpoint maps into O through it.
+  const auto truth = sim->truthOut().read();
+  ASSERT_TRUE(truth);
+  EXPECT_EQ(truth->odom_t_OW_m, sim->odometryFrameError().t_m);
+  EXPECT_EQ(truth->odom_yaw_OW_rad, sim->odometryFrameError().yaw_rad);
+  Setpoint at_drone_W;
+  at_drone_W.p_W_m = sim->truth().drone.p_W_m;
+  at_drone_W.yaw_rad = -dyaw;
+  const Setpoint at_drone_O = inOdometryFrame(sim->odometryFrameError(), at_drone_W);
+  EXPECT_LT((at_drone_O.p_W_m - s).norm(), 0.01);
+  EXPECT_NEAR(at_drone_O.yaw_rad, 0.0, 1e-12);
 }
 
 TEST(SimulationDisturbances, GivenASteadyWindThenTheUnawareControllerHoversOffsetByForceOverGain) {

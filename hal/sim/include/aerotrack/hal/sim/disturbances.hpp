@@ -76,6 +76,10 @@ struct OdometryFrameError {
 /// body rates, thrust and ground contact unchanged.
 QuadrotorState inOdometryFrame(const OdometryFrameError& T_OW, const QuadrotorState& state_W);
 
+/// A world-frame setpoint expressed in the odometry frame (for truth-fed followers: the flight
+/// controller takes its setpoints in O).
+hal::Setpoint inOdometryFrame(const OdometryFrameError& T_OW, const hal::Setpoint& setpoint_W);
+
 /// The drift and jumps of T_OW (see the file comment). Value type; one thread.
 class OdometryDrift {
  public:

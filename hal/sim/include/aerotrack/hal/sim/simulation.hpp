@@ -93,6 +93,10 @@ struct TruthSnapshot {
   Eigen::Vector3d camera_p_W_m = Eigen::Vector3d::Zero();
   double gimbal_angle_rad = 0.0;
   bool person_walking = false;  ///< The person's start delay has passed.
+  /// The odometry frame's pose in the world, T_OW (disturbances.hpp; identity without drift): the
+  /// setpoints and the odometry are in O, p_O = R_z(odom_yaw_OW_rad) p_W + odom_t_OW_m.
+  Eigen::Vector3d odom_t_OW_m = Eigen::Vector3d::Zero();
+  double odom_yaw_OW_rad = 0.0;
 };
 
 }  // namespace aerotrack::hal::sim
