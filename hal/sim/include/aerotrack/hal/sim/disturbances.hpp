@@ -25,9 +25,9 @@
 // Algorithms for Flying Robots", ICRA 2018 (EuRoC MAV sequences: OKVIS, ROVIO, VINS-Mono, SVO+MSF,
 // MSCKF); OpenVINS (Geneva et al., ICRA 2020) and VINS-Mono (Qin et al., T-RO 2018) report errors of
 // the same order on EuRoC. (The range is taken as quoted; the papers' tables were not re-read to
-// write this, and the drift of a given drone depends on its camera, its scene and its speed.) A random walk
-// gives an error std that grows as sqrt(s), not s; config/scenarios/drift.yaml sets a_xy so that the
-// 1-sigma horizontal error reaches the pessimistic 2 % of the distance at s = 100 m:
+// write this, and the drift of a given drone depends on its camera, its scene and its speed.) A
+// random walk gives an error std that grows as sqrt(s), not s; config/scenarios/drift.yaml sets a_xy
+// so that the 1-sigma horizontal error reaches the pessimistic 2 % of the distance at s = 100 m:
 //   sqrt(2 a^2 s) = 0.02 s  =>  a = 0.02 sqrt(s / 2) = 0.14 m/sqrt(m).
 //
 // Wind. The wind at the drone is a mean plus gusts, each world axis a first-order Gauss-Markov

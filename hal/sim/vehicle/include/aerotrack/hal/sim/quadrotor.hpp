@@ -21,7 +21,7 @@
 // Ground contact (z = 0): a step that would end below the ground ends on it instead: z = 0, v = 0,
 // body rates 0 and the attitude levelled to its heading (the vehicle settles on its legs). On the
 // ground the vehicle stays put (no sliding, no tipping, no spinning) until the vertical component of
-// its thrust exceeds its weight; it then lifts off within that step.
+// its thrust (plus that of F_ext) exceeds its weight; it then lifts off within that step.
 #pragma once
 
 #include <type_traits>
