@@ -139,7 +139,10 @@ class BaselineFollowTask final : public rt::Task {
     const auto truth = sim_->truthOut().read();
     if (!truth) return;
     const hal::sim::FollowCommand command = follower_.update(*truth, now_ns);
-    if (command_vehicle_) vehicle_.send(command.setpoint);
+    // The flight controller flies the odometry frame (issue 20: it drifts from the world).
+    if (command_vehicle_)
+      vehicle_.send(hal::sim::inOdometryFrame(hal::sim::OdometryFrameError{truth->odom_t_OW_m, truth->odom_yaw_OW_rad},
+                                              command.setpoint));
     gimbal_.command(command.gimbal);
   }
 

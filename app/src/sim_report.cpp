@@ -178,6 +178,9 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"person_mean_speed_mps", m.personMeanSpeedMps()},
       {"person_speed_scale", trial.speed_scale},
       {"mirrored", trial.mirrored},
+      {"odometry_drift",
+       {{"position_m", sim.odometryPositionErrorM().norm()},  // issue 20: VIO drift at the end
+        {"yaw_rad", sim.odometryFrameError().yaw_rad}}},
       {"controller", run.controller},
       {"executor", run.executor},
       {"interrupted", run.interrupted},

@@ -55,7 +55,7 @@ TEST_P(EveryScenario, RunsForSecondsWithTheDroneAirborneAndUnharmed) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenarios, EveryScenario,
-                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "runner"));
+                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "runner", "drift", "windy"));
 
 TEST(SimLockstep, GivenOpenFieldThenBaselineFollowerTracksThePersonToTheEnd) {
   const Outcome o = fly("open", 2, 1000.0);

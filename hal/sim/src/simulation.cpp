@@ -7,6 +7,11 @@
 namespace aerotrack::hal::sim {
 namespace {
 
+// Stream ids of the disturbances (issue 20), far from the small ids of the sensors.
+constexpr std::uint64_t kDriftWalkStream = 0xd21f7;
+constexpr std::uint64_t kDriftJumpStream = 0xd21f8;
+constexpr std::uint64_t kWindStream = 0x817d;
+
 std::mt19937_64 streamRng(std::uint64_t seed, std::uint64_t stream) {
   std::seed_seq seq{seed, stream, std::uint64_t{0x5eed}};
   return std::mt19937_64(seq);
@@ -90,6 +95,11 @@ Simulation::Simulation(const ScenarioInstance& scenario, const SimulationOptions
   truth_.person = personAt(start_ns);
   truth_.T_WC = cameraPose(drone, 0.0);
   gimbal_out_.write(gimbal_.encoder(start_ns));
+  if (scenario.spec.odometry.drift.enabled()) {
+    drift_.emplace(scenario.spec.odometry.drift, streamRng(scenario.seed, kDriftWalkStream),
+                   streamRng(scenario.seed, kDriftJumpStream), drone.p_W_m);
+  }
+  if (scenario.spec.wind) wind_.emplace(*scenario.spec.wind, streamRng(scenario.seed, kWindStream));
   publishTruth();
 }
 
@@ -188,12 +198,24 @@ void Simulation::publishTruth() {
   t.camera_p_W_m = cameraPose(drone, gimbal_.angleRad()).translation();
   t.gimbal_angle_rad = gimbal_.angleRad();
   t.person_walking = rt::nsToSeconds(now_ns_ - start_ns_) >= personStartS();
+  const OdometryFrameError T_OW = odometryFrameError();
+  t.odom_t_OW_m = T_OW.t_m;
+  t.odom_yaw_OW_rad = T_OW.yaw_rad;
   truth_out_.write(t);
 }
 
 void Simulation::physicsStep(double dt_s) {
-  const QuadrotorCommand command = controller_.update(active_setpoint_, quad_.state());
-  quad_.step(command, dt_s);
+  // The flight controller flies the odometry frame (what its estimator fuses), unaware of the wind.
+  const QuadrotorState& drone = quad_.state();
+  const QuadrotorCommand command =
+      controller_.update(active_setpoint_, drift_ ? inOdometryFrame(drift_->error(), drone) : drone);
+  if (wind_) {
+    const Eigen::Vector3d f_W_n = windForceW(quad_.params(), drone, wind_->velocityW(), wind_->spec());
+    quad_.step(command, dt_s, f_W_n);
+    wind_->step(dt_s);
+  } else {
+    quad_.step(command, dt_s);
+  }
   gimbal_.step(active_gimbal_command_, dt_s);
 }
 
@@ -257,7 +279,9 @@ void Simulation::captureDepth() {
 
 void Simulation::sampleOdometry() {
   const OdometrySpec& spec = scenario_.spec.odometry;
-  const QuadrotorState& drone = quad_.state();
+  if (drift_) drift_->update(secondsSinceStart(now_ns_), quad_.state().p_W_m);
+  // The true state expressed in the odometry frame O (O = W without drift).
+  const QuadrotorState drone = drift_ ? inOdometryFrame(drift_->error(), quad_.state()) : quad_.state();
   std::normal_distribution<double> unit(0.0, 1.0);
   OdometrySample sample;
   sample.stamp_ns = now_ns_;

@@ -87,7 +87,7 @@ TEST_P(BuiltInScenario, ThePersonsPathAndTheDronesStartAreClearOfObstacles) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenarios, BuiltInScenario,
-                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "runner"));
+                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "runner", "drift", "windy"));
 
 TEST(SharpTurn, SeedsPickBothTurnSidesAndMirrorTheWholeWorld) {
   const ScenarioSpec spec = load("sharp_turn");

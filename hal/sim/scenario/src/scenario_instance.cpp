@@ -269,6 +269,11 @@ void mirrorY(ScenarioSpec& s) {
   for (PathPoint& p : s.path) p.p_W_m.y() = -p.p_W_m.y();
   s.drone.start_m.y() = -s.drone.start_m.y();
   s.drone.start_yaw_rad = -s.drone.start_yaw_rad;
+  for (OdometryJump& j : s.odometry.drift.jumps) {  // the relocalisation errors mirror with the world
+    j.dp_m.y() = -j.dp_m.y();
+    j.dyaw_rad = -j.dyaw_rad;
+  }
+  if (s.wind) s.wind->mean_W_mps.y() = -s.wind->mean_W_mps.y();
   const double y0 = s.bounds_min_m.y();
   s.bounds_min_m.y() = -s.bounds_max_m.y();
   s.bounds_max_m.y() = -y0;

@@ -207,6 +207,48 @@ PersonSpriteSpec parsePersonSprite(const ConfigNode& n) {
   return p;
 }
 
+/// sensors.odometry.drift: every key optional (default 0: no drift).
+OdometryDriftSpec parseOdometryDrift(const ConfigNode& n) {
+  OdometryDriftSpec d;
+  d.position_m_per_sqrt_m = n.getDoubleOr("position_m_per_sqrt_m", 0.0, 0.0, 10.0);
+  d.z_m_per_sqrt_m = n.getDoubleOr("z_m_per_sqrt_m", 0.0, 0.0, 10.0);
+  d.yaw_rad_per_sqrt_m = n.getDoubleOr("yaw_rad_per_sqrt_m", 0.0, 0.0, 1.0);
+  d.position_m_per_sqrt_s = n.getDoubleOr("position_m_per_sqrt_s", 0.0, 0.0, 10.0);
+  d.yaw_rad_per_sqrt_s = n.getDoubleOr("yaw_rad_per_sqrt_s", 0.0, 0.0, 1.0);
+  if (n.has("jumps")) {
+    for (const ConfigNode& j : n.childList("jumps")) {
+      OdometryJump jump;
+      jump.t_s = j.getDouble("t_s", 0.0, 24.0 * 3600.0);
+      jump.dp_m = vec3(j, "dp_m", -100.0, 100.0);
+      jump.dyaw_rad = j.getDoubleOr("dyaw_rad", 0.0, -M_PI, M_PI);
+      j.finish();
+      if (!d.jumps.empty() && jump.t_s < d.jumps.back().t_s) j.fail("t_s", "jumps must be listed in time order");
+      d.jumps.push_back(jump);
+    }
+  }
+  if (n.has("random_jumps")) {
+    const ConfigNode r = n.child("random_jumps");
+    d.random_jumps_per_min = r.getDouble("rate_per_min", 0.0, 60.0);
+    d.random_jump_position_m = r.getDouble("position_m", 0.0, 100.0);
+    d.random_jump_yaw_rad = r.getDoubleOr("yaw_rad", 0.0, 0.0, M_PI);
+    r.finish();
+  }
+  n.finish();
+  return d;
+}
+
+/// The top-level wind section: mean_mps required, the rest optional.
+WindSpec parseWind(const ConfigNode& n) {
+  WindSpec w;
+  w.mean_W_mps = vec3(n, "mean_mps", -50.0, 50.0);
+  if (n.has("gust_sigma_mps")) w.gust_sigma_mps = vec3(n, "gust_sigma_mps", 0.0, 20.0);
+  if (n.has("gust_time_constant_s")) w.gust_time_constant_s = vec3(n, "gust_time_constant_s", 0.01, 1000.0);
+  w.body_cd_area_m2 = n.getDoubleOr("body_cd_area_m2", 0.0, 0.0, 10.0);
+  w.air_density_kgpm3 = n.getDoubleOr("air_density_kgpm3", w.air_density_kgpm3, 0.1, 2.0);
+  n.finish();
+  return w;
+}
+
 void parseSensors(const ConfigNode& n, ScenarioSpec& s) {
   if (n.has("gimbal_camera")) {
     const ConfigNode c = n.child("gimbal_camera");
@@ -257,6 +299,7 @@ void parseSensors(const ConfigNode& n, ScenarioSpec& s) {
     o.position_noise_m = c.getDouble("position_noise_m", 0.0, 10.0);
     o.velocity_noise_mps = c.getDouble("velocity_noise_mps", 0.0, 10.0);
     o.yaw_noise_rad = c.getDouble("yaw_noise_rad", 0.0, 1.0);
+    if (c.has("drift")) o.drift = parseOdometryDrift(c.child("drift"));
     c.finish();
   }
   if (n.has("gimbal")) {
@@ -308,6 +351,7 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
     r.finish();
   }
   if (root.has("sensors")) parseSensors(root.child("sensors"), s);
+  if (root.has("wind")) s.wind = parseWind(root.child("wind"));
 
   const ConfigNode success = root.child("success");
   s.success.tracking_distance_m = success.getDouble("tracking_distance_m", 0.5, 50.0);

@@ -112,11 +112,13 @@ void Quadrotor::touchDown() {
   state_.on_ground = true;
 }
 
-void Quadrotor::step(const QuadrotorCommand& command, double dt_s) {
+void Quadrotor::step(const QuadrotorCommand& command, double dt_s, const Eigen::Vector3d& f_ext_W_n) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
   updateCoefficients(dt_s);
   const QuadrotorParams& p = params_;
   QuadrotorState& s = state_;
+  // Skipped entirely when zero, so runs without wind stay bit-identical.
+  const bool external = f_ext_W_n.allFinite() && !f_ext_W_n.isZero(0.0);
 
   // Thrust lag (exact), and the mean thrust over the step.
   const double thrust_cmd_n =
@@ -126,7 +128,7 @@ void Quadrotor::step(const QuadrotorCommand& command, double dt_s) {
 
   if (s.on_ground) {
     // Resting on its legs: no motion until the thrust's vertical component exceeds the weight.
-    const double lift_n = thrust_mean_n * s.R_WB(2, 2);
+    const double lift_n = thrust_mean_n * s.R_WB(2, 2) + (external ? f_ext_W_n.z() : 0.0);
     if (!(lift_n > p.mass_kg * p.gravity_mps2)) {
       s.a_W_mps2.setZero();
       return;
@@ -152,6 +154,7 @@ void Quadrotor::step(const QuadrotorCommand& command, double dt_s) {
   const Eigen::Vector3d u0 = R_mid.transpose() * s.v_W_mps;
   Eigen::Vector3d c = -p.gravity_mps2 * R_mid.row(2).transpose();  // gravity in B_mid
   c.z() += thrust_mean_n / p.mass_kg;
+  if (external) c += R_mid.transpose() * (f_ext_W_n / p.mass_kg);
   const Eigen::Vector3d u1 = u0.cwiseProduct(drag_decay_) + c.cwiseProduct(drag_phi1_);
   const Eigen::Vector3d dp_B = u0.cwiseProduct(drag_phi1_) + c.cwiseProduct(drag_phi2_);
   s.v_W_mps = R_mid * u1;
@@ -167,6 +170,7 @@ void Quadrotor::step(const QuadrotorCommand& command, double dt_s) {
   a_B.z() += s.thrust_n / p.mass_kg;
   s.a_W_mps2 = s.R_WB * a_B;
   s.a_W_mps2.z() -= p.gravity_mps2;
+  if (external) s.a_W_mps2 += f_ext_W_n / p.mass_kg;
 }
 
 }  // namespace aerotrack::hal::sim

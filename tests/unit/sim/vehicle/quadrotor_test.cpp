@@ -244,6 +244,54 @@ TEST(Quadrotor, GivenManoeuvreWhenSteppedThenReportedAccelerationMatchesFiniteDi
   EXPECT_LT((numeric - a).norm(), 1e-5) << "numeric " << numeric.transpose() << " reported " << a.transpose();
 }
 
+TEST(Quadrotor, GivenExternalForceOnABodyAtRestThenItAcceleratesAsFOverMAndReachesTheDragTerminalVelocity) {
+  // No gravity, no thrust, level: u' = F/m - d u per body axis, so u(t) = F/(m d) (1 - exp(-d t))
+  // (exact, the discretisation is exact for a constant attitude), a(0+) = F/m and the terminal
+  // velocity is F / (m d) (issue 20: the wind's force enters here).
+  QuadrotorParams p;
+  p.gravity_mps2 = 0.0;
+  p.mass_kg = 2.0;
+  p.max_thrust_n = 50.0;
+  p.drag_B_per_s = {0.3, 0.5, 0.1};
+  QuadrotorState s;
+  s.p_W_m = {0.0, 0.0, 10.0};
+  Quadrotor quad = make(p, s);
+  const Eigen::Vector3d f_W_n(1.2, -0.8, 0.4);
+  const double dt_s = 0.002;
+  quad.step(QuadrotorCommand{}, dt_s, f_W_n);
+  for (int i = 0; i < 3; ++i) {
+    const double d = p.drag_B_per_s[i];
+    EXPECT_NEAR(quad.state().v_W_mps[i], f_W_n[i] / (p.mass_kg * d) * -std::expm1(-d * dt_s), 1e-12);
+    EXPECT_NEAR(quad.state().a_W_mps2[i], f_W_n[i] / p.mass_kg - d * quad.state().v_W_mps[i], 1e-12);
+  }
+  for (int k = 1; k < 50000; ++k) quad.step(QuadrotorCommand{}, dt_s, f_W_n);  // 100 s: > 10 time constants
+  for (int i = 0; i < 3; ++i) {
+    const double terminal = f_W_n[i] / (p.mass_kg * p.drag_B_per_s[i]);
+    EXPECT_NEAR(quad.state().v_W_mps[i], terminal, 1e-3 * std::abs(terminal)) << "axis " << i;
+  }
+}
+
+TEST(Quadrotor, GivenZeroExternalForceThenTheStepIsBitIdenticalToAStepWithout) {
+  QuadrotorState s;
+  s.p_W_m = {1.0, 2.0, 3.0};
+  s.v_W_mps = {0.5, -0.3, 0.2};
+  s.R_WB = rotation(0.3, {1, 2, 3});
+  s.thrust_n = 9.0;
+  Quadrotor a = make(QuadrotorParams{}, s);
+  Quadrotor b = make(QuadrotorParams{}, s);
+  QuadrotorCommand command;
+  command.thrust_n = 11.0;
+  command.w_B_radps = {0.2, -0.1, 0.4};
+  for (int k = 0; k < 500; ++k) {
+    a.step(command, 0.002);
+    b.step(command, 0.002, Eigen::Vector3d::Zero());
+  }
+  EXPECT_EQ(a.state().p_W_m, b.state().p_W_m);
+  EXPECT_EQ(a.state().v_W_mps, b.state().v_W_mps);
+  EXPECT_EQ(a.state().R_WB, b.state().R_WB);
+  EXPECT_EQ(a.state().a_W_mps2, b.state().a_W_mps2);
+}
+
 TEST(Quadrotor, GivenInvalidParametersOrStateWhenCreatedThenReturnsError) {
   QuadrotorParams bad_mass;
   bad_mass.mass_kg = 0.0;

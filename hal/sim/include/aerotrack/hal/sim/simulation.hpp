@@ -7,7 +7,11 @@
 //     mode: the camera pose and the person at each exposure (CameraExposure), which the camera device
 //     renders into an image (hal/sim/render) on its own thread, so the stepping thread stays cheap;
 //   - depth camera fixed to the body, ray cast against the obstacles (hal::DepthFrame);
-//   - odometry: truth plus noise, delayed;
+//   - odometry: truth plus noise, delayed; with sensors.odometry.drift, the truth expressed in a
+//     drifting, jumping odometry frame O (disturbances.hpp), which the flight controller flies too
+//     (a real one fuses VIO), so the drift moves the real drone; truth, metrics, collisions, the
+//     cameras and the person stay in the world frame W;
+//   - wind (the scenario's wind section): a force on the vehicle the controller does not know;
 //   - gimbal encoder.
 // It also keeps the ground-truth metrics a run is judged by (metrics.hpp).
 //
@@ -21,6 +25,7 @@
 #include <optional>
 #include <random>
 
+#include "aerotrack/hal/sim/disturbances.hpp"
 #include "aerotrack/hal/sim/geometric_controller.hpp"
 #include "aerotrack/hal/sim/gimbal_motor.hpp"
 #include "aerotrack/hal/sim/metrics.hpp"
@@ -88,6 +93,10 @@ struct TruthSnapshot {
   Eigen::Vector3d camera_p_W_m = Eigen::Vector3d::Zero();
   double gimbal_angle_rad = 0.0;
   bool person_walking = false;  ///< The person's start delay has passed.
+  /// The odometry frame's pose in the world, T_OW (disturbances.hpp; identity without drift): the
+  /// setpoints and the odometry are in O, p_O = R_z(odom_yaw_OW_rad) p_W + odom_t_OW_m.
+  Eigen::Vector3d odom_t_OW_m = Eigen::Vector3d::Zero();
+  double odom_yaw_OW_rad = 0.0;
 };
 
 }  // namespace aerotrack::hal::sim
@@ -139,6 +148,14 @@ class Simulation {
   /// Whether the person's torso is in the gimbal camera's view and line of sight, and if not why
   /// (out of the image is reported first: then the obstacles do not matter).
   Sight personSight(const Eigen::Isometry3d& T_WC, const PersonState& person) const;
+  /// The odometry frame's pose in the world now, T_OW (identity without sensors.odometry.drift).
+  OdometryFrameError odometryFrameError() const { return drift_ ? drift_->error() : OdometryFrameError{}; }
+  /// The drone's position error in the odometry frame now (p_O - p_W), m.
+  Eigen::Vector3d odometryPositionErrorM() const {
+    return odometryFrameError().toOdometry(quad_.state().p_W_m) - quad_.state().p_W_m;
+  }
+  /// The wind at the drone now, W (zero without a wind section).
+  Eigen::Vector3d windW() const { return wind_ ? wind_->velocityW() : Eigen::Vector3d::Zero(); }
 
  private:
   Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
@@ -162,6 +179,8 @@ class Simulation {
   TimeNs now_ns_;
   DurationNs physics_step_ns_;
   std::mt19937_64 camera_rng_, depth_rng_, odometry_rng_;
+  std::optional<OdometryDrift> drift_;  ///< Only with sensors.odometry.drift (own rng streams).
+  std::optional<WindField> wind_;       ///< Only with a wind section (own rng stream).
 
   Setpoint active_setpoint_;
   std::uint64_t setpoint_version_ = 0;

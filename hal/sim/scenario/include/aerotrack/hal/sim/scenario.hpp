@@ -124,12 +124,52 @@ struct DepthCameraSpec {
   DepthCameraParams camera;
 };
 
+/// A relocalisation jump of the odometry frame: at t_s the odometry's report of the drone's
+/// position steps by dp_m and its heading by dyaw_rad (the frame turns about the drone).
+struct OdometryJump {
+  double t_s = 0.0;  ///< Seconds since the simulation's start.
+  Eigen::Vector3d dp_m = Eigen::Vector3d::Zero();
+  double dyaw_rad = 0.0;
+};
+
+/// Visual-inertial odometry drift (sensors.odometry.drift): the odometry frame O moves away from
+/// the world W as a random walk in position and yaw whose variance grows with the distance flown
+/// (and optionally with time), plus jumps (hal/sim/disturbances.hpp has the model). All zero by
+/// default: O = W, the odometry is the truth plus white noise.
+struct OdometryDriftSpec {
+  double position_m_per_sqrt_m = 0.0;  ///< x and y: std of the walk after 1 m flown.
+  double z_m_per_sqrt_m = 0.0;         ///< z: std after 1 m flown.
+  double yaw_rad_per_sqrt_m = 0.0;     ///< yaw: std after 1 m flown.
+  double position_m_per_sqrt_s = 0.0;  ///< x, y and z: std after 1 s (drift while hovering).
+  double yaw_rad_per_sqrt_s = 0.0;
+  std::vector<OdometryJump> jumps;      ///< At given times.
+  double random_jumps_per_min = 0.0;    ///< Poisson rate of seeded jumps.
+  double random_jump_position_m = 0.0;  ///< Their size: horizontal, in a random direction.
+  double random_jump_yaw_rad = 0.0;     ///< Their heading step, of random sign.
+  bool enabled() const {
+    return position_m_per_sqrt_m > 0.0 || z_m_per_sqrt_m > 0.0 || yaw_rad_per_sqrt_m > 0.0 ||
+           position_m_per_sqrt_s > 0.0 || yaw_rad_per_sqrt_s > 0.0 || !jumps.empty() || random_jumps_per_min > 0.0;
+  }
+};
+
 struct OdometrySpec {
   double rate_hz = 100.0;
   double latency_s = 0.010;
   double position_noise_m = 0.02;
   double velocity_noise_mps = 0.05;
   double yaw_noise_rad = 0.01;
+  OdometryDriftSpec drift;
+};
+
+/// Wind (the optional top-level `wind:` section): a mean plus gusts, each axis a first-order
+/// Gauss-Markov process (hal/sim/disturbances.hpp). The air-relative velocity drives the vehicle's
+/// linear rotor drag and an optional quadratic body drag.
+struct WindSpec {
+  Eigen::Vector3d mean_W_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gust_sigma_mps = Eigen::Vector3d::Zero();               ///< Stationary std per axis.
+  Eigen::Vector3d gust_time_constant_s = Eigen::Vector3d::Constant(1.0);  ///< Correlation time per axis.
+  double body_cd_area_m2 = 0.0;      ///< Drag coefficient times frontal area (0: no quadratic drag).
+  double air_density_kgpm3 = 1.225;  ///< ISA sea level.
 };
 
 struct GimbalSpec {
@@ -172,6 +212,7 @@ struct ScenarioSpec {
   DepthCameraSpec depth_camera;
   OdometrySpec odometry;
   GimbalSpec gimbal;
+  std::optional<WindSpec> wind;  ///< None: still air (the vehicle's own drag only).
   SuccessSpec success;
 };
 

@@ -3,7 +3,9 @@
 // controller sends to the inner rate loop); the rate loop and the motors are first-order lags.
 //   T'  = (T_c - T) / tau_T,          w' = (w_c - w) / tau_w          (w: body rates in B)
 //   R'  = R [w]x
-//   m a = R e3 T - m g e3 - m R D R^T v                               (D = diag(drag_B_per_s))
+//   m a = R e3 T - m g e3 - m R D R^T v + F_ext                       (D = diag(drag_B_per_s))
+// F_ext: an external force in W (wind, hal/sim/disturbances.hpp), an input of each step, held
+// constant over it; the flight controller does not know it (it rejects it as a disturbance).
 // with the commands clamped to the vehicle's limits, and a flat ground at z = 0.
 //
 // Discretisation of one step of length dt (commands held constant over the step):
@@ -19,7 +21,7 @@
 // Ground contact (z = 0): a step that would end below the ground ends on it instead: z = 0, v = 0,
 // body rates 0 and the attitude levelled to its heading (the vehicle settles on its legs). On the
 // ground the vehicle stays put (no sliding, no tipping, no spinning) until the vertical component of
-// its thrust exceeds its weight; it then lifts off within that step.
+// its thrust (plus that of F_ext) exceeds its weight; it then lifts off within that step.
 #pragma once
 
 #include <type_traits>
@@ -89,7 +91,9 @@ class Quadrotor {
   /// comment). The thrust command is clamped to [min_thrust_n, max_thrust_n] and each body-rate
   /// component to +-max_body_rate_radps; non-finite command values count as min thrust / zero rate.
   /// dt_s <= 0 or not finite: no-op. Allocation-free; exp() is re-evaluated only when dt_s changes.
-  void step(const QuadrotorCommand& command, double dt_s);
+  /// f_ext_W_n: external force in W held over the step (see the file comment); non-finite: none.
+  /// A zero force leaves the step bit-identical to a step without one.
+  void step(const QuadrotorCommand& command, double dt_s, const Eigen::Vector3d& f_ext_W_n = Eigen::Vector3d::Zero());
 
   const QuadrotorState& state() const { return state_; }
   const QuadrotorParams& params() const { return params_; }
