@@ -266,6 +266,7 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
   s.success.tracking_distance_m = success.getDouble("tracking_distance_m", 0.5, 50.0);
   s.success.final_distance_factor = success.getDouble("final_distance_factor", 1.0, 100.0);
   success.finish();
+  if (root.has("bystanders")) s.bystanders = parseBystanders(root.child("bystanders"), s.boxes, s.cylinders);
   root.finish();
   return s;
 }
