@@ -251,6 +251,21 @@ void Simulation::captureCamera() {
     exposure.sequence = ++camera_sequence_;
     exposure.T_WC = T_WC;
     exposure.person = person;
+    // The nearest bystanders (a bounded insertion: the farthest kept is replaced by a nearer one).
+    std::array<double, kMaxExposureBystanders> range_m{};
+    for (std::size_t id = 1; id < personCount(); ++id) {
+      const double r = (bodies_[id].center_W_m - T_WC.translation().head<2>()).norm();
+      std::size_t slot = exposure.bystander_count;
+      if (slot == kMaxExposureBystanders) {
+        slot = static_cast<std::size_t>(std::max_element(range_m.begin(), range_m.end()) - range_m.begin());
+        if (range_m[slot] <= r) continue;
+      } else {
+        ++exposure.bystander_count;
+      }
+      range_m[slot] = r;
+      exposure.bystander_ids[slot] = id;
+      exposure.bystanders[slot] = personStateAt(id, now_ns_);
+    }
     exposures_out_.try_push(exposure);
     return;
   }

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
+#include "aerotrack/hal/sim/devices.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "support/require.hpp"
 
@@ -298,6 +300,47 @@ TEST(Bystanders, ParseErrorsNameFileLineAndKey) {
     return inst ? std::string("no error") : inst.error().message;
   }();
   EXPECT_NE(early.find("crossings[0]"), std::string::npos) << early;
+}
+
+TEST(Bystanders, ImageModeDrawsANearerBystanderOverTheTargetInItsOwnClothes) {
+  if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) {
+    GTEST_SKIP() << PersonSpriteSpec{}.image_path << " is missing: install the Debian package opencv-doc";
+  }
+  // Given the target standing 6 m ahead and a bystander in green 3 m ahead, on the same line
+  const std::string text = crowdYaml(
+      "sensors:\n  gimbal_camera:\n    mode: image\n    rate_hz: 10\n    latency_s: 0.04\n"
+      "    width_px: 320\n    height_px: 240\n    hfov_deg: 87\n    pixel_noise_torso_fraction: 0.028\n"
+      "    keypoint_miss_probability: 0.03\n"
+      "bystanders:\n  people:\n    - {path: [{p_m: [3.0, 0.0]}], clothing: {hue_deg: 120.0, saturation: 1.0}}\n",
+      false, 6.0);
+  SimulationOptions options;
+  options.render_depth = false;
+  std::shared_ptr<Simulation> sim =
+      aerotrack::test::require(Simulation::create(crowdInstance(text), options, 0), "Simulation::create");
+  SimGimbalCamera camera(sim);
+  ImageFrameHandle frame;
+  for (rt::TimeNs t = 0; t <= rt::secondsToNs(0.3) && !frame; t += 5'000'000) {
+    sim->step(t);
+    frame = camera.grab(t);
+  }
+  ASSERT_TRUE(frame);
+  // Then the bystander's torso (its mid-shoulders and mid-hips' midpoint, projected) is green: the
+  // recoloured bystander is drawn over the target's photo behind it
+  const PersonState by = sim->personStateAt(1, frame->stamp_ns);
+  const Eigen::Vector3d torso_W =
+      0.25 *
+      (by.keypoints_W_m[index(CocoKeypoint::kLeftShoulder)] + by.keypoints_W_m[index(CocoKeypoint::kRightShoulder)] +
+       by.keypoints_W_m[index(CocoKeypoint::kLeftHip)] + by.keypoints_W_m[index(CocoKeypoint::kRightHip)]);
+  const auto uv = project(sim->truth().T_WC.inverse() * torso_W, frame->intrinsics);
+  ASSERT_TRUE(uv);
+  cv::Vec3d mean(0, 0, 0);
+  for (int dv = -2; dv <= 2; ++dv)
+    for (int du = -2; du <= 2; ++du) {
+      const cv::Vec3b px = frame->bgr.at<cv::Vec3b>(static_cast<int>(uv->y()) + dv, static_cast<int>(uv->x()) + du);
+      for (int ch = 0; ch < 3; ++ch) mean[ch] += px[ch] / 25.0;
+    }
+  EXPECT_GT(mean[1], 1.3 * mean[0]) << mean[0] << " " << mean[1] << " " << mean[2];
+  EXPECT_GT(mean[1], 1.3 * mean[2]) << mean[0] << " " << mean[1] << " " << mean[2];
 }
 
 }  // namespace

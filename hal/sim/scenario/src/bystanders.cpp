@@ -409,6 +409,19 @@ AppearanceSignature signatureOf(const Clothing& clothing) {
   return sig;
 }
 
+Eigen::Vector3f clothingBgr(const Clothing& clothing) {
+  // HSV -> RGB with V = 1 (the standard hexcone conversion).
+  const double h = std::fmod(clothing.hue_deg, 360.0) / 60.0;
+  const double s = clothing.saturation;
+  const double x = (1.0 - s) + s * (1.0 - std::abs(std::fmod(h, 2.0) - 1.0));
+  const double lo = 1.0 - s;
+  const int sector = static_cast<int>(h) % 6;
+  const std::array<std::array<double, 3>, 6> rgb = {
+      {{1.0, x, lo}, {x, 1.0, lo}, {lo, 1.0, x}, {lo, x, 1.0}, {x, lo, 1.0}, {1.0, lo, x}}};
+  const auto& c = rgb[static_cast<std::size_t>(sector)];
+  return {static_cast<float>(c[2]), static_cast<float>(c[1]), static_cast<float>(c[0])};
+}
+
 Clothing randomClothing(std::mt19937_64& rng) {
   Clothing c;
   c.hue_deg = uniformIn(rng, 0.0, 360.0);

@@ -74,12 +74,20 @@ struct SimTruth {
   Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();  ///< Gimbal camera (OpenCV axes).
 };
 
+/// Most bystanders an image-mode exposure carries (the nearest to the camera).
+inline constexpr std::size_t kMaxExposureBystanders = 16;
+
 /// One image-mode exposure of the gimbal camera: what its renderer needs, at the exposure time.
 struct CameraExposure {
   TimeNs stamp_ns = 0;         ///< Exposure time.
   std::uint64_t sequence = 0;  ///< Frame counter (shared with keypoint mode's).
   Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
   PersonState person;
+  /// The bystanders nearest the camera (ids as Simulation::personStateAt's, 1..N), at most
+  /// kMaxExposureBystanders.
+  std::size_t bystander_count = 0;
+  std::array<std::size_t, kMaxExposureBystanders> bystander_ids{};
+  std::array<PersonState, kMaxExposureBystanders> bystanders{};
 };
 
 /// The truth other threads may read (through Simulation::truthOut()): small and fixed-size.

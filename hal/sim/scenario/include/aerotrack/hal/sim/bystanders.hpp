@@ -60,6 +60,9 @@ struct Clothing {
 /// perception's histogram does) in its saturation bin; grey in the last bin. Pure.
 AppearanceSignature signatureOf(const Clothing& clothing);
 
+/// The main clothing colour as BGR in [0, 1] (HSV with value 1), for the image renderer's recolouring.
+Eigen::Vector3f clothingBgr(const Clothing& clothing);
+
 /// Random clothing: hues uniform, saturations in [0.4, 1], grey share in [0.1, 0.35].
 Clothing randomClothing(std::mt19937_64& rng);
 
