@@ -84,7 +84,8 @@ TEST_P(BuiltInScenario, ThePersonsPathAndTheDronesStartAreClearOfObstacles) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenarios, BuiltInScenario, ::testing::Values("sharp_turn", "forest", "corridor", "open"));
+INSTANTIATE_TEST_SUITE_P(Scenarios, BuiltInScenario,
+                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "crowd", "crossing"));
 
 TEST(SharpTurn, SeedsPickBothTurnSidesAndMirrorTheWholeWorld) {
   const ScenarioSpec spec = load("sharp_turn");
