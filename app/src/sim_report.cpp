@@ -220,6 +220,16 @@ rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_p
                cv::Scalar(90, 110, 90), cv::FILLED);
 
   const auto& track = sim.metrics().track();
+  // Bystanders (issue 20) in grey, look-alikes darker, each ending in a dot, under the others.
+  for (std::size_t id = 1; id < sim.personCount(); ++id) {
+    const bool look_alike = sim.scenario().bystanders.people[id - 1].look_alike;
+    const cv::Scalar grey = look_alike ? cv::Scalar(110, 110, 110) : cv::Scalar(185, 185, 185);
+    const auto at = [&](std::size_t i) {
+      return sim.personStateAt(id, sim.startNs() + rt::secondsToNs(track[i].t_s)).p_W_m;
+    };
+    for (std::size_t i = 1; i < track.size(); ++i) cv::line(image, px(at(i - 1)), px(at(i)), grey, 1, cv::LINE_AA);
+    if (!track.empty()) cv::circle(image, px(at(track.size() - 1)), 3, grey, cv::FILLED);
+  }
   for (std::size_t i = 1; i < track.size(); ++i)
     cv::line(image, px(track[i - 1].person_m), px(track[i].person_m), cv::Scalar(200, 120, 30), 2, cv::LINE_AA);
   for (std::size_t i = 1; i < track.size(); ++i) {
@@ -234,11 +244,11 @@ rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_p
   }
   const std::string reason = sim.metrics().failureReason();
   char title[256];
-  std::snprintf(
-      title, sizeof(title),
-      "%s seed %llu: %s   visible %.0f%%  blue: person  green/red: drone (person visible / not)  orange: loss",
-      spec.name.c_str(), static_cast<unsigned long long>(sim.scenario().seed),
-      reason.empty() ? "success" : reason.c_str(), 100.0 * sim.metrics().visibleRatio());
+  std::snprintf(title, sizeof(title),
+                "%s seed %llu: %s   visible %.0f%%  blue: person  green/red: drone (person visible / not)  orange: loss"
+                "  grey: bystanders",
+                spec.name.c_str(), static_cast<unsigned long long>(sim.scenario().seed),
+                reason.empty() ? "success" : reason.c_str(), 100.0 * sim.metrics().visibleRatio());
   cv::putText(image, title, cv::Point(10, 24), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   try {
     if (!cv::imwrite(png_path, image)) return rt::Error{png_path + ": cannot write image"};

@@ -55,5 +55,13 @@ BENCHMARK_CAPTURE(BM_SimulationRealtimeFactor, corridor_depth15hz, "corridor", t
 BENCHMARK_CAPTURE(BM_SimulationRealtimeFactor, forest_no_depth, "forest", false)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3);
+// Bystanders (issue 20): crowd has 13 (a milling group of 5, 6 random walkers, a crosser, a
+// look-alike), crossing 6; each is observed, occludes and is rendered into the depth frames.
+BENCHMARK_CAPTURE(BM_SimulationRealtimeFactor, crowd_depth15hz, "crowd", true)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
+BENCHMARK_CAPTURE(BM_SimulationRealtimeFactor, crossing_depth15hz, "crossing", true)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 }  // namespace

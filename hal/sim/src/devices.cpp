@@ -79,7 +79,19 @@ ImageFrameHandle SimGimbalCamera::grab(TimeNs now_ns) {
   frame->stamp_ns = newest->stamp_ns;
   frame->sequence = newest->sequence;
   frame->intrinsics = renderer->params().intrinsics;
-  renderer->render(sim_->obstacles(), newest->T_WC, occluded ? nullptr : &newest->person, frame->bgr, scratch_);
+  if (newest->bystander_count == 0) {
+    renderer->render(sim_->obstacles(), newest->T_WC, occluded ? nullptr : &newest->person, frame->bgr, scratch_);
+  } else {  // Bystanders in their own clothes (look-alikes in the target's photo's).
+    std::array<RenderedPerson, kMaxExposureBystanders + 1> persons{};
+    persons[0].state = occluded ? nullptr : &newest->person;
+    for (std::size_t i = 0; i < newest->bystander_count; ++i) {
+      const Bystander& b = sim_->scenario().bystanders.people[newest->bystander_ids[i] - 1];
+      persons[i + 1] = RenderedPerson{&newest->bystanders[i], !b.look_alike, clothingBgr(b.clothing)};
+    }
+    renderer->render(sim_->obstacles(), newest->T_WC,
+                     std::span<const RenderedPerson>(persons.data(), newest->bystander_count + 1), frame->bgr,
+                     scratch_);
+  }
   last_stamp_ns_ = newest->stamp_ns;
   return frame;
 }

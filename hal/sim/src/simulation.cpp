@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 namespace aerotrack::hal::sim {
 namespace {
@@ -58,6 +59,15 @@ rt::Expected<std::unique_ptr<Simulation>> Simulation::create(const ScenarioInsta
                                                         std::move(person.value()), std::move(quad.value()),
                                                         std::move(controller.value()), start_ns));
   sim->renderer_ = std::move(renderer);
+  for (const Bystander& b : scenario.bystanders.people) {
+    auto walker = WalkingPerson::create(b.params, b.path);
+    if (!walker) return rt::Error{s.source + ": " + b.origin + ": " + walker.error().message};
+    sim->bystanders_.push_back(std::move(walker.value()));
+    sim->bystander_delay_s_.push_back(b.start_delay_s);
+  }
+  sim->bodies_.resize(sim->personCount());
+  sim->candidates_.reserve(sim->personCount());
+  sim->refreshBodies(start_ns);
   return sim;
 }
 
@@ -76,6 +86,8 @@ Simulation::Simulation(const ScenarioInstance& scenario, const SimulationOptions
       camera_rng_(streamRng(scenario.seed, 1)),
       depth_rng_(streamRng(scenario.seed, 2)),
       odometry_rng_(streamRng(scenario.seed, 3)),
+      crowd_rng_(streamRng(scenario.seed, 0xB1)),
+      appearance_rng_(streamRng(scenario.seed, 0xB2)),
       next_camera_ns_(start_ns),
       next_depth_ns_(start_ns),
       next_odometry_ns_(start_ns),
@@ -107,6 +119,38 @@ PersonState Simulation::personAt(TimeNs t_ns) const {
   return person_.state(rt::nsToSeconds(t_ns - start_ns_) - scenario_.spec.person_start_delay_s);
 }
 
+PersonState Simulation::personStateAt(std::size_t id, TimeNs t_ns) const {
+  if (id == 0) return personAt(t_ns);
+  return bystanders_[id - 1].state(rt::nsToSeconds(t_ns - start_ns_) - bystander_delay_s_[id - 1]);
+}
+
+const AppearanceSignature& Simulation::personAppearance(std::size_t id) const {
+  return id == 0 ? scenario_.bystanders.target_appearance : scenario_.bystanders.people[id - 1].appearance;
+}
+
+void Simulation::refreshBodies(TimeNs t_ns) {
+  if (bystanders_.empty() || t_ns == bodies_ns_) return;
+  bodies_ns_ = t_ns;
+  for (std::size_t id = 0; id < bodies_.size(); ++id) {
+    const PersonState p = personStateAt(id, t_ns);
+    const double height_m = id == 0 ? person_.params().height_m : bystanders_[id - 1].params().height_m;
+    bodies_[id] = Cylinder{p.p_W_m.head<2>(), kPersonBodyRadiusM, 0.0, height_m};
+  }
+}
+
+bool Simulation::sightClear(const Eigen::Vector3d& a_W_m, const Eigen::Vector3d& b_W_m, std::size_t skip_id) const {
+  if (!obstacles_.segmentClear(a_W_m, b_W_m)) return false;
+  const Eigen::Vector3d ab = b_W_m - a_W_m;
+  const double length_m = ab.norm();
+  if (!(length_m > 0.0)) return true;
+  const Ray ray(a_W_m, ab / length_m);
+  for (std::size_t id = 0; id < bodies_.size(); ++id) {
+    if (id == skip_id) continue;
+    if (firstHit(bodies_[id], ray, length_m)) return false;
+  }
+  return true;
+}
+
 Eigen::Isometry3d Simulation::cameraPose(const QuadrotorState& drone, double gimbal_angle_rad) const {
   Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
   const Eigen::Matrix3d R_BG = Eigen::AngleAxisd(gimbal_angle_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -128,7 +172,7 @@ Sight Simulation::personSight(const Eigen::Isometry3d& T_WC, const PersonState& 
     }
   }
   for (const Eigen::Vector3d& p_W : torso_W_m) {
-    if (!obstacles_.segmentClear(T_WC.translation(), p_W)) return Sight::kOccluded;
+    if (!sightClear(T_WC.translation(), p_W, 0)) return Sight::kOccluded;
   }
   return Sight::kVisible;
 }
@@ -157,6 +201,10 @@ void Simulation::sampleDueSensors() {
     sampleOdometry();
     next_odometry_ns_ += odometry_period_ns_;
   }
+  if (!bystanders_.empty() && (now_ns_ >= next_camera_ns_ || now_ns_ >= next_metrics_ns_ ||
+                               (options_.render_depth && now_ns_ >= next_depth_ns_))) {
+    refreshBodies(now_ns_);
+  }
   if (now_ns_ >= next_camera_ns_) {
     captureCamera();
     next_camera_ns_ += camera_period_ns_;
@@ -178,7 +226,11 @@ void Simulation::sampleDueSensors() {
     sample.person_speed_mps = truth_.person.speed_mps;
     sample.tracking = t_s >= personStartS();
     sample.person_walking = sample.tracking && t_s - personStartS() < person_.durationS();
+    // Clearance: to the static obstacles and to the bystanders' bodies (the target's is not an
+    // obstacle, as before bystanders existed).
     sample.clearance_m = obstacles_.distance(truth_.drone.p_W_m);
+    for (std::size_t id = 1; id < bodies_.size(); ++id)
+      sample.clearance_m = std::min(sample.clearance_m, distanceTo(bodies_[id], truth_.drone.p_W_m));
     sample.sight = personSight(truth_.T_WC, truth_.person);
     metrics_.record(sample);
     next_metrics_ns_ += metrics_period_ns_;
@@ -229,28 +281,89 @@ void Simulation::captureCamera() {
     exposure.sequence = ++camera_sequence_;
     exposure.T_WC = T_WC;
     exposure.person = person;
+    // The nearest bystanders (a bounded insertion: the farthest kept is replaced by a nearer one).
+    std::array<double, kMaxExposureBystanders> range_m{};
+    for (std::size_t id = 1; id < personCount(); ++id) {
+      const double r = (bodies_[id].center_W_m - T_WC.translation().head<2>()).norm();
+      std::size_t slot = exposure.bystander_count;
+      if (slot == kMaxExposureBystanders) {
+        slot = static_cast<std::size_t>(std::max_element(range_m.begin(), range_m.end()) - range_m.begin());
+        if (range_m[slot] <= r) continue;
+      } else {
+        ++exposure.bystander_count;
+      }
+      range_m[slot] = r;
+      exposure.bystander_ids[slot] = id;
+      exposure.bystanders[slot] = personStateAt(id, now_ns_);
+    }
     exposures_out_.try_push(exposure);
     return;
   }
   const LineOfSight line_of_sight = [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return obstacles_.segmentClear(a, b);
+    return bystanders_.empty() ? obstacles_.segmentClear(a, b) : sightClear(a, b, sight_skip_id_);
   };
   DetectionFrame frame;
   frame.stamp_ns = now_ns_;
   frame.result_ns = now_ns_ + rt::secondsToNs(spec.latency_s);
   frame.sequence = ++camera_sequence_;
   frame.intrinsics = spec.camera.intrinsics;
+  sight_skip_id_ = 0;
   if (const auto detection = observe(person.keypoints_W_m, T_WC, spec.camera, line_of_sight, camera_rng_)) {
     frame.persons[0] = *detection;
     frame.person_count = 1;
-    frame.target_index = 0;  // the simulated world holds one person: the one followed
+    // The oracle: the simulator knows which detection is the target. A lock-on stage (issue 20)
+    // replaces it; with bystanders the slot is the target's after sorting.
+    frame.target_index = 0;
+    frame.persons[0].appearance = noisySignature(personAppearance(0), appearance_rng_);
+    frame.persons[0].has_appearance = true;
   }
+  if (!bystanders_.empty()) observeCrowd(person, T_WC, frame);
   if (pending_count_ == pending_.size()) {  // cannot happen with sane rates; drop the oldest
     pending_head_ = (pending_head_ + 1) % pending_.size();
     --pending_count_;
   }
   pending_[(pending_head_ + pending_count_) % pending_.size()] = frame;
   ++pending_count_;
+}
+
+void Simulation::observeCrowd(const PersonState& target, const Eigen::Isometry3d& T_WC, DetectionFrame& frame) {
+  (void)target;
+  const GimbalCameraSpec& spec = scenario_.spec.gimbal_camera;
+  const LineOfSight line_of_sight = [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return sightClear(a, b, sight_skip_id_);
+  };
+  const auto area = [](const PersonDetection& d) { return d.bbox_w_px * d.bbox_h_px; };
+  candidates_.clear();
+  if (frame.person_count == 1) candidates_.push_back({frame.persons[0], 0, area(frame.persons[0])});
+  for (std::size_t id = 1; id < personCount(); ++id) {
+    const PersonState p = personStateAt(id, now_ns_);
+    sight_skip_id_ = id;
+    if (const auto detection = observe(p.keypoints_W_m, T_WC, spec.camera, line_of_sight, crowd_rng_)) {
+      candidates_.push_back({*detection, id, area(*detection)});
+      candidates_.back().detection.appearance = noisySignature(personAppearance(id), appearance_rng_);
+      candidates_.back().detection.has_appearance = true;
+    }
+  }
+  sight_skip_id_ = 0;
+  // MoveNet multipose keeps the most salient persons: the largest boxes (ties by id, deterministic).
+  const auto by_size = [](const Candidate& a, const Candidate& b) {
+    return a.area_px2 != b.area_px2 ? a.area_px2 > b.area_px2 : a.id < b.id;
+  };
+  const std::size_t kept = std::min(candidates_.size(), kMaxPersons);
+  std::partial_sort(candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(kept), candidates_.end(),
+                    by_size);
+  // Reported left to right, so the order does not tell which one is the target.
+  const auto by_position = [](const Candidate& a, const Candidate& b) {
+    if (a.detection.bbox_u_px != b.detection.bbox_u_px) return a.detection.bbox_u_px < b.detection.bbox_u_px;
+    return a.id < b.id;
+  };
+  std::sort(candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(kept), by_position);
+  frame.person_count = kept;
+  frame.target_index = -1;
+  for (std::size_t slot = 0; slot < kept; ++slot) {
+    frame.persons[slot] = candidates_[slot].detection;
+    if (candidates_[slot].id == 0) frame.target_index = static_cast<int>(slot);  // the oracle (see above)
+  }
 }
 
 void Simulation::releaseDetections() {
@@ -273,7 +386,10 @@ void Simulation::captureDepth() {
   frame->intrinsics = depthIntrinsics(spec.camera);
   frame->T_BC.linear() = opticalAxesInFlu();
   frame->T_BC.translation() = spec.mount_B_m;
-  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m);
+  // The bystanders' bodies (not the target's, which was never an obstacle).
+  const std::span<const Cylinder> bystander_bodies =
+      bodies_.size() > 1 ? std::span<const Cylinder>(bodies_).subspan(1) : std::span<const Cylinder>();
+  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m, bystander_bodies);
   depth_out_.write(std::move(frame));
 }
 

@@ -149,8 +149,31 @@ void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& 
   shade(world, T_WC, scratch, bgr);
   if (person != nullptr) {
     const SpritePlacement placement = placeSprite(*person, T_WC);
-    if (placement.visible) drawPerson(placement, bgr, scratch.depth_m);
+    if (placement.visible) drawPerson(placement, bgr, scratch.depth_m, RenderedPerson{person});
   }
+}
+
+void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC,
+                           std::span<const RenderedPerson> persons, cv::Mat& bgr, RenderScratch& scratch) const {
+  render(world, T_WC, nullptr, bgr, scratch);
+  constexpr std::size_t kMaxDrawn = 32;
+  std::array<SpritePlacement, kMaxDrawn> placements;
+  std::array<std::size_t, kMaxDrawn> order{};
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < persons.size() && count < kMaxDrawn; ++i) {
+    if (persons[i].state == nullptr) continue;
+    placements[count] = placeSprite(*persons[i].state, T_WC);
+    if (!placements[count].visible) continue;
+    order[count] = i;
+    ++count;
+  }
+  // Farthest first (ties: listed order), so that nearer persons are drawn over farther ones.
+  std::array<std::size_t, kMaxDrawn> slots{};
+  for (std::size_t i = 0; i < count; ++i) slots[i] = i;
+  std::stable_sort(slots.begin(), slots.begin() + static_cast<std::ptrdiff_t>(count),
+                   [&](std::size_t a, std::size_t b) { return placements[a].depth_m > placements[b].depth_m; });
+  for (std::size_t i = 0; i < count; ++i)
+    drawPerson(placements[slots[i]], bgr, scratch.depth_m, persons[order[slots[i]]]);
 }
 
 void SceneRenderer::rasterObstacles(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC,
@@ -369,7 +392,8 @@ SpritePlacement SceneRenderer::placeSprite(const PersonState& person, const Eige
   return out;
 }
 
-void SceneRenderer::drawPerson(const SpritePlacement& pl, cv::Mat& bgr, const cv::Mat& depth_m) const {
+void SceneRenderer::drawPerson(const SpritePlacement& pl, cv::Mat& bgr, const cv::Mat& depth_m,
+                               const RenderedPerson& look) const {
   const CameraIntrinsics& k = params_.intrinsics;
   const PersonSprite& s = *sprite_;
   const int u0 = std::max(0, static_cast<int>(std::floor(pl.bounds_px[0])) - 1);
@@ -388,6 +412,10 @@ void SceneRenderer::drawPerson(const SpritePlacement& pl, cv::Mat& bgr, const cv
   const Eigen::Vector2d r_i = rightOf(pl.down);
   const double mirror = pl.mirrored ? -1.0 : 1.0;
   const float depth = static_cast<float>(pl.depth_m);
+  // Recolouring: below the neck (sprite px along the torso axis from the mid-hip; a little under the
+  // neck keeps the chin), luminance times the clothing colour, which a gain of 1.6 brings back to
+  // about the photo's brightness.
+  const double clothes_from_b = -0.9 * (s.midHipPx() - s.neckPx()).norm();
   for (int v = v0; v <= v1; ++v) {
     cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
     const float* depth_row = depth_m.ptr<float>(v);
@@ -398,8 +426,12 @@ void SceneRenderer::drawPerson(const SpritePlacement& pl, cv::Mat& bgr, const cv
       const double along = rel.dot(pl.down);
       const double b = along <= 0.0 ? along / pl.scale : along / pl.leg_scale;
       const Eigen::Vector2d q = (s.midHipPx() + a * r_s + b * d_s) * level_scale;
-      const cv::Vec4f c = sample(img, q.x(), q.y());
+      cv::Vec4f c = sample(img, q.x(), q.y());
       if (c[3] <= 1e-3F) continue;
+      if (look.recolour && b > clothes_from_b) {
+        const float luminance = 0.114F * c[0] + 0.587F * c[1] + 0.299F * c[2];
+        for (int ch = 0; ch < 3; ++ch) c[ch] = std::min(c[3], 1.6F * luminance * look.clothing_bgr[ch]);
+      }
       cv::Vec3b& px = row[u];
       for (int ch = 0; ch < 3; ++ch) {
         const float value = 255.0F * c[ch] + (1.0F - c[3]) * static_cast<float>(px[ch]);

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -69,8 +70,17 @@ int main(int argc, char** argv) {
     const auto& truth = (*sim)->truth();
     const Eigen::Isometry3d T_WC = (*sim)->cameraPose(truth.drone, truth.gimbal_angle_rad);
     const hal::sim::PersonState person = (*sim)->personAt(t);
+    // Everyone: the target and the bystanders in their own clothes (look-alikes in the target's).
+    std::vector<hal::sim::PersonState> states;
+    for (std::size_t id = 0; id < (*sim)->personCount(); ++id) states.push_back((*sim)->personStateAt(id, t));
+    std::vector<hal::sim::RenderedPerson> everyone;
+    for (std::size_t id = 0; id < states.size(); ++id) {
+      const hal::sim::Bystander* b = id == 0 ? nullptr : &trial->bystanders.people[id - 1];
+      everyone.push_back({&states[id], b != nullptr && !b->look_alike,
+                          b != nullptr ? hal::sim::clothingBgr(b->clothing) : Eigen::Vector3f::Ones()});
+    }
     const auto begin = std::chrono::steady_clock::now();
-    renderer->render((*sim)->obstacles(), T_WC, &person, bgr, scratch);
+    renderer->render((*sim)->obstacles(), T_WC, everyone, bgr, scratch);
     render_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
     char name[64];
     std::snprintf(name, sizeof(name), "/frame_%02d.png", frame);
@@ -98,7 +108,7 @@ int main(int argc, char** argv) {
       Eigen::Isometry3d T_far = Eigen::Isometry3d::Identity();
       T_far.linear() << x, z.cross(x), z;
       T_far.translation() = eye;
-      renderer->render((*sim)->obstacles(), T_far, &person, bgr, scratch);
+      renderer->render((*sim)->obstacles(), T_far, everyone, bgr, scratch);
       std::snprintf(name, sizeof(name), "/frame_%02d_far.png", frame);
       cv::imwrite(out_dir + name, bgr);
     }

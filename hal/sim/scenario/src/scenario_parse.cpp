@@ -362,6 +362,7 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
     success.fail("max_distance_m", "must be greater than tracking_distance_m (" +
                                        rt::formatConfigNumber(s.success.tracking_distance_m) + " m)");
   success.finish();
+  if (root.has("bystanders")) s.bystanders = parseBystanders(root.child("bystanders"), s.boxes, s.cylinders);
   root.finish();
   return s;
 }

@@ -126,7 +126,7 @@ hal::CameraIntrinsics depthIntrinsics(const DepthCameraParams& params) {
 }
 
 void renderDepth(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const DepthCameraParams& params,
-                 std::mt19937_64& rng, cv::Mat& depth_m) {
+                 std::mt19937_64& rng, cv::Mat& depth_m, std::span<const Cylinder> extra_cylinders) {
   depth_m.create(params.height_px, params.width_px, CV_32FC1);
   const PixelRays rays(T_WC, depthIntrinsics(params));
   const double max_range_m = params.max_range_m;
@@ -177,6 +177,7 @@ void renderDepth(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, cons
   };
   for (const Box& box : world.boxes()) splat(box, box);
   for (const Cylinder& cyl : world.cylinders()) splat(cyl, boundingBox(cyl));
+  for (const Cylinder& cyl : extra_cylinders) splat(cyl, boundingBox(cyl));
 
   // 3. Sensor effects in row-major order: range limits, dropout, noise.
   std::normal_distribution<double> normal(0.0, 1.0);

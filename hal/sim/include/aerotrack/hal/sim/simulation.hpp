@@ -13,6 +13,10 @@
 //     cameras and the person stay in the world frame W;
 //   - wind (the scenario's wind section): a force on the vehicle the controller does not know;
 //   - gimbal encoder.
+// Bystanders (bystanders.hpp) walk with sim time: the depth camera sees them and the drone collides
+// with them (each a vertical cylinder, kPersonBodyRadiusM); they hide the target and each other from
+// the gimbal camera; in keypoint mode the camera reports every visible person (at most
+// hal::kMaxPersons, the largest in the image, ordered left to right) with a noisy appearance signature.
 // It also keeps the ground-truth metrics a run is judged by (metrics.hpp).
 //
 // Threads: step() is called from one thread (the sim_world task). The device-facing channels are
@@ -24,6 +28,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <vector>
 
 #include "aerotrack/hal/sim/disturbances.hpp"
 #include "aerotrack/hal/sim/geometric_controller.hpp"
@@ -74,12 +79,20 @@ struct SimTruth {
   Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();  ///< Gimbal camera (OpenCV axes).
 };
 
+/// Most bystanders an image-mode exposure carries (the nearest to the camera).
+inline constexpr std::size_t kMaxExposureBystanders = 16;
+
 /// One image-mode exposure of the gimbal camera: what its renderer needs, at the exposure time.
 struct CameraExposure {
   TimeNs stamp_ns = 0;         ///< Exposure time.
   std::uint64_t sequence = 0;  ///< Frame counter (shared with keypoint mode's).
   Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
   PersonState person;
+  /// The bystanders nearest the camera (ids as Simulation::personStateAt's, 1..N), at most
+  /// kMaxExposureBystanders.
+  std::size_t bystander_count = 0;
+  std::array<std::size_t, kMaxExposureBystanders> bystander_ids{};
+  std::array<PersonState, kMaxExposureBystanders> bystanders{};
 };
 
 /// The truth other threads may read (through Simulation::truthOut()): small and fixed-size.
@@ -145,8 +158,17 @@ class Simulation {
   Eigen::Isometry3d cameraPose(const QuadrotorState& drone, double gimbal_angle_rad) const;
   /// The person's state at sim time t_ns (standing at the start before their delay).
   PersonState personAt(TimeNs t_ns) const;
+  /// Everyone in the world: 0 is the target, 1..N the bystanders (scenario().bystanders.people[id - 1]).
+  std::size_t personCount() const { return 1 + bystanders_.size(); }
+  /// Person id's true state at sim time t_ns (standing at their start before their delay). Pure;
+  /// the stepping thread's (or anyone's after create(): the people are immutable).
+  PersonState personStateAt(std::size_t id, TimeNs t_ns) const;
+  /// Person id's true appearance signature (what the camera's noisy signatures scatter around).
+  const AppearanceSignature& personAppearance(std::size_t id) const;
   /// Whether the person's torso is in the gimbal camera's view and line of sight, and if not why
-  /// (out of the image is reported first: then the obstacles do not matter).
+  /// (out of the image is reported first: then the obstacles do not matter). The line of sight is
+  /// blocked by the obstacles and by the bystanders where they stand at the stepping thread's
+  /// current time.
   Sight personSight(const Eigen::Isometry3d& T_WC, const PersonState& person) const;
   /// The odometry frame's pose in the world now, T_OW (identity without sensors.odometry.drift).
   OdometryFrameError odometryFrameError() const { return drift_ ? drift_->error() : OdometryFrameError{}; }
@@ -167,6 +189,12 @@ class Simulation {
   void sampleOdometry();
   void releaseDetections();
   void publishTruth();
+  /// bystander_bodies_ at t_ns (no work if already there).
+  void refreshBodies(TimeNs t_ns);
+  /// The static obstacles and the people's bodies except person skip_id's leave the segment clear.
+  bool sightClear(const Eigen::Vector3d& a_W_m, const Eigen::Vector3d& b_W_m, std::size_t skip_id) const;
+  /// Keypoint mode with bystanders: everyone observed, the largest kMaxPersons reported.
+  void observeCrowd(const PersonState& target, const Eigen::Isometry3d& T_WC, DetectionFrame& frame);
 
   ScenarioInstance scenario_;
   SimulationOptions options_;
@@ -181,6 +209,22 @@ class Simulation {
   std::mt19937_64 camera_rng_, depth_rng_, odometry_rng_;
   std::optional<OdometryDrift> drift_;  ///< Only with sensors.odometry.drift (own rng streams).
   std::optional<WindField> wind_;       ///< Only with a wind section (own rng stream).
+  // Bystanders: their walkers (and start delays, s since the start); their bodies (bystander i is
+  // body i + 1; body 0 is the target's, an occluder of bystanders but not an obstacle, as before)
+  // at bodies_ns_; keypoint noise of bystanders and every person's appearance noise, each from
+  // its own stream so that runs without bystanders keep the target's detections bit for bit.
+  std::vector<WalkingPerson> bystanders_;
+  std::vector<double> bystander_delay_s_;
+  std::vector<Cylinder> bodies_;
+  TimeNs bodies_ns_ = -1;
+  std::size_t sight_skip_id_ = 0;  ///< The person whose keypoints observe() is checking.
+  struct Candidate {
+    PersonDetection detection;
+    std::size_t id = 0;
+    double area_px2 = 0.0;
+  };
+  std::vector<Candidate> candidates_;
+  std::mt19937_64 crowd_rng_, appearance_rng_;
 
   Setpoint active_setpoint_;
   std::uint64_t setpoint_version_ = 0;

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -65,6 +66,15 @@ struct RenderScratch {
   cv::Mat obstacle_id;  ///< CV_32SC1: that obstacle (boxes first, then cylinders), -1 where none.
 };
 
+/// One person to draw (several: the bystanders of issue 20). recolour: the sprite's clothes (below
+/// the neck) take clothing_bgr (each channel in [0, 1]), keeping their brightness, so that
+/// bystanders dress differently from the target (whose photo keeps its colours, as do look-alikes').
+struct RenderedPerson {
+  const PersonState* state = nullptr;
+  bool recolour = false;
+  Eigen::Vector3f clothing_bgr = Eigen::Vector3f::Ones();
+};
+
 /// Draws scenes; holds the sprite (shared, immutable). Copies are cheap; const methods are thread-safe.
 class SceneRenderer {
  public:
@@ -80,6 +90,10 @@ class SceneRenderer {
   /// pixels); no allocation besides bgr's and scratch's. Thread-safe for distinct bgr / scratch.
   void render(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const PersonState* person, cv::Mat& bgr,
               RenderScratch& scratch) const;
+  /// As above with several persons (at most 32 drawn), each over the obstacles' z-buffer and drawn
+  /// farthest first, so nearer persons hide farther ones (painter's order by billboard depth).
+  void render(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, std::span<const RenderedPerson> persons,
+              cv::Mat& bgr, RenderScratch& scratch) const;
 
   /// Where render() puts the person's sprite. Pure, allocation-free.
   SpritePlacement placeSprite(const PersonState& person, const Eigen::Isometry3d& T_WC) const;
@@ -101,7 +115,8 @@ class SceneRenderer {
   void rasterObstacles(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, RenderScratch& scratch) const;
   void shade(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const RenderScratch& scratch,
              cv::Mat& bgr) const;
-  void drawPerson(const SpritePlacement& placement, cv::Mat& bgr, const cv::Mat& depth_m) const;
+  void drawPerson(const SpritePlacement& placement, cv::Mat& bgr, const cv::Mat& depth_m,
+                  const RenderedPerson& look) const;
 
   SceneRenderParams params_;
   std::shared_ptr<const PersonSprite> sprite_;

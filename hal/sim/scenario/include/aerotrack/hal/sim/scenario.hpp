@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "aerotrack/hal/sim/bystanders.hpp"
 #include "aerotrack/hal/sim/depth_camera.hpp"
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/hal/sim/obstacle_world.hpp"
@@ -214,6 +215,7 @@ struct ScenarioSpec {
   GimbalSpec gimbal;
   std::optional<WindSpec> wind;  ///< None: still air (the vehicle's own drag only).
   SuccessSpec success;
+  BystandersSpec bystanders;  ///< The other people (bystanders.hpp); none by default.
 };
 
 /// One concrete trial of a scenario.
@@ -223,6 +225,8 @@ struct ScenarioInstance {
   bool mirrored = false;
   double speed_scale = 1.0;
   double duration_s = 0.0;  ///< Person's start delay + walk + end margin, capped.
+  /// The bystanders (spec.bystanders resolved for this seed) and the target's appearance.
+  BystandersInstance bystanders;
 };
 
 rt::Expected<ScenarioSpec> loadScenarioSpec(const std::string& path);

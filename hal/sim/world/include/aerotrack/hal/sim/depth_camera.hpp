@@ -12,6 +12,7 @@
 #pragma once
 
 #include <random>
+#include <span>
 
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
@@ -74,7 +75,9 @@ bool projectBoxToPixels(const Box& box, const Eigen::Matrix3d& R_CW, const Eigen
 /// keeping the nearest depth (a z-buffer in depth_m). Cost: O(obstacles in the world + pixels
 /// covered by obstacles within range). No allocation besides depth_m's.
 /// Precondition: validate(params) is ok. Not thread-safe on one rng/depth_m; otherwise reentrant.
+/// extra_cylinders: moving obstacles of this instant (the simulator's bystanders), rendered like the
+/// world's cylinders; none leaves the image exactly as before.
 void renderDepth(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const DepthCameraParams& params,
-                 std::mt19937_64& rng, cv::Mat& depth_m);
+                 std::mt19937_64& rng, cv::Mat& depth_m, std::span<const Cylinder> extra_cylinders = {});
 
 }  // namespace aerotrack::hal::sim

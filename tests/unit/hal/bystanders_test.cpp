@@ -1,0 +1,347 @@
+// Bystanders in the simulator (issue 20): the generators against the geometry they promise
+// (a crossing crosses the target's path between the follower and the target at the given time,
+// an alongside walker keeps its offset, group members stand off the path within reach), the
+// appearance signatures (look-alikes close, others far), and the Simulation with bystanders:
+// depth frames see them, touching one is a collision, they hide the target (personSight and the
+// keypoints), the keypoint camera reports several persons with signatures, runs are deterministic.
+// Parse errors name file, line and key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "aerotrack/hal/sim/devices.hpp"
+#include "aerotrack/hal/sim/simulation.hpp"
+#include "support/require.hpp"
+
+namespace aerotrack::hal::sim {
+namespace {
+
+using rt::kNsPerSecond;
+
+/// The target walks 1.2 m/s along +x from (0, 0) to (40, 0) after 2 s, or (walk = false) stands at
+/// (target_x, 0) until 500 s. The drone hovers at (0, 0, 1.5) (or starts 3 m behind), looking along +x.
+std::string crowdYaml(const std::string& bystanders, bool walk = true, double target_x = 6.0,
+                      const std::string& boxes = "") {
+  const std::string person = walk ? "  start_delay_s: 2.0\n  path:\n    - {p_m: [0.0, 0.0], speed_mps: 1.2}\n"
+                                    "    - {p_m: [40.0, 0.0], speed_mps: 0.0}\n"
+                                  : "  start_delay_s: 500.0\n  path:\n    - {p_m: [" + std::to_string(target_x) +
+                                        ", 0.0], speed_mps: 1.0}\n    - {p_m: [" + std::to_string(target_x) +
+                                        ", 3.0], speed_mps: 0.0}\n";
+  return R"(name: test
+end_margin_s: 1.0
+max_duration_s: 2000.0
+world:
+  bounds_min_m: [-10.0, -15.0, 0.0]
+  bounds_max_m: [50.0, 15.0, 4.0]
+)" + (boxes.empty() ? std::string() : "  boxes:\n" + boxes) +
+         "person:\n  height_m: 1.75\n  torso_m: 0.5\n" + person + R"(drone:
+  start_m: [)" +
+         (walk ? "-3.0" : "0.0") +
+         R"(, 0.0, 1.5]
+  start_yaw_rad: 0.0
+  radius_m: 0.25
+  mass_kg: 1.0
+  thrust_to_weight: 2.5
+success:
+  tracking_distance_m: 2.5
+  final_distance_factor: 2.0
+)" + bystanders;
+}
+
+ScenarioInstance crowdInstance(const std::string& text, std::uint64_t seed = 1) {
+  const ScenarioSpec spec = aerotrack::test::require(parseScenarioSpec(text, "test.yaml"), "parse");
+  return aerotrack::test::require(instantiate(spec, seed), "instantiate");
+}
+
+std::unique_ptr<Simulation> crowdSim(const std::string& text, bool depth = false, std::uint64_t seed = 1) {
+  SimulationOptions options;
+  options.render_depth = depth;
+  return aerotrack::test::require(Simulation::create(crowdInstance(text, seed), options, 0), "Simulation::create");
+}
+
+std::string crowdParseError(const std::string& text) {
+  const auto spec = parseScenarioSpec(text, "test.yaml");
+  return spec ? std::string("no error") : spec.error().message;
+}
+
+void hoverCrowd(Simulation& sim, double seconds, std::vector<DetectionFrame>* detections = nullptr,
+                const Eigen::Vector3d& at = Eigen::Vector3d(0, 0, 1.5)) {
+  Setpoint hold;
+  hold.p_W_m = at;
+  sim.setpointInbox().write(hold);
+  const rt::TimeNs start = sim.truth().stamp_ns;
+  for (rt::TimeNs t = start; t <= start + rt::secondsToNs(seconds); t += 5'000'000) {
+    sim.step(t);
+    while (auto f = sim.detectionsOut().try_pop())
+      if (detections != nullptr) detections->push_back(*f);
+  }
+}
+
+rt::TimeNs simNs(double t_s) {
+  return rt::secondsToNs(t_s);
+}
+
+TEST(Bystanders, GivenNoSectionThenNoBystandersAndOnlyTheTargetIsAPerson) {
+  const auto sim = crowdSim(crowdYaml(""));
+  EXPECT_EQ(sim->personCount(), 1U);
+  EXPECT_TRUE(sim->scenario().bystanders.people.empty());
+  EXPECT_EQ(sim->personStateAt(0, simNs(5.0)).p_W_m, sim->personAt(simNs(5.0)).p_W_m);
+}
+
+TEST(Bystanders, CrossingCrossesTheTargetsPathBehindTheTargetAtTheGivenTime) {
+  const auto sim = crowdSim(crowdYaml("bystanders:\n  crossings:\n    - {at_s: [10.0, 20.0], behind_m: 1.2}\n"));
+  ASSERT_EQ(sim->personCount(), 3U);
+  for (std::size_t id = 1; id <= 2; ++id) {
+    const double when_s = id == 1 ? 10.0 : 20.0;
+    // The time the crosser passes y = 0 (the target's path), by bisection over a sign change.
+    double lo = when_s - 4.0, hi = when_s + 4.0;
+    const double y_lo = sim->personStateAt(id, simNs(lo)).p_W_m.y();
+    ASSERT_LT(y_lo * sim->personStateAt(id, simNs(hi)).p_W_m.y(), 0.0) << "person " << id << " does not cross";
+    for (int i = 0; i < 40; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (sim->personStateAt(id, simNs(mid)).p_W_m.y() * y_lo > 0.0 ? lo : hi) = mid;
+    }
+    EXPECT_NEAR(lo, when_s, 0.3);
+    // Where: 1.2 m behind the target, i.e. between the target and a follower 2.5 m behind it.
+    const double target_x = sim->personAt(simNs(lo)).p_W_m.x();
+    const double cross_x = sim->personStateAt(id, simNs(lo)).p_W_m.x();
+    EXPECT_NEAR(target_x - cross_x, 1.2, 0.3);
+    EXPECT_LT(target_x - cross_x, sim->scenario().spec.success.tracking_distance_m);
+  }
+}
+
+TEST(Bystanders, AlongsideWalkerKeepsItsLateralOffsetOverTheStretch) {
+  const auto sim =
+      crowdSim(crowdYaml("bystanders:\n  alongside:\n    - {from_s: 6.0, to_s: 20.0, offset_m: 1.0, side: left}\n"));
+  ASSERT_EQ(sim->personCount(), 2U);
+  for (double t_s = 6.0; t_s <= 20.0; t_s += 0.5) {
+    const Eigen::Vector3d target = sim->personAt(simNs(t_s)).p_W_m;
+    const Eigen::Vector3d beside = sim->personStateAt(1, simNs(t_s)).p_W_m;
+    EXPECT_NEAR(beside.y() - target.y(), 1.0, 0.05) << "t = " << t_s;
+    EXPECT_NEAR(beside.x() - target.x(), 0.0, 0.35) << "t = " << t_s;
+  }
+}
+
+TEST(Bystanders, GroupMembersStandOffThePathWithinReachOfTheMeetingPoint) {
+  const auto sim = crowdSim(
+      crowdYaml("bystanders:\n  groups:\n    - {at_s: 12.0, count: 5, radius_m: 2.5, path_clearance_m: 0.8}\n"));
+  ASSERT_EQ(sim->personCount(), 6U);
+  const Eigen::Vector3d meeting = sim->personAt(simNs(12.0)).p_W_m;
+  for (std::size_t id = 1; id < 6; ++id) {
+    for (const double t_s : {0.0, 12.0, 30.0}) {  // standing: always there
+      const Eigen::Vector3d p = sim->personStateAt(id, simNs(t_s)).p_W_m;
+      EXPECT_GE(std::abs(p.y()), 0.8 - 1e-9) << "member " << id;  // the path is y = 0
+      EXPECT_LE((p - meeting).norm(), 2.5 + 1e-9) << "member " << id;
+    }
+  }
+}
+
+TEST(Bystanders, MillingMembersStayOffThePath) {
+  const auto sim = crowdSim(crowdYaml(
+      "bystanders:\n  groups:\n    - {at_s: 12.0, count: 4, radius_m: 3.0, path_clearance_m: 1.0, milling: true}\n"));
+  for (std::size_t id = 1; id < sim->personCount(); ++id)
+    for (double t_s = 0.0; t_s < 60.0; t_s += 0.25)
+      EXPECT_GE(std::abs(sim->personStateAt(id, simNs(t_s)).p_W_m.y()), 1.0 - 0.3) << id << " at " << t_s;
+}
+
+TEST(Bystanders, LookAlikeSignatureIsCloseToTheTargetsAndOthersAreFar) {
+  const ScenarioInstance inst = crowdInstance(crowdYaml(R"(bystanders:
+  target_clothing: {hue_deg: 0.0, saturation: 0.8, second_hue_deg: 220.0, second_saturation: 0.5}
+  people:
+    - {path: [{p_m: [5.0, 3.0]}], look_alike: true}
+    - {path: [{p_m: [5.0, -3.0]}], clothing: {hue_deg: 120.0, saturation: 0.8}}
+    - {path: [{p_m: [6.0, -3.0]}], clothing: {hue_deg: 60.0, saturation: 0.5, second_hue_deg: 300.0, second_saturation: 0.9}}
+)"));
+  const AppearanceSignature& target = inst.bystanders.target_appearance;
+  ASSERT_EQ(inst.bystanders.people.size(), 3U);
+  EXPECT_LT(signatureDistance(inst.bystanders.people[0].appearance, target), 0.25);
+  EXPECT_GT(signatureDistance(inst.bystanders.people[1].appearance, target), 0.6);
+  EXPECT_GT(signatureDistance(inst.bystanders.people[2].appearance, target), 0.6);
+  // Noisy measurements: the target's own closest, the look-alike near, the others far.
+  std::mt19937_64 rng(7);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_LT(signatureDistance(noisySignature(target, rng), target), 0.15);
+    EXPECT_LT(signatureDistance(noisySignature(inst.bystanders.people[0].appearance, rng), target), 0.3);
+    EXPECT_GT(signatureDistance(noisySignature(inst.bystanders.people[1].appearance, rng), target), 0.6);
+  }
+}
+
+TEST(Bystanders, DepthFrameSeesAStandingBystanderAtItsRange) {
+  auto sim = crowdSim(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [3.0, 0.0]}]}\n", false, 8.0), true);
+  hoverCrowd(*sim, 0.5);
+  const DepthFrameHandle frame = sim->depthOut().read();
+  ASSERT_TRUE(frame);
+  // Straight ahead at camera height: the body's front, 3 - 0.25 m from the drone's centre, 0.12 m
+  // in front of which the depth camera sits. The noise is 0.0015 z^2 (~1 cm).
+  const float z = frame->depth_m.at<float>(frame->depth_m.rows / 2, frame->depth_m.cols / 2);
+  EXPECT_NEAR(z, 3.0 - kPersonBodyRadiusM - 0.12, 0.05);
+}
+
+TEST(Bystanders, FlyingIntoABystanderIsACollision) {
+  auto sim = crowdSim(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [3.0, 0.0]}]}\n", false, 8.0));
+  hoverCrowd(*sim, 8.0, nullptr, Eigen::Vector3d(3.0, 0.0, 1.2));
+  EXPECT_GE(sim->metrics().collisions(), 1);
+  EXPECT_LT(sim->metrics().minClearanceM(), 0.0);
+}
+
+TEST(Bystanders, BystanderBetweenHidesTheTargetFromSightAndKeypoints) {
+  auto sim = crowdSim(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [2.0, 0.0]}]}\n", false, 5.0));
+  std::vector<DetectionFrame> frames;
+  hoverCrowd(*sim, 1.0, &frames);
+  EXPECT_EQ(sim->personSight(sim->truth().T_WC, sim->truth().person), Sight::kOccluded);
+  ASSERT_FALSE(frames.empty());
+  for (const DetectionFrame& f : frames) {
+    EXPECT_EQ(f.target_index, -1);  // hidden
+    EXPECT_EQ(f.person_count, 1U);  // the bystander is seen
+  }
+  // Without the bystander the same target is visible.
+  auto clear = crowdSim(crowdYaml("", false, 5.0));
+  hoverCrowd(*clear, 0.2);
+  EXPECT_EQ(clear->personSight(clear->truth().T_WC, clear->truth().person), Sight::kVisible);
+}
+
+TEST(Bystanders, KeypointCameraReportsEveryVisiblePersonWithSignaturesAndTheOracleTarget) {
+  auto sim = crowdSim(crowdYaml(R"(bystanders:
+  target_clothing: {hue_deg: 0.0, saturation: 0.8}
+  people:
+    - {path: [{p_m: [6.0, 2.0]}], clothing: {hue_deg: 120.0, saturation: 0.8}}
+    - {path: [{p_m: [7.0, -2.5]}], clothing: {hue_deg: 240.0, saturation: 0.8}}
+    - {path: [{p_m: [5.0, -1.2]}], look_alike: true}
+)",
+                                false, 6.0));
+  std::vector<DetectionFrame> frames;
+  hoverCrowd(*sim, 1.0, &frames);
+  ASSERT_GT(frames.size(), 20U);
+  int full = 0;
+  for (const DetectionFrame& f : frames) {
+    if (f.person_count != 4) continue;
+    ++full;
+    ASSERT_GE(f.target_index, 0);
+    for (std::size_t i = 0; i < f.person_count; ++i) {
+      EXPECT_TRUE(f.persons[i].has_appearance);
+      if (i > 0) {
+        EXPECT_LE(f.persons[i - 1].bbox_u_px, f.persons[i].bbox_u_px);  // left to right
+      }
+    }
+    // The target stands on the optical axis: its box holds the image centre.
+    const PersonDetection& t = f.persons[static_cast<std::size_t>(f.target_index)];
+    EXPECT_LT(t.bbox_u_px, 320.0);
+    EXPECT_GT(t.bbox_u_px + t.bbox_w_px, 320.0);
+    EXPECT_LT(signatureDistance(t.appearance, sim->personAppearance(0)), 0.15);
+  }
+  EXPECT_GT(full, static_cast<int>(frames.size()) * 8 / 10);
+}
+
+TEST(Bystanders, AtMostSixPersonsAreReportedTheLargestFirst) {
+  std::string people = "bystanders:\n  people:\n";
+  for (int i = 0; i < 8; ++i)  // a row across the view, farther and farther
+    people += "    - {path: [{p_m: [" + std::to_string(4.0 + i) + ", " + std::to_string(i % 2 ? 1.5 : -1.5) + "]}]}\n";
+  auto sim = crowdSim(crowdYaml(people, false, 3.0));
+  std::vector<DetectionFrame> frames;
+  hoverCrowd(*sim, 0.5, &frames);
+  ASSERT_FALSE(frames.empty());
+  for (const DetectionFrame& f : frames) {
+    EXPECT_LE(f.person_count, kMaxPersons);
+    EXPECT_GE(f.target_index, 0);  // the nearest, largest, always kept
+  }
+  EXPECT_EQ(frames.back().person_count, kMaxPersons);
+}
+
+TEST(Bystanders, GivenSameSeedThenIdenticalDetections) {
+  const std::string text = crowdYaml(R"(bystanders:
+  crossings:
+    - {count: 2, window_s: [6.0, 14.0]}
+  random_walkers: {count: 4, region_min_m: [0.0, -10.0], region_max_m: [30.0, 10.0]}
+  groups:
+    - {at_s: 10.0, count: 3, milling: true, look_alikes: 1}
+)");
+  auto a = crowdSim(text, true, 5), b = crowdSim(text, true, 5);
+  std::vector<DetectionFrame> fa, fb;
+  hoverCrowd(*a, 4.0, &fa);
+  hoverCrowd(*b, 4.0, &fb);
+  ASSERT_EQ(fa.size(), fb.size());
+  for (std::size_t i = 0; i < fa.size(); ++i) {
+    ASSERT_EQ(fa[i].person_count, fb[i].person_count);
+    EXPECT_EQ(fa[i].target_index, fb[i].target_index);
+    for (std::size_t p = 0; p < fa[i].person_count; ++p) {
+      EXPECT_EQ(fa[i].persons[p].appearance, fb[i].persons[p].appearance);
+      for (std::size_t k = 0; k < kNumKeypoints; ++k)
+        EXPECT_EQ(fa[i].persons[p].keypoints[k].u_px, fb[i].persons[p].keypoints[k].u_px);
+    }
+  }
+  EXPECT_EQ(a->truth().drone.p_W_m, b->truth().drone.p_W_m);
+  // Another seed places them elsewhere.
+  auto c = crowdSim(text, false, 6);
+  EXPECT_NE(a->personStateAt(1, simNs(1.0)).p_W_m, c->personStateAt(1, simNs(1.0)).p_W_m);
+}
+
+TEST(Bystanders, ParseErrorsNameFileLineAndKey) {
+  const std::string through_wall = crowdParseError(
+      crowdYaml("bystanders:\n  people:\n    - path:\n        - {p_m: [5.0, -4.0]}\n        - {p_m: [5.0, 4.0]}\n",
+                true, 6.0, "    - {min_m: [4.5, -1.0, 0.0], max_m: [5.5, 1.0, 3.0]}\n"));
+  EXPECT_NE(through_wall.find("test.yaml:"), std::string::npos) << through_wall;
+  EXPECT_NE(through_wall.find("p_m"), std::string::npos) << through_wall;
+  EXPECT_NE(through_wall.find("obstacle"), std::string::npos) << through_wall;
+  const std::string negative = crowdParseError(crowdYaml(
+      "bystanders:\n  random_walkers: {count: -2, region_min_m: [0.0, -10.0], region_max_m: [30.0, 10.0]}\n"));
+  EXPECT_NE(negative.find("bystanders.random_walkers.count"), std::string::npos) << negative;
+  const std::string fast =
+      crowdParseError(crowdYaml("bystanders:\n  crossings:\n    - {at_s: [5.0], speed_mps: 7.0}\n"));
+  EXPECT_NE(fast.find("speed_mps"), std::string::npos) << fast;
+  EXPECT_NE(fast.find("out of range"), std::string::npos) << fast;
+  const std::string unknown = crowdParseError(crowdYaml("bystanders:\n  crowds: []\n"));
+  EXPECT_NE(unknown.find("bystanders.crowds: unknown key"), std::string::npos) << unknown;
+  const std::string early = [&] {
+    const auto spec = parseScenarioSpec(crowdYaml("bystanders:\n  crossings:\n    - {at_s: [1.0]}\n"), "test.yaml");
+    if (!spec) return spec.error().message;
+    const auto inst = instantiate(*spec, 1);
+    return inst ? std::string("no error") : inst.error().message;
+  }();
+  EXPECT_NE(early.find("crossings[0]"), std::string::npos) << early;
+}
+
+TEST(Bystanders, ImageModeDrawsANearerBystanderOverTheTargetInItsOwnClothes) {
+  if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) {
+    GTEST_SKIP() << PersonSpriteSpec{}.image_path << " is missing: install the Debian package opencv-doc";
+  }
+  // Given the target standing 6 m ahead and a bystander in green 3 m ahead, on the same line
+  const std::string text = crowdYaml(
+      "sensors:\n  gimbal_camera:\n    mode: image\n    rate_hz: 10\n    latency_s: 0.04\n"
+      "    width_px: 320\n    height_px: 240\n    hfov_deg: 87\n    pixel_noise_torso_fraction: 0.028\n"
+      "    keypoint_miss_probability: 0.03\n"
+      "bystanders:\n  people:\n    - {path: [{p_m: [3.0, 0.0]}], clothing: {hue_deg: 120.0, saturation: 1.0}}\n",
+      false, 6.0);
+  SimulationOptions options;
+  options.render_depth = false;
+  std::shared_ptr<Simulation> sim =
+      aerotrack::test::require(Simulation::create(crowdInstance(text), options, 0), "Simulation::create");
+  SimGimbalCamera camera(sim);
+  ImageFrameHandle frame;
+  for (rt::TimeNs t = 0; t <= rt::secondsToNs(0.3) && !frame; t += 5'000'000) {
+    sim->step(t);
+    frame = camera.grab(t);
+  }
+  ASSERT_TRUE(frame);
+  // Then the bystander's torso (its mid-shoulders and mid-hips' midpoint, projected) is green: the
+  // recoloured bystander is drawn over the target's photo behind it
+  const PersonState by = sim->personStateAt(1, frame->stamp_ns);
+  const Eigen::Vector3d torso_W =
+      0.25 *
+      (by.keypoints_W_m[index(CocoKeypoint::kLeftShoulder)] + by.keypoints_W_m[index(CocoKeypoint::kRightShoulder)] +
+       by.keypoints_W_m[index(CocoKeypoint::kLeftHip)] + by.keypoints_W_m[index(CocoKeypoint::kRightHip)]);
+  const auto uv = project(sim->truth().T_WC.inverse() * torso_W, frame->intrinsics);
+  ASSERT_TRUE(uv);
+  cv::Vec3d mean(0, 0, 0);
+  for (int dv = -2; dv <= 2; ++dv)
+    for (int du = -2; du <= 2; ++du) {
+      const cv::Vec3b px = frame->bgr.at<cv::Vec3b>(static_cast<int>(uv->y()) + dv, static_cast<int>(uv->x()) + du);
+      for (int ch = 0; ch < 3; ++ch) mean[ch] += px[ch] / 25.0;
+    }
+  EXPECT_GT(mean[1], 1.3 * mean[0]) << mean[0] << " " << mean[1] << " " << mean[2];
+  EXPECT_GT(mean[1], 1.3 * mean[2]) << mean[0] << " " << mean[1] << " " << mean[2];
+}
+
+}  // namespace
+}  // namespace aerotrack::hal::sim
