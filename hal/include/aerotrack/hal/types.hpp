@@ -122,10 +122,18 @@ inline constexpr std::array<std::pair<int, int>, 18> kCocoSkeleton = {{{0, 1},
                                                                        {0, 5},
                                                                        {0, 6}}};
 
+/// Bins of a person's appearance signature: the hue-saturation histogram of the torso that the
+/// lock-on compares (12 hue x 3 saturation + 1 grey bin, perception/appearance.hpp).
+inline constexpr std::size_t kAppearanceSignatureBins = 37;
+
 struct PersonDetection {
   std::array<Keypoint2D, kNumKeypoints> keypoints{};
   double score = 0.0;                                                         ///< Person confidence in [0, 1].
   double bbox_u_px = 0.0, bbox_v_px = 0.0, bbox_w_px = 0.0, bbox_h_px = 0.0;  ///< Top-left corner, size.
+  /// A detector that measures appearance fills this (sums to 1); the image pipeline computes it from
+  /// the image instead, so its detections leave has_appearance false.
+  std::array<float, kAppearanceSignatureBins> appearance{};
+  bool has_appearance = false;
 };
 
 inline constexpr std::size_t kMaxPersons = 6;  ///< MoveNet multipose returns at most six.
