@@ -10,6 +10,7 @@
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/hal/sim/baseline_follower.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
+#include "aerotrack/perception/keypoint_lock_on.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
@@ -49,18 +50,22 @@ class GimbalCameraTask final : public rt::Task {
  public:
   GimbalCameraTask(hal::GimbalCamera& device, rt::SpscQueue<hal::DetectionFrame>& detections,
                    rt::SharedSlot<hal::ImageFrame>& images, std::atomic<rt::TimeNs>& newest_frame_ns,
-                   rt::LatestSlot<hal::DetectionFrame>& newest_detection)
+                   rt::LatestSlot<hal::DetectionFrame>& newest_detection, const perception::KeypointLockOn& lock_on)
       : device_(device),
         detections_(detections),
         images_(images),
         newest_frame_ns_(newest_frame_ns),
-        newest_detection_(newest_detection) {}
+        newest_detection_(newest_detection),
+        lock_on_(lock_on) {}
   void step(rt::TimeNs now_ns) override {
     if (auto image = device_.grab(now_ns)) {
       newest_frame_ns_.store(image->stamp_ns, std::memory_order_relaxed);
       images_.write(std::move(image));
     }
-    while (const auto frame = device_.grabDetections(now_ns)) {
+    while (auto frame = device_.grabDetections(now_ns)) {
+      // A device that detects (the simulator's keypoint mode) reports everyone it sees; which one is
+      // followed is chosen here, as the image pipeline's detector chooses it (keypoint_lock_on.hpp).
+      lock_on_.apply(*frame);
       newest_frame_ns_.store(frame->stamp_ns, std::memory_order_relaxed);
       newest_detection_.write(*frame);
       detections_.try_push(*frame);
@@ -73,6 +78,7 @@ class GimbalCameraTask final : public rt::Task {
   rt::SharedSlot<hal::ImageFrame>& images_;
   std::atomic<rt::TimeNs>& newest_frame_ns_;  ///< camera health, for the supervisor
   rt::LatestSlot<hal::DetectionFrame>& newest_detection_;
+  perception::KeypointLockOn lock_on_;
 };
 
 /// Publishes each new depth frame on the depth channel.
@@ -114,11 +120,22 @@ class GimbalEncoderTask final : public rt::Task {
 /// Advances the simulation to the executor's time (the physics of sim backends).
 class SimWorldTask final : public rt::Task {
  public:
-  explicit SimWorldTask(std::shared_ptr<hal::sim::Simulation> sim) : sim_(std::move(sim)) {}
-  void step(rt::TimeNs now_ns) override { sim_->step(now_ns); }
+  SimWorldTask(std::shared_ptr<hal::sim::Simulation> sim, const rt::LatestSlot<hal::DetectionFrame>& newest_detection)
+      : sim_(std::move(sim)), newest_detection_(newest_detection) {}
+  void step(rt::TimeNs now_ns) override {
+    // Whom the pipeline follows, for the identity metrics (the followed detection is matched to the
+    // truth by the simulator): each detector output once, whichever task produced it.
+    if (const auto frame = newest_detection_.read(); frame && frame->sequence != last_sequence_) {
+      last_sequence_ = frame->sequence;
+      sim_->recordFollowed(*frame);
+    }
+    sim_->step(now_ns);
+  }
 
  private:
   std::shared_ptr<hal::sim::Simulation> sim_;
+  const rt::LatestSlot<hal::DetectionFrame>& newest_detection_;
+  std::uint64_t last_sequence_ = 0;
 };
 
 /// The simulator's truth-fed stand-in for planner and gimbal control (see baseline_follower.hpp):

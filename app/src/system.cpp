@@ -88,7 +88,7 @@ std::span<const System::TaskKind> System::taskKinds() {
   static const TaskKind kKinds[] = {
       {"sim_world", true,
        [](System& s, const std::string& /*where*/) {
-         return made(std::make_unique<SimWorldTask>(s.devices_.simulation));
+         return made(std::make_unique<SimWorldTask>(s.devices_.simulation, s.channels_.newest_detection));
        }},
       {"odometry", false,
        [](System& s, const std::string& /*where*/) {
@@ -98,8 +98,11 @@ std::span<const System::TaskKind> System::taskKinds() {
       {"gimbal_camera", false,
        [](System& s, const std::string& /*where*/) {
          Channels& c = s.channels_;
+         // The lock-on of detection-delivering cameras uses the image pipeline's tracker settings.
+         const perception::DetectorParams detector = s.config_.perception.value_or(perception::DetectorParams{});
          return made(std::make_unique<GimbalCameraTask>(*s.devices_.gimbal_camera, c.detections, c.images,
-                                                        c.newest_camera_frame_ns, c.newest_detection));
+                                                        c.newest_camera_frame_ns, c.newest_detection,
+                                                        perception::KeypointLockOn(detector.tracker, detector.torso)));
        }},
       {"depth_camera", false,
        [](System& s, const std::string& /*where*/) {

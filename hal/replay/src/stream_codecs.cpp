@@ -143,6 +143,7 @@ namespace {
 // DetectionCodec's layout: the frame's fields, then kPersonColumns per person.
 constexpr std::size_t kFrameColumns = 15;
 constexpr std::size_t kPersonColumns = 5 + 3 * kNumKeypoints;
+constexpr std::size_t kAppearanceColumns = 1 + kAppearanceSignatureBins;  // per person, after all persons
 
 }  // namespace
 
@@ -160,6 +161,12 @@ const std::vector<std::string>& DetectionCodec::columns() {
         const std::string keypoint = person + "k" + std::to_string(k) + "_";
         for (const char* field : {"u_px", "v_px", "score"}) c.push_back(keypoint + field);
       }
+    }
+    // Appearance signatures after everything else (issue 20: the lock-on reruns in replay on them).
+    for (std::size_t p = 0; p < kMaxPersons; ++p) {
+      const std::string person = "p" + std::to_string(p) + "_";
+      c.push_back(person + "has_appearance");
+      for (std::size_t b = 0; b < kAppearanceSignatureBins; ++b) c.push_back(person + "a" + std::to_string(b));
     }
     return c;
   }();
@@ -182,6 +189,10 @@ std::vector<double> DetectionCodec::encode(const DetectionFrame& f) {
   for (const PersonDetection& p : f.persons) {
     out.insert(out.end(), {p.score, p.bbox_u_px, p.bbox_v_px, p.bbox_w_px, p.bbox_h_px});
     for (const Keypoint2D& kp : p.keypoints) out.insert(out.end(), {kp.u_px, kp.v_px, kp.score});
+  }
+  for (const PersonDetection& p : f.persons) {
+    out.push_back(p.has_appearance ? 1.0 : 0.0);
+    for (const float bin : p.appearance) out.push_back(static_cast<double>(bin));
   }
   return out;
 }
@@ -229,6 +240,13 @@ rt::Expected<DetectionFrame> DetectionCodec::decode(const CsvRecord& r, const st
     person.bbox_w_px = x[3];
     person.bbox_h_px = x[4];
     for (std::size_t i = 0; i < kNumKeypoints; ++i) person.keypoints[i] = {x[5 + 3 * i], x[6 + 3 * i], x[7 + 3 * i]};
+    const double* a = v.data() + kFrameColumns + kMaxPersons * kPersonColumns + p * kAppearanceColumns;
+    if (a[0] != 0.0 && a[0] != 1.0) return badValue(r, path, "detections: has_appearance must be 0 or 1");
+    person.has_appearance = a[0] == 1.0;
+    for (std::size_t b = 0; b < kAppearanceSignatureBins; ++b) {
+      if (a[1 + b] < 0.0 || a[1 + b] > 1.0) return badValue(r, path, "detections: an appearance bin is not in [0, 1]");
+      person.appearance[b] = static_cast<float>(a[1 + b]);
+    }
   }
   return f;
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <span>
+#include <limits>
 
 namespace aerotrack::hal::sim {
 namespace {
@@ -275,6 +276,7 @@ void Simulation::captureCamera() {
   const PersonState person = personAt(now_ns_);
   const Eigen::Isometry3d T_WC = cameraPose(quad_.state(), gimbal_.angleRad());
   const GimbalCameraSpec& spec = scenario_.spec.gimbal_camera;
+  exposures_[(camera_sequence_ + 1) % exposures_.size()] = {camera_sequence_ + 1, now_ns_, T_WC};
   if (spec.mode == GimbalCameraMode::kImage) {  // the device renders it; no detector model here
     CameraExposure exposure;
     exposure.stamp_ns = now_ns_;
@@ -425,6 +427,55 @@ void Simulation::sampleOdometry() {
     --odometry_count_;
   }
   if (published) odometry_out_.write(ready);
+}
+
+}  // namespace aerotrack::hal::sim
+
+namespace aerotrack::hal::sim {
+
+int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& detection) const {
+  const Exposure& exposure = exposures_[sequence % exposures_.size()];
+  if (exposure.sequence != sequence || sequence == 0) return -1;
+  // The detection's torso centre: the mean of its reported shoulders and hips.
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  int reported = 0;
+  for (const CocoKeypoint k :
+       {CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip}) {
+    const Keypoint2D& kp = detection.keypoints[index(k)];
+    if (kp.score <= 0.0) continue;
+    centre_px += Eigen::Vector2d(kp.u_px, kp.v_px);
+    ++reported;
+  }
+  if (reported == 0) return -1;
+  centre_px /= reported;
+  const CameraIntrinsics& k = scenario_.spec.gimbal_camera.camera.intrinsics;
+  const Eigen::Isometry3d T_CW = exposure.T_WC.inverse();
+  int best = -1;
+  double best_error = std::numeric_limits<double>::infinity();
+  for (std::size_t id = 0; id < personCount(); ++id) {
+    const PersonState p = personStateAt(id, exposure.stamp_ns);
+    const auto neck = project(T_CW * midpoint(p, CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder), k);
+    const auto hip = project(T_CW * midpoint(p, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip), k);
+    if (!neck || !hip) continue;
+    const double torso_px = (*neck - *hip).norm();
+    const double error_px = (centre_px - 0.5 * (*neck + *hip)).norm();
+    // Half a torso: two people whose torsos overlap that much in the image are one blob to a detector.
+    if (error_px <= 0.5 * torso_px && error_px < best_error) {
+      best_error = error_px;
+      best = static_cast<int>(id);
+    }
+  }
+  return best;
+}
+
+void Simulation::recordFollowed(const DetectionFrame& frame) {
+  const double t_s = rt::nsToSeconds(frame.stamp_ns - start_ns_);
+  if (frame.target_index < 0 || frame.target_index >= static_cast<int>(std::min(frame.person_count, kMaxPersons))) {
+    metrics_.recordFollowed(t_s, -1);
+    return;
+  }
+  metrics_.recordFollowed(t_s,
+                          matchDetection(frame.sequence, frame.persons[static_cast<std::size_t>(frame.target_index)]));
 }
 
 }  // namespace aerotrack::hal::sim

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -261,6 +262,8 @@ TEST(StreamCodecs, DeliveredDetectionFramesSurviveAWriteAndAReadBitForBit) {
       p.bbox_w_px = u(rng);
       p.bbox_h_px = u(rng);
       for (Keypoint2D& k : p.keypoints) k = {u(rng), u(rng) * 1e-7, u(rng)};
+      p.has_appearance = i % 2 == 0;
+      for (float& bin : p.appearance) bin = static_cast<float>(std::abs(u(rng)) * 1e-3);
     }
   }
   {
@@ -284,7 +287,13 @@ TEST(StreamCodecs, DeliveredDetectionFramesSurviveAWriteAndAReadBitForBit) {
     EXPECT_EQ(a.person_count, b.person_count);
     EXPECT_EQ(a.target_index, b.target_index);
     EXPECT_EQ(std::memcmp(&a.intrinsics, &b.intrinsics, sizeof(CameraIntrinsics)), 0);
-    EXPECT_EQ(std::memcmp(a.persons.data(), b.persons.data(), sizeof(a.persons)), 0);
+    for (std::size_t p = 0; p < kMaxPersons; ++p) {  // field by field: the struct has padding
+      const PersonDetection &pa = a.persons[p], &pb = b.persons[p];
+      EXPECT_EQ(std::memcmp(pa.keypoints.data(), pb.keypoints.data(), sizeof(pa.keypoints)), 0);
+      EXPECT_EQ(std::memcmp(&pa.score, &pb.score, 5 * sizeof(double)), 0);  // score and the box
+      EXPECT_EQ(pa.has_appearance, pb.has_appearance);
+      EXPECT_EQ(std::memcmp(pa.appearance.data(), pb.appearance.data(), sizeof(pa.appearance)), 0);
+    }
   }
 }
 

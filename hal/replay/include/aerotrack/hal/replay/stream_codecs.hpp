@@ -92,7 +92,9 @@ struct SetpointCodec {
 
 /// gimbal_camera/detections.csv: what a keypoint-mode camera (the simulator's) delivers, every field of
 /// the DetectionFrame: result_delay_ns (result_ns - stamp_ns), sequence, the intrinsics, person_count,
-/// target_index, then all kMaxPersons persons (score, box, 17 keypoints u v score), used or not.
+/// target_index, then all kMaxPersons persons (score, box, 17 keypoints u v score), used or not, then
+/// each person's appearance signature (has_appearance, 37 bins).
+/// Recordings made before the signatures (issue 20) lack those columns and are refused by the header check.
 struct DetectionCodec {
   using Sample = DetectionFrame;
   static const std::vector<std::string>& columns();

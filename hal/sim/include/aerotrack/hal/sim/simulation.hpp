@@ -165,6 +165,16 @@ class Simulation {
   PersonState personStateAt(std::size_t id, TimeNs t_ns) const;
   /// Person id's true appearance signature (what the camera's noisy signatures scatter around).
   const AppearanceSignature& personAppearance(std::size_t id) const;
+  /// Notes whom the autonomy stack follows: the detector output frame (its followed person,
+  /// target_index) is matched to the true people at its exposure -- the person whose torso centre
+  /// projects nearest the followed detection's, within half their projected torso length -- and the
+  /// identity metrics record it (0: the target, k: bystander k, -1: nobody followed, or a detection
+  /// that matches no one). Stepping thread; frames older than the last 64 exposures are ignored.
+  void recordFollowed(const DetectionFrame& frame);
+  /// The true person a detection (image pixels of the exposure `sequence`) belongs to, as above;
+  /// -1 if none or the exposure is forgotten.
+  int matchDetection(std::uint64_t sequence, const PersonDetection& detection) const;
+
   /// Whether the person's torso is in the gimbal camera's view and line of sight, and if not why
   /// (out of the image is reported first: then the obstacles do not matter). The line of sight is
   /// blocked by the obstacles and by the bystanders where they stand at the stepping thread's
@@ -235,6 +245,13 @@ class Simulation {
   TimeNs next_camera_ns_, next_depth_ns_, next_odometry_ns_, next_metrics_ns_;
   DurationNs camera_period_ns_, depth_period_ns_, odometry_period_ns_, metrics_period_ns_;
   std::uint64_t camera_sequence_ = 0, depth_sequence_ = 0;
+  // The camera's recent exposures, for matching the pipeline's followed detection to the truth.
+  struct Exposure {
+    std::uint64_t sequence = 0;
+    TimeNs stamp_ns = 0;
+    Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  };
+  std::array<Exposure, 64> exposures_{};
   // Detections waiting for their latency to pass (a small fixed ring).
   std::array<DetectionFrame, 16> pending_{};
   std::size_t pending_head_ = 0, pending_count_ = 0;

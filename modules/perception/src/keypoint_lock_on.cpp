@@ -1,0 +1,41 @@
+// Lock-on for detection-delivering cameras: see keypoint_lock_on.hpp.
+#include "aerotrack/perception/keypoint_lock_on.hpp"
+
+#include <algorithm>
+#include <array>
+#include <span>
+
+namespace aerotrack::perception {
+
+Appearance toAppearance(const hal::PersonDetection& person) {
+  Appearance a;
+  if (!person.has_appearance) return a;
+  double total = 0.0;
+  for (const float bin : person.appearance) {
+    if (!(bin >= 0.0F)) return a;  // negative or NaN: not a histogram
+    total += static_cast<double>(bin);
+  }
+  if (!(total > 0.0)) return a;
+  // Renormalise: the Bhattacharyya distance assumes both histograms sum to 1.
+  for (std::size_t i = 0; i < a.histogram.size(); ++i)
+    a.histogram[i] = static_cast<float>(static_cast<double>(person.appearance[i]) / total);
+  a.valid = true;
+  return a;
+}
+
+void KeypointLockOn::apply(hal::DetectionFrame& frame) {
+  if (frame.target_index >= 0) return;
+  const std::size_t count = std::min(frame.person_count, hal::kMaxPersons);
+  std::array<TrackCandidate, hal::kMaxPersons> candidates{};
+  for (std::size_t i = 0; i < count; ++i) {
+    const hal::PersonDetection& person = frame.persons[i];
+    candidates[i].torso =
+        torsoFeatures(person.keypoints, frame.intrinsics.width_px, frame.intrinsics.height_px, torso_);
+    candidates[i].appearance = toAppearance(person);
+    candidates[i].score = person.score;
+  }
+  const auto chosen = tracker_.update(frame.stamp_ns, std::span(candidates.data(), count));
+  frame.target_index = chosen ? static_cast<int>(*chosen) : -1;
+}
+
+}  // namespace aerotrack::perception
