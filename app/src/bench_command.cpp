@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -60,6 +61,7 @@ bool runTrials(const std::string& self, const std::vector<TrialJob>& trials, std
                const std::atomic<bool>& stop, std::map<std::size_t, int>& exit_status, std::string& error) {
   std::map<pid_t, std::size_t> running;
   std::size_t next = 0;
+  bool told_to_stop = false;
   while ((next < trials.size() && !stop.load()) || !running.empty()) {
     while (!stop.load() && next < trials.size() && static_cast<std::int64_t>(running.size()) < jobs) {
       std::error_code ec;
@@ -75,11 +77,19 @@ bool runTrials(const std::string& self, const std::vector<TrialJob>& trials, std
       }
       running[pid] = next++;
     }
+    // Poll, so that a stop request reaches the running trials at once rather than when the next one
+    // ends (an image-mode trial runs about as long as it simulates). Each trial is told once.
     int status = 0;
-    const pid_t done = waitpid(-1, &status, 0);
+    const pid_t done = waitpid(-1, &status, WNOHANG);
     if (done < 0) break;
-    if (stop.load())
+    if (stop.load() && !told_to_stop) {
       for (const auto& [pid, index] : running) kill(pid, SIGTERM);
+      told_to_stop = true;
+    }
+    if (done == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
     exit_status[running[done]] = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     running.erase(done);
   }
