@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <span>
 #include <limits>
+#include <span>
 
 namespace aerotrack::hal::sim {
 namespace {
@@ -310,16 +310,22 @@ void Simulation::captureCamera() {
   frame.sequence = ++camera_sequence_;
   frame.intrinsics = spec.camera.intrinsics;
   sight_skip_id_ = 0;
+  target_slot_ = -1;
   if (const auto detection = observe(person.keypoints_W_m, T_WC, spec.camera, line_of_sight, camera_rng_)) {
     frame.persons[0] = *detection;
     frame.person_count = 1;
-    // The oracle: the simulator knows which detection is the target. A lock-on stage (issue 20)
-    // replaces it; with bystanders the slot is the target's after sorting.
-    frame.target_index = 0;
+    target_slot_ = 0;
+    // Which detection is followed is not the camera's to say: a multi-person detector reports
+    // everyone, and the lock-on downstream chooses (perception/keypoint_lock_on.hpp), so that it can
+    // be fooled by a bystander as on a real camera.
+    frame.target_index = -1;
     frame.persons[0].appearance = noisySignature(personAppearance(0), appearance_rng_);
     frame.persons[0].has_appearance = true;
   }
   if (!bystanders_.empty()) observeCrowd(person, T_WC, frame);
+  // The operator designates the target while it waits to start (a follow-me app's tap on the
+  // person): until then the frames name it; afterwards the lock-on is on its own.
+  if (secondsSinceStart(now_ns_) < personStartS()) frame.target_index = target_slot_;
   if (pending_count_ == pending_.size()) {  // cannot happen with sane rates; drop the oldest
     pending_head_ = (pending_head_ + 1) % pending_.size();
     --pending_count_;
@@ -361,10 +367,11 @@ void Simulation::observeCrowd(const PersonState& target, const Eigen::Isometry3d
   };
   std::sort(candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(kept), by_position);
   frame.person_count = kept;
-  frame.target_index = -1;
+  frame.target_index = -1;  // the lock-on's to choose (see captureCamera)
+  target_slot_ = -1;
   for (std::size_t slot = 0; slot < kept; ++slot) {
     frame.persons[slot] = candidates_[slot].detection;
-    if (candidates_[slot].id == 0) frame.target_index = static_cast<int>(slot);  // the oracle (see above)
+    if (candidates_[slot].id == 0) target_slot_ = static_cast<int>(slot);
   }
 }
 

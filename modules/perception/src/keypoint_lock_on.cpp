@@ -24,8 +24,8 @@ Appearance toAppearance(const hal::PersonDetection& person) {
 }
 
 void KeypointLockOn::apply(hal::DetectionFrame& frame) {
-  if (frame.target_index >= 0) return;
   const std::size_t count = std::min(frame.person_count, hal::kMaxPersons);
+  if (frame.target_index >= static_cast<int>(count)) frame.target_index = -1;  // names no listed person
   std::array<TrackCandidate, hal::kMaxPersons> candidates{};
   for (std::size_t i = 0; i < count; ++i) {
     const hal::PersonDetection& person = frame.persons[i];
@@ -33,6 +33,13 @@ void KeypointLockOn::apply(hal::DetectionFrame& frame) {
         torsoFeatures(person.keypoints, frame.intrinsics.width_px, frame.intrinsics.height_px, torso_);
     candidates[i].appearance = toAppearance(person);
     candidates[i].score = person.score;
+  }
+  if (frame.target_index >= 0) {
+    // Designated (or chosen upstream): the tracker learns this person -- position, size, appearance --
+    // and follows them on its own in the frames that leave the choice open.
+    const auto target = static_cast<std::size_t>(frame.target_index);
+    tracker_.update(frame.stamp_ns, std::span(candidates.data() + target, 1));
+    return;
   }
   const auto chosen = tracker_.update(frame.stamp_ns, std::span(candidates.data(), count));
   frame.target_index = chosen ? static_cast<int>(*chosen) : -1;

@@ -1,6 +1,6 @@
 // Unit tests of the lock-on for detection-delivering cameras (keypoint_lock_on.hpp): the followed
 // person is kept whatever order the device lists people in, the appearance signature is what tells a
-// bystander from the target after a loss, a frame that already names its target is left alone, and a
+// bystander from the target after a loss, a designated target is learnt and then followed, and a
 // malformed signature is no appearance at all.
 #include <gtest/gtest.h>
 
@@ -78,13 +78,22 @@ TEST(KeypointLockOn, GivenALostTarget_WhenOnlyABystanderIsSeen_ThenNobodyIsFollo
   EXPECT_EQ(back.target_index, 1);
 }
 
-TEST(KeypointLockOn, GivenAFrameThatNamesItsTarget_WhenApplied_ThenItIsUnchanged) {
+TEST(KeypointLockOn, GivenADesignatedTarget_WhenLaterFramesLeaveTheChoiceOpen_ThenTheDesignatedPersonIsFollowed) {
   KeypointLockOn lock_on(TrackerParams{}, TorsoFeatureParams{});
-  auto f = frameOf(0, {uprightDetection(100.0, 90.0, 3), uprightDetection(400.0, 40.0, 20)});
+  // The designated person is the smaller, less salient one: acquisition alone would pick the other.
+  auto f = frameOf(0, {uprightDetection(100.0, 90.0, 3, 0.9), uprightDetection(400.0, 60.0, 20, 0.6)});
   f.target_index = 1;
   lock_on.apply(f);
   EXPECT_EQ(f.target_index, 1);
-  EXPECT_FALSE(lock_on.tracker().locked(0));
+  EXPECT_TRUE(lock_on.tracker().locked(0));
+  auto open = frameOf(kLockOnFrameNs, {uprightDetection(402.0, 60.0, 20, 0.6), uprightDetection(98.0, 90.0, 3, 0.9)});
+  lock_on.apply(open);
+  EXPECT_EQ(open.target_index, 0);
+  // A target index past the listed persons names nobody: the choice is open.
+  auto bad = frameOf(2 * kLockOnFrameNs, {uprightDetection(404.0, 60.0, 20, 0.6)});
+  bad.target_index = 3;
+  lock_on.apply(bad);
+  EXPECT_EQ(bad.target_index, 0);
 }
 
 TEST(KeypointLockOn, GivenMalformedSignatures_WhenConverted_ThenTheyAreNoAppearance) {

@@ -25,8 +25,9 @@ class KeypointLockOn {
   KeypointLockOn(const TrackerParams& tracker, const TorsoFeatureParams& torso) : tracker_(tracker), torso_(torso) {}
 
   /// Chooses the followed person of a frame whose device left the choice open (target_index < 0)
-  /// and writes it into target_index (-1 if none passes). A frame that already names its target
-  /// (a recording made before this stage existed) is left as it is.
+  /// and writes it into target_index (-1 if none passes). A frame that names its target (an operator's
+  /// designation before the start; a recording made before this stage existed) keeps it, and the
+  /// tracker locks onto that person, to follow them in the frames that do not.
   void apply(hal::DetectionFrame& frame);
 
   const PersonTracker& tracker() const { return tracker_; }
