@@ -291,6 +291,26 @@ TEST(Bystanders, GivenSameSeedThenIdenticalDetections) {
   EXPECT_NE(a->personStateAt(1, simNs(1.0)).p_W_m, c->personStateAt(1, simNs(1.0)).p_W_m);
 }
 
+TEST(Bystanders, AnUnseenBystanderLeavesTheTargetsDetectionsBitForBit) {
+  // The target is observed from the camera's own stream, bystanders from another: a bystander behind
+  // the drone changes nothing in the target's detections.
+  auto alone = crowdSim(crowdYaml("", false, 6.0));
+  auto with = crowdSim(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [-4.0, 3.0]}]}\n", false, 6.0));
+  std::vector<DetectionFrame> a, b;
+  hoverCrowd(*alone, 1.0, &a);
+  hoverCrowd(*with, 1.0, &b);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].person_count, 1U);
+    ASSERT_EQ(b[i].person_count, 1U);
+    EXPECT_EQ(b[i].target_index, 0);
+    for (std::size_t k = 0; k < kNumKeypoints; ++k) {
+      EXPECT_EQ(a[i].persons[0].keypoints[k].u_px, b[i].persons[0].keypoints[k].u_px);
+      EXPECT_EQ(a[i].persons[0].keypoints[k].score, b[i].persons[0].keypoints[k].score);
+    }
+  }
+}
+
 TEST(Bystanders, ParseErrorsNameFileLineAndKey) {
   const std::string through_wall = crowdParseError(
       crowdYaml("bystanders:\n  people:\n    - path:\n        - {p_m: [5.0, -4.0]}\n        - {p_m: [5.0, 4.0]}\n",
