@@ -287,7 +287,7 @@ void Simulation::captureCamera() {
     frame.persons[0].appearance = noisySignature(personAppearance(0), appearance_rng_);
     frame.persons[0].has_appearance = true;
   }
-  if (!bystanders_.empty()) observeCrowd(person, T_WC, frame);
+  if (!bystanders_.empty()) observeCrowd(T_WC, frame);
   if (pending_count_ == pending_.size()) {  // cannot happen with sane rates; drop the oldest
     pending_head_ = (pending_head_ + 1) % pending_.size();
     --pending_count_;
@@ -296,8 +296,7 @@ void Simulation::captureCamera() {
   ++pending_count_;
 }
 
-void Simulation::observeCrowd(const PersonState& target, const Eigen::Isometry3d& T_WC, DetectionFrame& frame) {
-  (void)target;
+void Simulation::observeCrowd(const Eigen::Isometry3d& T_WC, DetectionFrame& frame) {
   const GimbalCameraSpec& spec = scenario_.spec.gimbal_camera;
   const LineOfSight line_of_sight = [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return sightClear(a, b, sight_skip_id_);
