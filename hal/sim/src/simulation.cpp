@@ -322,7 +322,7 @@ void Simulation::captureCamera() {
     frame.persons[0].appearance = noisySignature(personAppearance(0), appearance_rng_);
     frame.persons[0].has_appearance = true;
   }
-  if (!bystanders_.empty()) observeCrowd(person, T_WC, frame);
+  if (!bystanders_.empty()) observeCrowd(T_WC, frame);
   // The operator designates the target while it waits to start (a follow-me app's tap on the
   // person): until then the frames name it; afterwards the lock-on is on its own.
   if (secondsSinceStart(now_ns_) < personStartS()) frame.target_index = target_slot_;
@@ -334,8 +334,7 @@ void Simulation::captureCamera() {
   ++pending_count_;
 }
 
-void Simulation::observeCrowd(const PersonState& target, const Eigen::Isometry3d& T_WC, DetectionFrame& frame) {
-  (void)target;
+void Simulation::observeCrowd(const Eigen::Isometry3d& T_WC, DetectionFrame& frame) {
   const GimbalCameraSpec& spec = scenario_.spec.gimbal_camera;
   const LineOfSight line_of_sight = [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return sightClear(a, b, sight_skip_id_);

@@ -146,6 +146,20 @@ TEST(Bystanders, MillingMembersStayOffThePath) {
       EXPECT_GE(std::abs(sim->personStateAt(id, simNs(t_s)).p_W_m.y()), 1.0 - 0.3) << id << " at " << t_s;
 }
 
+TEST(Bystanders, RandomWalkersStayInTheirRegionAndAwayFromTheDronesStart) {
+  const auto sim = crowdSim(crowdYaml(
+      "bystanders:\n  random_walkers: {count: 8, region_min_m: [-8.0, -8.0], region_max_m: [20.0, 8.0], legs: 5}\n"));
+  ASSERT_EQ(sim->personCount(), 9U);
+  const Eigen::Vector2d drone_start = sim->scenario().spec.drone.start_m.head<2>();
+  for (std::size_t id = 1; id < sim->personCount(); ++id) {
+    for (double t_s = 0.0; t_s < 80.0; t_s += 0.2) {
+      const Eigen::Vector2d p = sim->personStateAt(id, simNs(t_s)).p_W_m.head<2>();
+      EXPECT_GT((p - drone_start).norm(), kDroneStartKeepOutM - 0.3) << id << " at " << t_s;
+      EXPECT_TRUE(p.x() >= -7.0 && p.x() <= 19.0 && p.y() >= -7.0 && p.y() <= 7.0) << id << " at " << t_s;
+    }
+  }
+}
+
 TEST(Bystanders, LookAlikeSignatureIsCloseToTheTargetsAndOthersAreFar) {
   const ScenarioInstance inst = crowdInstance(crowdYaml(R"(bystanders:
   target_clothing: {hue_deg: 0.0, saturation: 0.8, second_hue_deg: 220.0, second_saturation: 0.5}
@@ -275,6 +289,26 @@ TEST(Bystanders, GivenSameSeedThenIdenticalDetections) {
   // Another seed places them elsewhere.
   auto c = crowdSim(text, false, 6);
   EXPECT_NE(a->personStateAt(1, simNs(1.0)).p_W_m, c->personStateAt(1, simNs(1.0)).p_W_m);
+}
+
+TEST(Bystanders, AnUnseenBystanderLeavesTheTargetsDetectionsBitForBit) {
+  // The target is observed from the camera's own stream, bystanders from another: a bystander behind
+  // the drone changes nothing in the target's detections.
+  auto alone = crowdSim(crowdYaml("", false, 6.0));
+  auto with = crowdSim(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [-4.0, 3.0]}]}\n", false, 6.0));
+  std::vector<DetectionFrame> a, b;
+  hoverCrowd(*alone, 1.0, &a);
+  hoverCrowd(*with, 1.0, &b);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].person_count, 1U);
+    ASSERT_EQ(b[i].person_count, 1U);
+    EXPECT_EQ(b[i].target_index, 0);
+    for (std::size_t k = 0; k < kNumKeypoints; ++k) {
+      EXPECT_EQ(a[i].persons[0].keypoints[k].u_px, b[i].persons[0].keypoints[k].u_px);
+      EXPECT_EQ(a[i].persons[0].keypoints[k].score, b[i].persons[0].keypoints[k].score);
+    }
+  }
 }
 
 TEST(Bystanders, ParseErrorsNameFileLineAndKey) {

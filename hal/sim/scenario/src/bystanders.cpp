@@ -255,6 +255,7 @@ struct Context {
   double target_delay_s;
   const std::vector<PathPoint>& target_path;
   const ObstacleWorld& world;
+  const ObstacleWorld& walk_world;  ///< world and a keep-out disc around the drone's start.
   std::mt19937_64& rng;
   const Clothing& target_clothing;
   /// The target at sim time t_s (seconds since the start).
@@ -341,7 +342,7 @@ rt::Expected<std::vector<Bystander>> group(const Context& ctx, const GroupGenera
       const double phi = uniformIn(ctx.rng, -std::numbers::pi, std::numbers::pi);
       spot = centre + r * Eigen::Vector2d(std::cos(phi), std::sin(phi));
       if (distanceToPath(spot, ctx.target_path) < g.path_clearance_m) continue;
-      if (ctx.world.distance(atLegs(spot)) <= kPersonBodyRadiusM + 0.1) continue;
+      if (ctx.walk_world.distance(atLegs(spot)) <= kPersonBodyRadiusM + 0.1) continue;
       const auto crowded = [&](const Eigen::Vector2d& o) {
         return (o - spot).norm() < 2.0 * kPersonBodyRadiusM + 0.15;
       };
@@ -361,7 +362,7 @@ rt::Expected<std::vector<Bystander>> group(const Context& ctx, const GroupGenera
           const Eigen::Vector2d next =
               spot + uniformIn(ctx.rng, 0.3, 0.8) * Eigen::Vector2d(std::cos(phi), std::sin(phi));
           if (distanceToPath(next, ctx.target_path) < g.path_clearance_m || (next - p).norm() < 0.2 ||
-              ctx.world.distance(atLegs(next)) <= kPersonBodyRadiusM + 0.1)
+              ctx.walk_world.distance(atLegs(next)) <= kPersonBodyRadiusM + 0.1)
             continue;
           path.back().speed_mps = uniformIn(ctx.rng, 0.3, 0.6);
           path.push_back({next, 0.5, uniformIn(ctx.rng, 1.0, 4.0)});
@@ -487,7 +488,8 @@ BystandersSpec parseBystanders(const rt::ConfigNode& n, const std::vector<Box>& 
 
 rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spec, const PersonParams& target_params,
                                                        const std::vector<PathPoint>& target_path,
-                                                       double target_start_delay_s, bool mirrored,
+                                                       double target_start_delay_s,
+                                                       const Eigen::Vector2d& drone_start_m, bool mirrored,
                                                        const std::vector<Box>& boxes,
                                                        const std::vector<Cylinder>& cylinders, std::uint64_t seed) {
   auto rng = bystanderRng(seed);
@@ -500,7 +502,11 @@ rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spe
   if (!target) return rt::Error{"bystanders: target: " + target.error().message};
   auto world = ObstacleWorld::create(boxes, cylinders);
   if (!world) return rt::Error{"bystanders: " + world.error().message};
-  const Context ctx{*target, target_start_delay_s, target_path, *world, rng, inst.target_clothing};
+  std::vector<Cylinder> with_keep_out = cylinders;
+  with_keep_out.push_back(Cylinder{drone_start_m, kDroneStartKeepOutM, 0.0, 3.0});
+  auto walk_world = ObstacleWorld::create(boxes, with_keep_out);
+  if (!walk_world) return rt::Error{"bystanders: " + walk_world.error().message};
+  const Context ctx{*target, target_start_delay_s, target_path, *world, *walk_world, rng, inst.target_clothing};
 
   for (std::size_t i = 0; i < spec.people.size(); ++i) {
     const BystanderSpec& p = spec.people[i];
@@ -509,7 +515,7 @@ rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spe
     if (p.walk) {
       BystanderWalk walk = *p.walk;
       if (mirrored) mirrorWalk(walk);
-      auto generated = randomWalk(walk, *world, rng);
+      auto generated = randomWalk(walk, *walk_world, rng);
       if (!generated) return rt::Error{origin + ": " + generated.error().message};
       path = std::move(generated.value());
     } else if (mirrored) {
@@ -547,7 +553,7 @@ rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spe
     if (mirrored) mirrorWalk(walk);
     for (int i = 0; i < r.count; ++i) {
       const std::string origin = "bystanders.random_walkers[" + std::to_string(i) + "]";
-      auto path = randomWalk(walk, *world, rng);
+      auto path = randomWalk(walk, *walk_world, rng);
       if (!path) return rt::Error{origin + ": " + path.error().message};
       const double delay_s = uniformIn(rng, r.start_delay_s.x(), r.start_delay_s.y());
       inst.people.push_back(makeBystander(ctx, std::move(path.value()), delay_s, false, std::nullopt, origin));

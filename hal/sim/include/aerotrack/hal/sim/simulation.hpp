@@ -204,7 +204,7 @@ class Simulation {
   /// The static obstacles and the people's bodies except person skip_id's leave the segment clear.
   bool sightClear(const Eigen::Vector3d& a_W_m, const Eigen::Vector3d& b_W_m, std::size_t skip_id) const;
   /// Keypoint mode with bystanders: everyone observed, the largest kMaxPersons reported.
-  void observeCrowd(const PersonState& target, const Eigen::Isometry3d& T_WC, DetectionFrame& frame);
+  void observeCrowd(const Eigen::Isometry3d& T_WC, DetectionFrame& frame);
   int target_slot_ = -1;  ///< The target's slot in the frame being captured (-1: not reported).
 
   ScenarioInstance scenario_;

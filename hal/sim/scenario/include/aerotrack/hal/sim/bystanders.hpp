@@ -41,6 +41,9 @@ namespace aerotrack::hal::sim {
 /// A person's torso colour histogram (hal::PersonDetection::appearance's layout; sums to 1).
 using AppearanceSignature = std::array<float, kAppearanceSignatureBins>;
 
+/// Random walkers and group members keep this far from the drone's start point.
+inline constexpr double kDroneStartKeepOutM = 2.0;
+
 /// A person's body as an obstacle and occluder: a vertical cylinder of their height. 0.25 m covers
 /// the shoulders (0.259 H = 0.45 m wide at H = 1.75 m, Drillis & Contini) and the swinging arms.
 inline constexpr double kPersonBodyRadiusM = 0.25;
@@ -174,11 +177,14 @@ BystandersSpec parseBystanders(const rt::ConfigNode& node, const std::vector<Box
                                const std::vector<Cylinder>& cylinders);
 
 /// Generates the bystanders for one seed around the target (its params, instantiated path and start
-/// delay), keeping generated paths out of the obstacles. mirrored: the instance was mirrored about
-/// y = 0 (listed paths and regions follow). Error if a generator cannot place what it was asked to.
+/// delay), keeping generated paths out of the obstacles, and random walks and groups also
+/// kDroneStartKeepOutM away from the drone's start (so nobody walks into the drone before it takes
+/// off). mirrored: the instance was mirrored about y = 0 (listed paths and regions follow). Error if
+/// a generator cannot place what it was asked to.
 rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spec, const PersonParams& target_params,
                                                        const std::vector<PathPoint>& target_path,
-                                                       double target_start_delay_s, bool mirrored,
+                                                       double target_start_delay_s,
+                                                       const Eigen::Vector2d& drone_start_m, bool mirrored,
                                                        const std::vector<Box>& boxes,
                                                        const std::vector<Cylinder>& cylinders, std::uint64_t seed);
 
