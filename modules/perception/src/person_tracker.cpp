@@ -106,9 +106,12 @@ std::optional<std::size_t> PersonTracker::update(rt::TimeNs stamp_ns, std::span<
         chosen = i;
       }
     }
-    // An external prediction may be wrong (estimator drift): if nothing passes its gate and the
-    // track is lost anyway, fall back to acquisition.
-    if (!chosen && !locked(stamp_ns)) chosen = acquire(candidates);
+    // Nothing passes the motion gate: the prediction may be wrong (a constant image velocity
+    // across a fast gimbal turn or an occlusion; estimator drift). Re-identify by appearance at once
+    // when the reference is known (acquire() then takes only the person who looks like the target),
+    // rather than drop a visible target until the track times out; without a reference, only once
+    // the track is lost.
+    if (!chosen && (reference_.valid || !locked(stamp_ns))) chosen = acquire(candidates);
   } else {
     chosen = acquire(candidates);
   }

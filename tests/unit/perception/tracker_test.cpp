@@ -90,13 +90,28 @@ TEST(PersonTracker, GivenALostTarget_WhenOnlyAStrangerIsSeen_ThenNothingIsAcquir
   EXPECT_EQ(*chosen, 1U);
 }
 
-TEST(PersonTracker, GivenATargetThatJumpsAcrossTheImage_WhenLocked_ThenTheJumpIsOutsideTheGate) {
+TEST(PersonTracker, GivenATargetThatJumpsAcrossTheImage_WhenLocked_ThenOnlyItsAppearanceCanClaimIt) {
   PersonTracker tracker(TrackerParams{});
   const std::array<TrackCandidate, 1> here = {person(200.0, 50.0, shirt(0))};
   ASSERT_TRUE(tracker.update(0, here).has_value());
-  // 400 px in one frame is 8 torso lengths: no person moves so.
-  const std::array<TrackCandidate, 1> there = {person(600.0, 50.0, shirt(0))};
+  // 400 px in one frame is 8 torso lengths, outside the motion gate: someone in another shirt there
+  // is not the target ...
+  const std::array<TrackCandidate, 1> other = {person(600.0, 50.0, shirt(20))};
+  EXPECT_FALSE(tracker.update(kFrameNs, other).has_value());
+  // ... but the target's own look is re-identified at once (a fast gimbal turn moves the image so;
+  // waiting for the track to time out would drop a visible target for lost_after_s).
+  const std::array<TrackCandidate, 1> same = {person(600.0, 50.0, shirt(0))};
+  EXPECT_TRUE(tracker.update(2 * kFrameNs, same).has_value());
+}
+
+TEST(PersonTracker, GivenNoReferenceAppearance_WhenNothingPassesTheGate_ThenNobodyIsTakenUntilTheTrackIsLost) {
+  PersonTracker tracker(TrackerParams{});
+  const std::array<TrackCandidate, 1> here = {person(200.0, 50.0, Appearance{})};
+  ASSERT_TRUE(tracker.update(0, here).has_value());
+  const std::array<TrackCandidate, 1> there = {person(600.0, 50.0, Appearance{})};
   EXPECT_FALSE(tracker.update(kFrameNs, there).has_value());
+  const auto after_loss = static_cast<rt::TimeNs>(1.5 * static_cast<double>(rt::kNsPerSecond));
+  EXPECT_TRUE(tracker.update(after_loss, there).has_value());
 }
 
 TEST(PersonTracker, GivenAnExternalPrediction_WhenTheImageMovedByGimbalRotation_ThenThePredictionGates) {

@@ -7,7 +7,10 @@
 // not). Among the gated candidates the cost is position error, size error and appearance distance
 // (torso colour, appearance.hpp), each normalised. Without a track the tracker acquires: before
 // any lock, the most confident person with the largest torso; after a loss, only a person whose
-// appearance matches the one it lost. Pure: time is passed in; no allocation.
+// appearance matches the one it lost. While locked, if nobody passes the motion gate, the person
+// who looks like the target is re-identified at once (issue 20: a constant image velocity does not
+// predict a fast gimbal turn, and waiting out lost_after_s dropped a visible target for a second).
+// Pure: time is passed in; no allocation.
 #pragma once
 
 #include <optional>
