@@ -87,8 +87,8 @@ TEST_P(BuiltInScenario, ThePersonsPathAndTheDronesStartAreClearOfObstacles) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenarios, BuiltInScenario,
-                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "runner", "drift", "windy", "crowd",
-                                           "crossing"));
+                         ::testing::Values("sharp_turn", "forest", "corridor", "open", "runner", "drift", "windy",
+                                           "crowd", "crossing"));
 
 TEST(SharpTurn, SeedsPickBothTurnSidesAndMirrorTheWholeWorld) {
   const ScenarioSpec spec = load("sharp_turn");

@@ -131,8 +131,8 @@ struct PersonDetection {
   double score = 0.0;                                                         ///< Person confidence in [0, 1].
   double bbox_u_px = 0.0, bbox_v_px = 0.0, bbox_w_px = 0.0, bbox_h_px = 0.0;  ///< Top-left corner, size.
   /// The person's torso colour histogram (bin = hue_bin * 3 + saturation_bin, grey last; sums to 1)
-  /// when the source measured one (the simulator's keypoint camera does; the image pipeline computes its own from the image).
-  /// Recorded in detections.csv, so the lock-on reruns on it in replay.
+  /// when the source measured one (the simulator's keypoint camera does; the image pipeline computes its own from the
+  /// image). Recorded in detections.csv, so the lock-on reruns on it in replay.
   std::array<float, kAppearanceSignatureBins> appearance{};
   bool has_appearance = false;
 };
