@@ -442,18 +442,8 @@ namespace aerotrack::hal::sim {
 int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& detection) const {
   const Exposure& exposure = exposures_[sequence % exposures_.size()];
   if (exposure.sequence != sequence || sequence == 0) return -1;
-  // The detection's torso centre: the mean of its reported shoulders and hips.
-  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
-  int reported = 0;
-  for (const CocoKeypoint k :
-       {CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip}) {
-    const Keypoint2D& kp = detection.keypoints[index(k)];
-    if (kp.score <= 0.0) continue;
-    centre_px += Eigen::Vector2d(kp.u_px, kp.v_px);
-    ++reported;
-  }
-  if (reported == 0) return -1;
-  centre_px /= reported;
+  // Every reported keypoint against the same keypoint of each person, projected at the exposure:
+  // the torso centre alone confuses two people who overlap in the image, their limbs do not.
   const CameraIntrinsics& k = scenario_.spec.gimbal_camera.camera.intrinsics;
   const Eigen::Isometry3d T_CW = exposure.T_WC.inverse();
   int best = -1;
@@ -463,10 +453,20 @@ int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& de
     const auto neck = project(T_CW * midpoint(p, CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder), k);
     const auto hip = project(T_CW * midpoint(p, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip), k);
     if (!neck || !hip) continue;
-    const double torso_px = (*neck - *hip).norm();
-    const double error_px = (centre_px - 0.5 * (*neck + *hip)).norm();
-    // Half a torso: two people whose torsos overlap that much in the image are one blob to a detector.
-    if (error_px <= 0.5 * torso_px && error_px < best_error) {
+    double error_sum_px = 0.0;
+    int compared = 0;
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+      const Keypoint2D& kp = detection.keypoints[i];
+      if (kp.score <= 0.0) continue;
+      const auto uv = project(T_CW * p.keypoints_W_m[i], k);
+      if (!uv) continue;
+      error_sum_px += (Eigen::Vector2d(kp.u_px, kp.v_px) - *uv).norm();
+      ++compared;
+    }
+    if (compared == 0) continue;
+    const double error_px = error_sum_px / compared;
+    // Within half a torso on average: farther, the detection is of nobody we simulate.
+    if (error_px <= 0.5 * (*neck - *hip).norm() && error_px < best_error) {
       best_error = error_px;
       best = static_cast<int>(id);
     }

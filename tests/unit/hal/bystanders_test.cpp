@@ -7,6 +7,8 @@
 // Parse errors name file, line and key.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -216,7 +218,7 @@ TEST(Bystanders, BystanderBetweenHidesTheTargetFromSightAndKeypoints) {
   EXPECT_EQ(clear->personSight(clear->truth().T_WC, clear->truth().person), Sight::kVisible);
 }
 
-TEST(Bystanders, KeypointCameraReportsEveryVisiblePersonWithSignaturesAndTheOracleTarget) {
+TEST(Bystanders, KeypointCameraReportsEveryVisiblePersonWithSignaturesAndTheDesignatedTarget) {
   auto sim = crowdSim(crowdYaml(R"(bystanders:
   target_clothing: {hue_deg: 0.0, saturation: 0.8}
   people:
@@ -246,6 +248,48 @@ TEST(Bystanders, KeypointCameraReportsEveryVisiblePersonWithSignaturesAndTheOrac
     EXPECT_LT(signatureDistance(t.appearance, sim->personAppearance(0)), 0.15);
   }
   EXPECT_GT(full, static_cast<int>(frames.size()) * 8 / 10);
+}
+
+TEST(Bystanders, EachReportedDetectionIsMatchedToItsOwnPersonAndFollowingABystanderIsASwitch) {
+  auto sim = crowdSim(crowdYaml(R"(bystanders:
+  people:
+    - {path: [{p_m: [6.0, 2.0]}]}
+    - {path: [{p_m: [7.0, -2.5]}]}
+    - {path: [{p_m: [5.0, -1.2]}], look_alike: true}
+)",
+                                false, 6.0));
+  std::vector<DetectionFrame> frames;
+  hoverCrowd(*sim, 1.0, &frames);
+  int full = 0;
+  for (const DetectionFrame& f : frames) {
+    if (f.person_count != 4) continue;
+    ++full;
+    std::vector<int> ids;
+    for (std::size_t i = 0; i < f.person_count; ++i) ids.push_back(sim->matchDetection(f.sequence, f.persons[i]));
+    std::sort(ids.begin(), ids.end());
+    EXPECT_EQ(ids, (std::vector<int>{0, 1, 2, 3})) << "frame " << f.sequence;
+    // The designated target (before the start) is the true target.
+    ASSERT_GE(f.target_index, 0);
+    EXPECT_EQ(sim->matchDetection(f.sequence, f.persons[static_cast<std::size_t>(f.target_index)]), 0);
+  }
+  ASSERT_GT(full, 10);
+  // A detection of nobody, and a frame the simulator no longer remembers, match no one.
+  const DetectionFrame& last = frames.back();
+  PersonDetection nobody = last.persons[0];
+  for (Keypoint2D& k : nobody.keypoints) k.v_px -= 400.0;  // up in the sky
+  EXPECT_EQ(sim->matchDetection(last.sequence, nobody), -1);
+  EXPECT_EQ(sim->matchDetection(last.sequence + 1000, last.persons[0]), -1);
+  // Following the target, then a bystander, then nobody, then the target again: two switches.
+  DetectionFrame followed = last;
+  followed.target_index = last.target_index;
+  sim->recordFollowed(followed);
+  followed.target_index = last.target_index == 0 ? 1 : 0;
+  sim->recordFollowed(followed);
+  followed.target_index = -1;
+  sim->recordFollowed(followed);
+  followed.target_index = last.target_index;
+  sim->recordFollowed(followed);
+  EXPECT_EQ(sim->metrics().identitySwitches(), 2);
 }
 
 TEST(Bystanders, AtMostSixPersonsAreReportedTheLargestFirst) {

@@ -166,8 +166,9 @@ class Simulation {
   /// Person id's true appearance signature (what the camera's noisy signatures scatter around).
   const AppearanceSignature& personAppearance(std::size_t id) const;
   /// Notes whom the autonomy stack follows: the detector output frame (its followed person,
-  /// target_index) is matched to the true people at its exposure -- the person whose torso centre
-  /// projects nearest the followed detection's, within half their projected torso length -- and the
+  /// target_index) is matched to the true people at its exposure -- the person whose keypoints
+  /// project nearest the detection's (mean pixel distance over the reported keypoints, within half
+  /// their projected torso length) -- and the
   /// identity metrics record it (0: the target, k: bystander k, -1: nobody followed, or a detection
   /// that matches no one). Stepping thread; frames older than the last 64 exposures are ignored.
   void recordFollowed(const DetectionFrame& frame);
