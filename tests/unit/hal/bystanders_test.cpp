@@ -380,6 +380,31 @@ TEST(Bystanders, ParseErrorsNameFileLineAndKey) {
   EXPECT_NE(early.find("crossings[0]"), std::string::npos) << early;
 }
 
+TEST(Bystanders, AListedPathThroughAGeneratedTreeIsAnErrorOfThatSeed) {
+  // The file's own obstacles leave the path clear; a dense generated forest (kept off the target's
+  // path only) does not.
+  const std::string forest = R"(    - {min_m: [100.0, 100.0, 0.0], max_m: [101.0, 101.0, 1.0]}
+  forest:
+    region_min_m: [10.0, -10.0]
+    region_max_m: [30.0, 10.0]
+    density_per_m2: 0.5
+    radius_m: [0.2, 0.2]
+    height_m: 3.0
+    min_gap_m: 0.1
+    path_clearance_m: 0.5
+)";
+  const auto spec = parseScenarioSpec(
+      crowdYaml("bystanders:\n  people:\n    - path:\n        - {p_m: [20.0, -9.0]}\n        - {p_m: [20.0, -1.0]}\n",
+                true, 6.0, forest),
+      "test.yaml");
+  ASSERT_TRUE(spec) << spec.error().message;
+  const auto inst = instantiate(*spec, 1);
+  ASSERT_FALSE(inst);
+  EXPECT_NE(inst.error().message.find("bystanders.people[0]: the listed path passes through an obstacle"),
+            std::string::npos)
+      << inst.error().message;
+}
+
 TEST(Bystanders, ImageModeDrawsANearerBystanderOverTheTargetInItsOwnClothes) {
   if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) {
     GTEST_SKIP() << PersonSpriteSpec{}.image_path << " is missing: install the Debian package opencv-doc";

@@ -518,8 +518,13 @@ rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spe
       auto generated = randomWalk(walk, *walk_world, rng);
       if (!generated) return rt::Error{origin + ": " + generated.error().message};
       path = std::move(generated.value());
-    } else if (mirrored) {
-      mirrorPath(path);
+    } else {
+      if (mirrored) mirrorPath(path);
+      // The file's obstacles were checked when it was read; this seed's world also has jittered
+      // and generated ones (trees, clutter), which a listed path must not cross either.
+      if (!pathClear(path, *world))
+        return rt::Error{origin + ": the listed path passes through an obstacle of seed " + std::to_string(seed) +
+                         "'s world (jittered or generated)"};
     }
     Bystander b = makeBystander(ctx, std::move(path), p.start_delay_s, p.look_alike, p.clothing, origin);
     b.params.height_m = p.height_m;
