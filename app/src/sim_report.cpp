@@ -77,8 +77,28 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
     const auto verdict = static_cast<planning::CheckVerdict>(i);
     check_failures[std::string(planning::toString(verdict))] = task->checkFailures(verdict);
   }
+  // The final check's verdicts (issue 21): passed first time, repaired by re-timing (by the first
+  // verdict), or rejected (check_failures above, by the final verdict; repair_failed: repairs tried).
+  nlohmann::json repaired = nlohmann::json::object();
+  nlohmann::json repair_failed = nlohmann::json::object();
+  std::uint64_t repaired_total = 0;
+  for (int i = 1; i < planning::kCheckVerdictCount; ++i) {
+    const auto verdict = static_cast<planning::CheckVerdict>(i);
+    if (!planning::isDynamicLimit(verdict)) continue;
+    repaired[std::string(planning::toString(verdict))] = task->checkRepairs(verdict);
+    repair_failed[std::string(planning::toString(verdict))] = task->checkRepairFailures(verdict);
+    repaired_total += task->checkRepairs(verdict);
+  }
+  const nlohmann::json check = {{"runs", task->checksRun()},
+                                {"passed_first_time", task->checksPassedFirstTime()},
+                                {"repaired", repaired_total},
+                                {"rejected", task->checksRejected()},
+                                {"repaired_by_first_verdict", repaired},
+                                {"repair_failed_by_first_verdict", repair_failed},
+                                {"max_repair_stretch", task->maxRepairStretch()}};
   const rt::TimingSnapshot cycle = task->cycleStats().snapshot();
   return {{"cycles", task->cycles()},
+          {"check", check},
           {"search_failures", search_failures},
           {"check_failures", check_failures},
           {"outcomes", outcomes},

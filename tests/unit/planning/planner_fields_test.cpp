@@ -34,7 +34,9 @@ TEST(PlannerFields, GivenParamsWhenWrittenAndReadBackThenEveryFieldIsTheSame) {
 TEST(PlannerFields, GivenEachFieldAtTheEndsOfItsRangeThenParserAndValidateAgree) {
   int probes = 0;
   const std::set<std::string> refused_inside = field_checks::rangeEnds(planner(), TrackingPlannerParams{}, &probes);
-  EXPECT_EQ(probes, 4 * 74);  // four per number: 72 fields, max_box_size_m counting three
+  // Four per number: 71 fields, max_box_size_m counting three (issue 21: the optimiser's three limits went,
+  // optimizer_limit_fraction and check.max_repair_stretch came).
+  EXPECT_EQ(probes, 4 * 73);
   // In range, yet refused by both because of a rule across fields, with the other field at its default.
   EXPECT_EQ(refused_inside, (std::set<std::string>{
                                 "flight_altitude_m@lo",        // 0.1 is not above takeoff_below_m (0.5)
@@ -62,10 +64,13 @@ TEST(PlannerFields, GivenThePlanningBudgetThenBothSidesTakeTheHalfOpenRange) {
 
 TEST(PlannerFields, GivenTheWrittenSectionThenItsKeysAreExactlyTheKeysTheParserReads) {
   const std::vector<std::string> written = field_checks::keys(planner(), TrackingPlannerParams{});
-  EXPECT_EQ(written.size(), 82U);  // 9 scalars + 7 sections with 4 + 16 + 4 + 18 + 13 + 7 + 4 keys
-  for (const char* key : {"planning_budget_s", "goal.visible_max_turn_rad", "search.occlusion_aware",
-                          "corridor.max_box_size_m", "optimizer.max_pieces", "prediction.qp_max_iterations",
-                          "check.margin_escape_s", "collision.broad_phase_group"}) {
+  // 82 before issue 21, which removed the optimizer's three limits (derived from the check's) and added
+  // optimizer_limit_fraction and check.max_repair_stretch.
+  EXPECT_EQ(written.size(), 81U);
+  for (const char* key :
+       {"planning_budget_s", "goal.visible_max_turn_rad", "search.occlusion_aware", "corridor.max_box_size_m",
+        "optimizer.max_pieces", "prediction.qp_max_iterations", "check.margin_escape_s", "check.max_repair_stretch",
+        "optimizer_limit_fraction", "collision.broad_phase_group"}) {
     EXPECT_NE(std::find(written.begin(), written.end(), key), written.end()) << key;
   }
 }

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "../malloc_counter.hpp"
@@ -41,6 +43,10 @@ class TrackingPlannerStages {
   CheckResult checkPlannedTrajectory(const PolynomialTrajectory& trajectory, const mapping::LocalGrid& grid,
                                      const PersonMotion& person, rt::TimeNs start_ns) const {
     return planner_.checkPlannedTrajectory(trajectory, grid, nullptr, person, start_ns);
+  }
+  CheckResult repairPlannedTrajectory(CheckResult check, const StatePva& start, PolynomialTrajectory& out,
+                                      const mapping::LocalGrid& grid, const PersonMotion& person, double& stretch) {
+    return planner_.repairPlannedTrajectory(check, start, out, grid, nullptr, person, 0, stretch);
   }
 
  private:
@@ -572,7 +578,8 @@ TEST(PlanningTask, FailedCheckKeepsTheOldTrajectory) {
   ASSERT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);
   const auto first = rig.task->lastPublished().trajectory;
 
-  params.check.max_velocity_mps = 0.1;  // the lowest the config allows (trajectoryCheckFields())
+  params.check.max_velocity_mps = 0.1;    // the lowest the config allows (trajectoryCheckFields())
+  params.check.max_repair_stretch = 1.0;  // no repair
   TaskRig strict(params);
   strict.grid.write(std::make_shared<const mapping::LocalGrid>(world.grid));
   strict.odometry.write(odometryAt(Eigen::Vector3d(0, 0, 1.5)));
@@ -759,6 +766,193 @@ TEST(PlanningTask, FailedCycleAlongASurfaceSeenBesideTheDroneStops) {
   rig.loseThePersonAt(0.1, a);
   EXPECT_EQ(rig.task->count(PlanStatus::kStopped), 1U);
   EXPECT_NE(rig.task->lastPublished().trajectory, first.trajectory);
+}
+
+// --- Issue 21: one set of limits, and the repair of a trajectory over them by re-timing. ---
+
+// Three quintic pieces from rest at the origin, through two waypoints with a turn, to rest: fast enough
+// (2.2 s for about 5 m) to have large velocity, acceleration and jerk.
+PolynomialTrajectory fastTurn() {
+  MinJerkSpline spline;
+  spline.reset(restAt(Eigen::Vector3d(0, 0, 1.5)), restAt(Eigen::Vector3d(3, 2, 1.5)), 3);
+  Eigen::Matrix3Xd waypoints(3, 2);
+  waypoints << 1.0, 2.5, 0.0, 0.5, 1.5, 1.5;
+  Eigen::VectorXd durations(3);
+  durations << 0.8, 0.6, 0.8;
+  EXPECT_TRUE(spline.generate(waypoints, durations));
+  PolynomialTrajectory out;
+  out.assign(spline);
+  return out;
+}
+
+// The reference: peak norms of derivative `order`, densely sampled (1 ms).
+double densePeak(const PolynomialTrajectory& trajectory, int order) {
+  double peak = 0.0;
+  for (double t = 0.0; t <= trajectory.durationS(); t += 1e-3)
+    peak = std::max(peak, trajectory.derivative(order, t).norm());
+  return peak;
+}
+
+TEST(TrajectoryRepair, OptimiserLimitsAreDerivedFromTheChecksByTheStatedFraction) {
+  TrackingPlannerParams params = defaultParams();
+  params.optimizer.max_velocity_mps = 99.0;  // ignored: not a config key, overwritten by create()
+  params.optimizer_limit_fraction = 0.9;
+  const TrackingPlanner planner = makePlanner(params);
+  EXPECT_DOUBLE_EQ(planner.params().optimizer.max_velocity_mps, 0.9 * params.check.max_velocity_mps);
+  EXPECT_DOUBLE_EQ(planner.params().optimizer.max_acceleration_mps2, 0.9 * params.check.max_acceleration_mps2);
+  EXPECT_DOUBLE_EQ(planner.params().optimizer.max_jerk_mps3, 0.9 * params.check.max_jerk_mps3);
+}
+
+TEST(TrajectoryRepair, StretchDividesEachDerivativeByItsPowerAndKeepsThePath) {
+  const PolynomialTrajectory original = fastTurn();
+  PolynomialTrajectory stretched = original;
+  constexpr double kFactor = 1.7;
+  stretched.stretchTime(kFactor);
+  EXPECT_NEAR(stretched.durationS(), kFactor * original.durationS(), 1e-12);
+  for (double t = 0.0; t <= original.durationS(); t += 0.01) {
+    // Same place at the stretched time: the geometry is unchanged.
+    EXPECT_LT((stretched.derivative(0, kFactor * t) - original.derivative(0, t)).norm(), 1e-9) << t;
+    for (int order = 1; order <= 3; ++order) {
+      const Eigen::Vector3d expected = original.derivative(order, t) / std::pow(kFactor, order);
+      EXPECT_LT((stretched.derivative(order, kFactor * t) - expected).norm(), 1e-8) << order << " " << t;
+    }
+  }
+}
+
+// A trajectory over one limit by a known factor (the others loose): the stretch factor is that factor (a
+// power's root of it), and the stretched trajectory is within every limit, densely sampled.
+TEST(TrajectoryRepair, StretchFactorBringsAViolationByAKnownFactorWithinTheLimits) {
+  const PolynomialTrajectory original = fastTurn();
+  const double v_peak = densePeak(original, 1);
+  const double a_peak = densePeak(original, 2);
+  const double j_peak = densePeak(original, 3);
+  constexpr double kOver = 1.5;  // the limit is exceeded by this factor
+  struct Case {
+    double v_limit, a_limit, j_limit, expected_factor;
+  };
+  for (const Case& c : {Case{v_peak / kOver, 10 * a_peak, 10 * j_peak, kOver},
+                        Case{10 * v_peak, a_peak / kOver, 10 * j_peak, std::sqrt(kOver)},
+                        Case{10 * v_peak, 10 * a_peak, j_peak / kOver, std::cbrt(kOver)}}) {
+    TrajectoryCheckParams params;
+    params.max_velocity_mps = c.v_limit;
+    params.max_acceleration_mps2 = c.a_limit;
+    params.max_jerk_mps3 = c.j_limit;
+    params.horizon_s = 10.0;  // the whole trajectory
+    params.sample_step_s = 0.005;
+    const double k = dynamicStretchFactor(original, params);
+    EXPECT_NEAR(k, c.expected_factor, 2e-3 * c.expected_factor);
+    PolynomialTrajectory repaired = original;
+    repaired.stretchTime(k);
+    EXPECT_LE(densePeak(repaired, 1), c.v_limit * 1.002);
+    EXPECT_LE(densePeak(repaired, 2), c.a_limit * 1.002);
+    EXPECT_LE(densePeak(repaired, 3), c.j_limit * 1.002);
+    EXPECT_NEAR(dynamicStretchFactor(repaired, params), 1.0, 2e-3);
+  }
+}
+
+TEST(TrajectoryRepair, RetimingKeepsTheStartStateAndTheJunctions) {
+  const PolynomialTrajectory original = fastTurn();
+  StatePva start;
+  const trajectory_server::TrajectorySample s0 = original.sample(0.0);
+  start << s0.p_W_m, Eigen::Vector3d(0.3, 0.1, 0.0), Eigen::Vector3d(0.5, 0, 0);  // moving at the hand-over
+  MinJerkSpline scratch;
+  PolynomialTrajectory retimed;
+  ASSERT_TRUE(retimeKeepingStart(original, start, 1.4, scratch, retimed));
+  ASSERT_EQ(retimed.pieces(), original.pieces());
+  const trajectory_server::TrajectorySample r0 = retimed.sample(0.0);
+  EXPECT_LT((r0.p_W_m - start.col(0)).norm(), 1e-9);
+  EXPECT_LT((r0.v_W_mps - start.col(1)).norm(), 1e-9);
+  EXPECT_LT((r0.a_W_mps2 - start.col(2)).norm(), 1e-9);
+  double t_original = 0.0;
+  double t_retimed = 0.0;
+  for (int i = 0; i < original.pieces(); ++i) {
+    EXPECT_NEAR(retimed.pieceDurationS(i), 1.4 * original.pieceDurationS(i), 1e-12);
+    t_original += original.pieceDurationS(i);
+    t_retimed += retimed.pieceDurationS(i);
+    EXPECT_LT((retimed.derivative(0, t_retimed) - original.derivative(0, t_original)).norm(), 1e-9) << i;
+  }
+}
+
+TEST(TrajectoryRepair, PlannerRepairsAnAccelerationViolationAndRefusesACollision) {
+  TrackingPlannerParams params = defaultParams();
+  params.min_person_distance_m = 0.0;  // the person plays no part here
+  const PolynomialTrajectory fast = fastTurn();
+  // Limits the fast turn exceeds in acceleration only, by 1.3.
+  params.check.max_velocity_mps = 2.0 * densePeak(fast, 1);
+  params.check.max_acceleration_mps2 = densePeak(fast, 2) / 1.3;
+  params.check.max_jerk_mps3 = 2.0 * densePeak(fast, 3);
+  TrackingPlanner planner = makePlanner(params);
+  TrackingPlannerStages stages(planner);
+  const TrackingPlannerStages::PersonMotion person;
+  const StatePva start = restAt(Eigen::Vector3d(0, 0, 1.5));
+
+  // Open space: the first check fails on acceleration; the repair re-times it within every limit.
+  const mapping::LocalGrid open = makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(0, 0, 1.5), {});
+  PolynomialTrajectory out = fast;
+  const CheckResult first = stages.checkPlannedTrajectory(out, open, person, 0);
+  ASSERT_EQ(first.verdict, CheckVerdict::kAcceleration);
+  double stretch = 0.0;
+  EXPECT_EQ(stages.repairPlannedTrajectory(first, start, out, open, person, stretch).verdict, CheckVerdict::kOk);
+  EXPECT_GT(stretch, 1.0);
+  EXPECT_LE(stretch, params.check.max_repair_stretch);
+  const double tolerance = 1.0 + params.check.tolerance;
+  EXPECT_LE(densePeak(out, 2), params.check.max_acceleration_mps2 * tolerance);
+  EXPECT_LE(densePeak(out, 1), params.check.max_velocity_mps * tolerance);
+  EXPECT_LE(densePeak(out, 3), params.check.max_jerk_mps3 * tolerance);
+  EXPECT_NEAR(out.durationS(), stretch * fast.durationS(), 1e-9);
+
+  // A box on the path (around the second waypoint): blocked whatever the timing. A first verdict of
+  // collision is not repaired at all; one of acceleration is re-timed, then refused on the grid.
+  const mapping::LocalGrid blocked =
+      makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(0, 0, 1.5), {{{2.3, 1.3, 1.0}, {2.7, 1.7, 2.0}}});
+  PolynomialTrajectory through = fast;
+  stretch = 0.0;
+  const CheckResult grid_first{CheckVerdict::kGridBlocked, 1.0};
+  EXPECT_EQ(stages.repairPlannedTrajectory(grid_first, start, through, blocked, person, stretch).verdict,
+            CheckVerdict::kGridBlocked);
+  EXPECT_EQ(stretch, 1.0);
+  EXPECT_NEAR(through.durationS(), fast.durationS(), 1e-12);  // untouched
+  const CheckResult accel_first = stages.checkPlannedTrajectory(through, blocked, person, 0);
+  ASSERT_EQ(accel_first.verdict, CheckVerdict::kAcceleration);  // the acceleration peak comes first
+  EXPECT_EQ(stages.repairPlannedTrajectory(accel_first, start, through, blocked, person, stretch).verdict,
+            CheckVerdict::kGridBlocked);
+}
+
+// The task counts the final check's verdicts: passed first time, repaired (by the first verdict), rejected.
+TEST(PlanningTask, CountsChecksPassedRepairedAndRejected) {
+  // Default limits: passed first time.
+  TaskRig rig;
+  ASSERT_TRUE(rig.planOnceAroundTheWall().trajectory);
+  EXPECT_EQ(rig.task->checksRun(), 1U);
+  EXPECT_EQ(rig.task->checksPassedFirstTime(), 1U);
+  EXPECT_EQ(rig.task->checksRejected(), 0U);
+
+  // The optimiser aims at the limits themselves and the check allows no tolerance: its soft penalties let
+  // its output exceed them a little, and the repair re-times it.
+  TrackingPlannerParams params = defaultParams();
+  params.optimizer_limit_fraction = 1.0;
+  params.check.tolerance = 0.0;
+  params.check.max_acceleration_mps2 = 1.0;
+  TaskRig repairing(params);
+  ASSERT_TRUE(repairing.planOnceAroundTheWall().trajectory);
+  EXPECT_EQ(repairing.task->checksRun(), 1U);
+  EXPECT_EQ(repairing.task->checksPassedFirstTime(), 0U);
+  std::uint64_t repaired = 0;
+  for (const CheckVerdict v : {CheckVerdict::kVelocity, CheckVerdict::kAcceleration, CheckVerdict::kJerk})
+    repaired += repairing.task->checkRepairs(v);
+  EXPECT_EQ(repaired, 1U);
+  EXPECT_GT(repairing.task->maxRepairStretch(), 1.0);
+
+  // Repair off (a stretch of at most 1) and limits far below the plan: rejected, by the verdict.
+  params = defaultParams();
+  params.check.max_velocity_mps = 0.1;
+  params.check.max_repair_stretch = 1.0;
+  TaskRig strict(params);
+  EXPECT_FALSE(strict.planOnceAroundTheWall().trajectory);
+  EXPECT_EQ(strict.task->checksRun(), 1U);
+  EXPECT_EQ(strict.task->checksRejected(), 1U);
+  EXPECT_EQ(strict.task->checkFailures(CheckVerdict::kVelocity), 1U);
+  EXPECT_EQ(strict.task->checkRepairFailures(CheckVerdict::kVelocity), 1U);
 }
 
 }  // namespace

@@ -19,6 +19,7 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::number("person_sight_height_m", &P::person_sight_height_m, Range::closed(0.1, 5.0)),
           rt::number("takeoff_below_m", &P::takeoff_below_m, Range::closed(0.0, 100.0)),
           rt::number("min_person_distance_m", &P::min_person_distance_m, Range::closed(0.0, 50.0)),
+          rt::number("optimizer_limit_fraction", &P::optimizer_limit_fraction, Range::openClosed(0.0, 1.0)),
           rt::section("goal", &P::goal, trackingGoalFields()),
           rt::section("search", &P::search, kinodynamicSearchFields()),
           rt::section("corridor", &P::corridor, corridorFields()),

@@ -1,6 +1,8 @@
 // Planning task: see planning_task.hpp.
 #include "aerotrack/planning/planning_task.hpp"
 
+#include <algorithm>
+
 namespace aerotrack::planning {
 PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& channels, const rt::Clock& stats_clock)
     : planner_(std::move(planner)),
@@ -96,6 +98,24 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   if (report.search_status == SearchStatus::kPartial) ++search_partial_;
   if (report.status == PlanStatus::kSearchFailed) ++search_failures_[static_cast<std::size_t>(report.search_status)];
   if (report.status == PlanStatus::kCheckFailed) ++check_failures_[static_cast<std::size_t>(report.check)];
+  const bool checked = report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
+                       report.status == PlanStatus::kCheckFailed ||
+                       (report.status == PlanStatus::kStopped && report.check != CheckVerdict::kOk);
+  if (checked) {
+    ++checks_run_;
+    if (report.check != CheckVerdict::kOk) ++checks_rejected_;
+    const auto first = static_cast<std::size_t>(report.first_check);
+    if (report.first_check == CheckVerdict::kOk) {
+      ++checks_passed_first_time_;
+    } else if (isDynamicLimit(report.first_check)) {
+      if (report.check == CheckVerdict::kOk) {
+        ++check_repairs_[first];
+        max_repair_stretch_ = std::max(max_repair_stretch_, report.repair_stretch);
+      } else {
+        ++check_repair_failures_[first];
+      }
+    }
+  }
   if (report.corridor_boxes > 0) corridor_boxes_sum_ += static_cast<std::uint64_t>(report.corridor_boxes);
   if (report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
       report.status == PlanStatus::kCheckFailed) {

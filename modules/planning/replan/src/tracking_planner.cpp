@@ -36,8 +36,14 @@ std::string_view toString(PlanStatus status) {
   return "unknown";
 }
 
-rt::Expected<TrackingPlanner> TrackingPlanner::create(const TrackingPlannerParams& params) {
-  if (const rt::Status s = validate(params); !s) return rt::Error{"planning: " + s.error().message};
+rt::Expected<TrackingPlanner> TrackingPlanner::create(const TrackingPlannerParams& params_in) {
+  if (const rt::Status s = validate(params_in); !s) return rt::Error{"planning: " + s.error().message};
+  // One set of dynamic limits (issue 21): the check's are the vehicle's; the optimiser's soft-penalty targets
+  // lie inside them by the stated fraction, so its output tends to pass and the two cannot drift apart.
+  TrackingPlannerParams params = params_in;
+  params.optimizer.max_velocity_mps = params.optimizer_limit_fraction * params.check.max_velocity_mps;
+  params.optimizer.max_acceleration_mps2 = params.optimizer_limit_fraction * params.check.max_acceleration_mps2;
+  params.optimizer.max_jerk_mps3 = params.optimizer_limit_fraction * params.check.max_jerk_mps3;
   auto search = KinodynamicSearch::create(params.search);
   if (!search) return rt::Error{"planning: search: " + search.error().message};
   auto corridor = CorridorBuilder::create(params.corridor);
@@ -219,7 +225,11 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   report.optimizer_status = optimized->status;
   report.optimizer_iterations = optimized->iterations;
 
-  report.check = checkPlannedTrajectory(out, grid, inputs.octree, *person, start_ns).verdict;  // 6.
+  CheckResult check = checkPlannedTrajectory(out, grid, inputs.octree, *person, start_ns);  // 6.
+  report.first_check = check.verdict;
+  if (isDynamicLimit(check.verdict))
+    check = repairPlannedTrajectory(check, start, out, grid, inputs.octree, *person, start_ns, report.repair_stretch);
+  report.check = check.verdict;
   if (report.check != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
   report.status = person->live ? PlanStatus::kPlanned : PlanStatus::kRelocating;
   return report;
@@ -356,6 +366,30 @@ rt::Expected<OptimizerResult> TrackingPlanner::optimizeTrajectory(const mapping:
   // drone can always stop on the trajectory it flies.
   appendStop(out);
   return optimized;
+}
+
+// Repairs are rare (a few per cent of cycles) and each costs a spline solve and a full check: three
+// attempts cover a stretch computed on a re-timed spline that, unlike a pure stretch, keeps the start.
+constexpr int kRepairAttempts = 3;
+
+CheckResult TrackingPlanner::repairPlannedTrajectory(CheckResult check, const StatePva& start,
+                                                     PolynomialTrajectory& out, const mapping::LocalGrid& grid,
+                                                     const octomap::OcTree* octree, const PersonMotion& person,
+                                                     rt::TimeNs start_ns, double& stretch) {
+  // The optimiser's penalties are soft (paper Sect. V-C), so its output may exceed the limits it aimed at.
+  // The same path flown slower is within them (a pure stretch by k divides v, a, j by k, k^2, k^3), and
+  // stays in the corridor it was optimised in; re-timing from the unchanged start state keeps the hand-over
+  // smooth, at the price of small changes to the path between junctions: hence the full re-check.
+  stretch = 1.0;
+  for (int attempt = 0; attempt < kRepairAttempts && isDynamicLimit(check.verdict); ++attempt) {
+    // At least the tolerance's worth more each time, so a re-timing that barely helped still progresses.
+    const double k = std::max(dynamicStretchFactor(out, params_.check), 1.0 + params_.check.tolerance);
+    if (stretch * k > params_.check.max_repair_stretch) break;
+    if (!retimeKeepingStart(out, start, k, repair_spline_, out)) break;
+    stretch *= k;
+    check = checkPlannedTrajectory(out, grid, octree, person, start_ns);
+  }
+  return check;
 }
 
 CheckResult TrackingPlanner::checkPlannedTrajectory(const PolynomialTrajectory& trajectory,

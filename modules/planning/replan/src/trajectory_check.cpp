@@ -39,6 +39,7 @@ const rt::FieldTable<TrajectoryCheckParams>& trajectoryCheckFields() {
       rt::number("sample_step_s", &P::sample_step_s, Range::closed(1e-3, 1.0)),
       rt::number("horizon_s", &P::horizon_s, Range::closed(0.1, 60.0)),
       rt::number("margin_escape_s", &P::margin_escape_s, Range::closed(0.01, 10.0)),
+      rt::number("max_repair_stretch", &P::max_repair_stretch, Range::closed(1.0, 10.0)),
   });
   return kTable;
 }
@@ -75,6 +76,23 @@ CheckResult checkTrajectory(const PolynomialTrajectory& trajectory, const Trajec
     if (!report->collision_free) return {CheckVerdict::kCollision, report->first_collision_t_s.value_or(0.0)};
   }
   return {};
+}
+
+double dynamicStretchFactor(const PolynomialTrajectory& trajectory, const TrajectoryCheckParams& params) {
+  const double end_s = std::min(trajectory.durationS(), params.horizon_s);
+  const int steps = std::max(1, static_cast<int>(std::ceil(end_s / params.sample_step_s)));
+  double v_max = 0.0;
+  double a_max = 0.0;
+  double j_max = 0.0;
+  for (int k = 0; k <= steps; ++k) {
+    const double t = end_s * k / steps;
+    const trajectory_server::TrajectorySample s = trajectory.sample(t);
+    v_max = std::max(v_max, s.v_W_mps.norm());
+    a_max = std::max(a_max, s.a_W_mps2.norm());
+    j_max = std::max(j_max, trajectory.derivative(3, t).norm());
+  }
+  return std::max({1.0, v_max / params.max_velocity_mps, std::sqrt(a_max / params.max_acceleration_mps2),
+                   std::cbrt(j_max / params.max_jerk_mps3)});
 }
 
 }  // namespace aerotrack::planning

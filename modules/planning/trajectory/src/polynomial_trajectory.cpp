@@ -2,6 +2,7 @@
 #include "aerotrack/planning/polynomial_trajectory.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace aerotrack::planning {
 
@@ -59,6 +60,37 @@ trajectory_server::TrajectorySample PolynomialTrajectory::sample(double t_s) con
   s.v_W_mps = c.transpose() * monomialBasis(1, t_s);
   s.a_W_mps2 = c.transpose() * monomialBasis(2, t_s);
   return s;
+}
+
+void PolynomialTrajectory::stretchTime(double factor) {
+  // p'(t) = p(t / k) = sum_n c_n k^-n t^n on [0, k T].
+  double scale = 1.0;
+  Eigen::Matrix<double, 6, 1> per_order;
+  for (int n = 0; n < 6; ++n, scale /= factor) per_order(n) = scale;
+  for (auto& c : coeffs_) c = per_order.asDiagonal() * c;
+  for (double& d : durations_s_) d *= factor;
+  total_s_ *= factor;
+}
+
+bool retimeKeepingStart(const PolynomialTrajectory& in, const StatePva& start, double factor, MinJerkSpline& spline,
+                        PolynomialTrajectory& out) {
+  const int m = in.pieces();
+  if (m < 1 || !(factor > 0.0) || !std::isfinite(factor)) return false;
+  Eigen::Matrix3Xd waypoints_m(3, m - 1);
+  Eigen::VectorXd durations_s(m);
+  double t_s = 0.0;
+  for (int i = 0; i < m; ++i) {
+    t_s += in.pieceDurationS(i);
+    durations_s(i) = factor * in.pieceDurationS(i);
+    if (i + 1 < m) waypoints_m.col(i) = in.derivative(0, t_s);
+  }
+  const trajectory_server::TrajectorySample last = in.sample(in.durationS());
+  StatePva end;
+  end << last.p_W_m, last.v_W_mps / factor, last.a_W_mps2 / (factor * factor);
+  spline.reset(start, end, m);
+  if (!spline.generate(waypoints_m, durations_s)) return false;
+  out.assign(spline);
+  return true;
 }
 
 }  // namespace aerotrack::planning

@@ -93,9 +93,6 @@ const rt::FieldTable<TrajectoryOptimizerParams>& trajectoryOptimizerFields() {
   using P = TrajectoryOptimizerParams;
   using rt::Range;
   static const rt::FieldTable<P> kTable({
-      rt::number("max_velocity_mps", &P::max_velocity_mps, Range::closed(0.1, 30.0)),
-      rt::number("max_acceleration_mps2", &P::max_acceleration_mps2, Range::closed(0.1, 50.0)),
-      rt::number("max_jerk_mps3", &P::max_jerk_mps3, Range::closed(0.1, 1e4)),
       rt::number("barrier_weight", &P::barrier_weight, Range::closed(1e-9, 1e6)),
       rt::number("time_weight", &P::time_weight, Range::closed(0.0, 1e6)),
       rt::number("waypoint_velocity_weight", &P::waypoint_velocity_weight, Range::closed(0.0, 1e9)),
@@ -165,6 +162,9 @@ TrajectoryOptimizer::~TrajectoryOptimizer() = default;
 
 rt::Expected<TrajectoryOptimizer> TrajectoryOptimizer::create(const TrajectoryOptimizerParams& params) {
   if (const rt::Status s = validate(params); !s) return rt::Error{"trajectory optimizer: " + s.error().message};
+  // The limits are not config keys (the planner derives them from the check's, issue 21): checked here.
+  if (!(params.max_velocity_mps > 0.0) || !(params.max_acceleration_mps2 > 0.0) || !(params.max_jerk_mps3 > 0.0))
+    return rt::Error{"trajectory optimizer: the velocity, acceleration and jerk limits must be > 0"};
   return TrajectoryOptimizer(params);
 }
 

@@ -68,8 +68,21 @@ class PlanningTask final : public rt::Task {
   std::uint64_t searchPartial() const { return search_partial_; }
   /// Failed searches by how they ended (index: SearchStatus).
   std::uint64_t searchFailures(SearchStatus status) const { return search_failures_[static_cast<std::size_t>(status)]; }
-  /// Failed final checks by verdict (CheckVerdict).
+  /// Failed final checks (rejected after any repair) by their final verdict (CheckVerdict).
   std::uint64_t checkFailures(CheckVerdict verdict) const { return check_failures_[static_cast<std::size_t>(verdict)]; }
+  /// Final checks run (an optimised trajectory reached stage 6), and those passed without repair.
+  std::uint64_t checksRun() const { return checks_run_; }
+  std::uint64_t checksPassedFirstTime() const { return checks_passed_first_time_; }
+  /// Final checks whose trajectory was thrown away (after any repair; a stop may have been flown instead).
+  std::uint64_t checksRejected() const { return checks_rejected_; }
+  /// Trajectories repaired (re-timed, then passed) by the verdict of their first check (issue 21).
+  std::uint64_t checkRepairs(CheckVerdict first) const { return check_repairs_[static_cast<std::size_t>(first)]; }
+  /// Repairs tried and failed (rejected anyway) by the verdict of their first check.
+  std::uint64_t checkRepairFailures(CheckVerdict first) const {
+    return check_repair_failures_[static_cast<std::size_t>(first)];
+  }
+  /// The largest time stretch a successful repair applied (1: none yet).
+  double maxRepairStretch() const { return max_repair_stretch_; }
   std::uint64_t optimizerMaxIterations() const { return optimizer_max_iterations_; }
   std::uint64_t optimizerLineSearch() const { return optimizer_line_search_; }
   double meanCorridorBoxes() const;
@@ -124,7 +137,13 @@ class PlanningTask final : public rt::Task {
   std::uint64_t cycles_ = 0;
   std::uint64_t search_partial_ = 0;
   std::array<std::uint64_t, 5> search_failures_{};
-  std::array<std::uint64_t, 8> check_failures_{};  // by CheckVerdict
+  std::array<std::uint64_t, kCheckVerdictCount> check_failures_{};         // by final CheckVerdict
+  std::array<std::uint64_t, kCheckVerdictCount> check_repairs_{};          // by first CheckVerdict
+  std::array<std::uint64_t, kCheckVerdictCount> check_repair_failures_{};  // by first CheckVerdict
+  std::uint64_t checks_run_ = 0;
+  std::uint64_t checks_passed_first_time_ = 0;
+  std::uint64_t checks_rejected_ = 0;
+  double max_repair_stretch_ = 1.0;
   std::uint64_t optimizer_max_iterations_ = 0;
   std::uint64_t optimizer_line_search_ = 0;
   std::uint64_t corridor_boxes_sum_ = 0;

@@ -11,7 +11,9 @@
 //   4. corridor: overlapping free boxes along the search path (Sect. V-C, modules/planning/corridor);
 //   5. optimisation: the minimum-jerk spline in the corridor (Sect. V-C, modules/planning/trajectory);
 //   6. final check: limits, inflated grid, FCL against the octree (trajectory_check.hpp), and the minimum
-//      distance to the person's predicted path (never fly into them).
+//      distance to the person's predicted path (never fly into them). A trajectory over the dynamic limits
+//      only (the optimiser's penalties are soft) is repaired first: re-timed slower by the stretch the
+//      worst violation needs, from the same start state, and checked again in full (issue 21).
 // A cycle that fails at any stage publishes nothing: the current trajectory continues (the trajectory
 // server holds its end at rest). If, in addition, the current trajectory's next stretch is no longer
 // clear in the newest grid, a stopping trajectory (a minimum-jerk brake to rest along the current
@@ -59,6 +61,10 @@ struct TrackingPlannerParams {
   /// Never fly into the person: a trajectory that comes horizontally closer to their predicted path than
   /// this (or than it starts, if it starts closer) is refused by the final check; >= 0.
   double min_person_distance_m = 1.0;
+  /// The optimiser's velocity, acceleration and jerk targets are this fraction of the check's (the
+  /// vehicle's) limits, set by create(): one set of limits, the soft penalties' targets inside it by a
+  /// stated margin (issue 21). The optimizer section's own limit fields are overwritten; in (0, 1].
+  double optimizer_limit_fraction = 0.93;
   TrackingGoalParams goal;
   KinodynamicSearchParams search;
   CorridorParams corridor;
@@ -118,8 +124,10 @@ struct PlanReport {
   int corridor_boxes = 0;
   OptimizerStatus optimizer_status = OptimizerStatus::kConverged;
   int optimizer_iterations = 0;
-  CheckVerdict check = CheckVerdict::kOk;
-  bool predicted = false;  ///< The Bezier prediction was used (else constant velocity).
+  CheckVerdict check = CheckVerdict::kOk;        ///< The final verdict (after any repair).
+  CheckVerdict first_check = CheckVerdict::kOk;  ///< The optimiser's output's verdict, before any repair.
+  double repair_stretch = 1.0;  ///< The time stretch a repair applied (1: none); with check kOk: repaired.
+  bool predicted = false;       ///< The Bezier prediction was used (else constant velocity).
 };
 
 /// Not thread-safe (one planning thread). create() allocates all scratch memory; a warm cycle allocates
@@ -210,6 +218,12 @@ class TrackingPlanner {
   CheckResult checkPlannedTrajectory(const PolynomialTrajectory& trajectory, const mapping::LocalGrid& grid,
                                      const octomap::OcTree* octree, const PersonMotion& person,
                                      rt::TimeNs start_ns) const;
+  /// Stage 6b, repair (issue 21): while the verdict is a dynamic limit (isDynamicLimit), re-time `out` from
+  /// `start` by dynamicStretchFactor (retimeKeepingStart) and check again in full, at most kRepairAttempts
+  /// times and up to check.max_repair_stretch in all. Returns the last verdict; the stretch in `stretch`.
+  CheckResult repairPlannedTrajectory(CheckResult check, const StatePva& start, PolynomialTrajectory& out,
+                                      const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+                                      const PersonMotion& person, rt::TimeNs start_ns, double& stretch);
   /// A failed cycle: `status`, or kStopped with a stop written into `out` if the current trajectory is
   /// blocked ahead.
   PlanReport failCycle(PlanReport report, PlanStatus status, const PlanInputs& inputs, const StatePva& start,
@@ -234,6 +248,7 @@ class TrackingPlanner {
   /// The same piece, generated into stop_spline_ only (false if the solve failed).
   bool pieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s);
   MinJerkSpline stop_spline_;
+  MinJerkSpline repair_spline_;
   Eigen::VectorXd one_duration_;
   std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
 };

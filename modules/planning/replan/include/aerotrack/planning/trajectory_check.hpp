@@ -20,14 +20,19 @@
 
 namespace aerotrack::planning {
 
+/// The vehicle's dynamic limits live here and only here (issue 21): the optimiser's soft-penalty targets are
+/// derived from them (TrackingPlannerParams::optimizer_limit_fraction), so the two cannot drift apart.
 struct TrajectoryCheckParams {
-  double max_velocity_mps = 3.0;       ///< Norm limit; > 0.
-  double max_acceleration_mps2 = 4.0;  ///< Norm limit; > 0.
-  double max_jerk_mps3 = 40.0;         ///< Norm limit; > 0.
+  double max_velocity_mps = 3.0;       ///< Norm limit (the vehicle's); > 0.
+  double max_acceleration_mps2 = 4.0;  ///< Norm limit (the vehicle's); > 0.
+  double max_jerk_mps3 = 40.0;         ///< Norm limit (the vehicle's); > 0.
   double tolerance = 0.05;             ///< Relative excess allowed over each limit; in [0, 1].
   double sample_step_s = 0.02;         ///< Time between limit and grid samples; > 0.
   double horizon_s = 3.0;              ///< Only this much of the trajectory is checked (the rest is replanned); > 0.
   double margin_escape_s = 0.3;        ///< A start inside the inflation margin must be left within this; > 0.
+  /// A trajectory over the dynamic limits is repaired by stretching its time (repairs beyond this total
+  /// factor are refused: a plan that slow no longer keeps up with the person); >= 1 (1: no repair).
+  double max_repair_stretch = 2.0;
 };
 
 /// Judges a trajectory's samples against the inflated grid, in time order. A sample in the margin after
@@ -70,6 +75,11 @@ enum class CheckVerdict : std::uint8_t {
   kTooCloseToPerson,  ///< Checked by the planner (it knows the person's predicted path).
 };
 std::string_view toString(CheckVerdict verdict);
+inline constexpr int kCheckVerdictCount = 8;
+/// Velocity, acceleration or jerk: a verdict a slower timing of the same path can cure (the others cannot).
+constexpr bool isDynamicLimit(CheckVerdict verdict) {
+  return verdict == CheckVerdict::kVelocity || verdict == CheckVerdict::kAcceleration || verdict == CheckVerdict::kJerk;
+}
 
 struct CheckResult {
   CheckVerdict verdict = CheckVerdict::kOk;
@@ -81,5 +91,10 @@ struct CheckResult {
 CheckResult checkTrajectory(const PolynomialTrajectory& trajectory, const TrajectoryCheckParams& params,
                             const mapping::LocalGrid& grid, const mapping::TrajectoryChecker& checker,
                             const octomap::OcTree* octree);
+
+/// The time stretch k >= 1 that brings the trajectory within the dynamic limits (without the tolerance) over
+/// the checked window [0, min(duration, horizon_s)], sampled every sample_step_s: the largest of |v| / v_max,
+/// sqrt(|a| / a_max) and cbrt(|j| / j_max) (a pure stretch by k divides v by k, a by k^2, j by k^3), or 1.
+double dynamicStretchFactor(const PolynomialTrajectory& trajectory, const TrajectoryCheckParams& params);
 
 }  // namespace aerotrack::planning

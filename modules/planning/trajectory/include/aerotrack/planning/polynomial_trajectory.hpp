@@ -32,6 +32,11 @@ class PolynomialTrajectory final : public trajectory_server::Trajectory {
   trajectory_server::TrajectorySample sample(double t_s) const override;
   /// Derivative `order` (0 position .. 3 jerk) at t_s (clamped to [0, durationS()]).
   Eigen::Vector3d derivative(int order, double t_s) const;
+  /// Pure time rescaling t -> factor * t (factor > 0): the same path in space, every duration times
+  /// factor, so velocity scales with 1 / factor, acceleration 1 / factor^2, jerk 1 / factor^3 (c_k becomes
+  /// c_k / factor^k). The start's velocity and acceleration scale too: see retimeKeepingStart for a
+  /// hand-over that must stay smooth.
+  void stretchTime(double factor);
 
  private:
   int locate(double& t_s) const;  // piece index of t_s; t_s becomes time within the piece
@@ -40,5 +45,14 @@ class PolynomialTrajectory final : public trajectory_server::Trajectory {
   std::vector<double> durations_s_;
   double total_s_ = 0.0;
 };
+
+/// Re-allocation of time (issue 21): the minimum-jerk spline through `in`'s junction positions with every
+/// duration times `factor` (> 0), from `start` (kept exactly, so the hand-over from the trajectory being
+/// flown stays continuous in p, v, a) to `in`'s end position with its end velocity / factor and
+/// acceleration / factor^2. Away from the start the dynamics shrink about as a pure stretch's do; the path
+/// between junctions may move slightly, so the result must be checked again (collision included).
+/// `spline` is scratch. `out` may be `in`. False (out untouched) if the solve failed.
+bool retimeKeepingStart(const PolynomialTrajectory& in, const StatePva& start, double factor, MinJerkSpline& spline,
+                        PolynomialTrajectory& out);
 
 }  // namespace aerotrack::planning

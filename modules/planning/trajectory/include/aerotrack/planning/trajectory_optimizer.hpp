@@ -56,8 +56,9 @@ struct TrajectoryOptimizerParams {
   int max_pieces = 32;                        ///< Scratch sized for this many pieces (more allocates); >= 1.
 };
 
-/// The `optimizer:` config section: every field above by its name, all required, with the one range per field
-/// that parsing, validate() and printing share (rt/field_table.hpp; the ranges are in the .cpp).
+/// The `optimizer:` config section: every field above but the three limits by its name, all required (the
+/// limits are derived from the check's, the vehicle's: TrackingPlannerParams::optimizer_limit_fraction), with the one
+/// range per field that parsing, validate() and printing share (rt/field_table.hpp; the ranges are in the .cpp).
 const rt::FieldTable<TrajectoryOptimizerParams>& trajectoryOptimizerFields();
 /// Every field in its range; the error names the key.
 rt::Status validate(const TrajectoryOptimizerParams& params);
