@@ -344,7 +344,7 @@ int suiteCommand(const ParsedArgs& args, const std::string& self, std::int64_t j
     std::snprintf(ours, sizeof(ours), "%d %s", stats["successes"].get<int>(),
                   formatInterval(stats["success_ci95"]).c_str());
     std::snprintf(trials, sizeof(trials), "%d/%lld", stats["completed"].get<int>(),
-                  static_cast<long long>(suite->last_seed - suite->first_seed + 1));
+                  static_cast<long long>(suite->last_seed) - static_cast<long long>(suite->first_seed) + 1);
     std::printf("%-44s %12s %22s %22s %7.0f%%\n", r.cell.id.c_str(), trials, followed, ours,
                 stats["visible_ratio_mean"].is_number() ? 100.0 * stats["visible_ratio_mean"].get<double>() : 0.0);
   }

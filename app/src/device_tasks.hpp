@@ -191,7 +191,7 @@ class TargetTruthCheckTask final : public rt::Task {
     // The estimate lives in the odometry frame (identity without drift, issue 20): so does the truth here.
     const hal::sim::OdometryFrameError T_OW{truth->odom_t_OW_m, truth->odom_yaw_OW_rad};
     const double position_error_m = (p_m - T_OW.toOdometry(truth->person_p_W_m).head<2>()).norm();
-    const double velocity_error_mps = (estimate->v_WT_mps - T_OW.R_OW() * truth->person_v_W_mps).head<2>().norm();
+    const double velocity_error_mps = (estimate->v_WT_mps - T_OW.rotationOW() * truth->person_v_W_mps).head<2>().norm();
     position_error_sum_m_ += position_error_m;
     velocity_error_sum_mps_ += velocity_error_mps;
     position_error_max_m_ = std::max(position_error_max_m_, position_error_m);

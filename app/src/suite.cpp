@@ -264,25 +264,43 @@ std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& r
       std::string visible = suiteNumberCell(stats["visible_ratio_mean"], 0, " %", 100.0);
       if (suite.targets.visible_ratio && stats["visible_ratio_mean"].is_number() &&
           stats["visible_ratio_mean"].get<double>() < *suite.targets.visible_ratio)
-        visible = "🔴 " + visible;
+        visible.insert(0, "🔴 ");
       const nlohmann::json& id = stats["identity"];
-      const std::string no_switch = id.value("trials_reported", 0) > 0
-                                        ? std::to_string(id.value("trials_without_switch", 0)) + "/" +
-                                              std::to_string(id.value("trials_reported", 0))
-                                        : "-";
-      md += "| " + speed + " | " + mode + " | " + r.cell.camera + " | " +
-            suiteRateCell(stats, "followed_rate", "followed_ci95", suite.targets.followed_rate) + " | " +
-            suiteRateCell(stats, "success_rate", "success_ci95", suite.targets.success_rate) + " | " + visible + " | " +
-            suiteNumberCell(stats["distance_mean_m"], 2, " m") + " | " +
-            suiteNumberCell(stats["min_clearance_m"], 2, " m") + " | " + no_switch + " | " +
-            suiteNumberCell(id["time_on_wrong_person_s_mean"], 1, " s") + " | " +
-            suiteNumberCell(stats["person_top_speed_mps_mean"], 2, "") + " / " +
-            suiteNumberCell(stats["person_mean_speed_mps_mean"], 2, " m/s") + " |\n";
+      std::string no_switch = "-";
+      if (id.value("trials_reported", 0) > 0) {
+        no_switch = std::to_string(id.value("trials_without_switch", 0));
+        no_switch += '/';
+        no_switch += std::to_string(id.value("trials_reported", 0));
+      }
+      // One cell at a time (appends, not a chain of temporaries).
+      for (const std::string& cell :
+           {speed, mode, r.cell.camera,
+            suiteRateCell(stats, "followed_rate", "followed_ci95", suite.targets.followed_rate),
+            suiteRateCell(stats, "success_rate", "success_ci95", suite.targets.success_rate), visible,
+            suiteNumberCell(stats["distance_mean_m"], 2, " m"), suiteNumberCell(stats["min_clearance_m"], 2, " m"),
+            no_switch, suiteNumberCell(id["time_on_wrong_person_s_mean"], 1, " s")}) {
+        md += "| ";
+        md += cell;
+        md += ' ';
+      }
+      md += "| ";
+      md += suiteNumberCell(stats["person_top_speed_mps_mean"], 2, "");
+      md += " / ";
+      md += suiteNumberCell(stats["person_mean_speed_mps_mean"], 2, " m/s");
+      md += " |\n";
     }
-    if (!errors.empty()) md += "\n" + errors;
+    if (!errors.empty()) {
+      md += '\n';
+      md += errors;
+    }
     const std::string plot = "plot-" + suiteScenarioTag(scenario) + ".png";
-    if (std::find(plot_files.begin(), plot_files.end(), plot) != plot_files.end())
-      md += "\n![" + scenario + "](" + plot + ")\n";
+    if (std::find(plot_files.begin(), plot_files.end(), plot) != plot_files.end()) {
+      md += "\n![";
+      md += scenario;
+      md += "](";
+      md += plot;
+      md += ")\n";
+    }
   }
   return md;
 }
@@ -401,10 +419,11 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
     drawSuitePanel(image, cv::Rect(2 * w, 30, w, h), {"mean distance, m", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo,
                    x_hi, distance, false);
     const std::string file = "plot-" + suiteScenarioTag(scenario) + ".png";
+    const std::string path = out_dir + "/" + file;
     try {
-      if (!cv::imwrite(out_dir + "/" + file, image)) return rt::Error{out_dir + "/" + file + ": cannot write image"};
+      if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
     } catch (const cv::Exception& e) {
-      return rt::Error{out_dir + "/" + file + ": cannot write image: " + e.what()};
+      return rt::Error{path + ": cannot write image: " + e.what()};
     }
     files.push_back(file);
   }

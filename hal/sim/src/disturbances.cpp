@@ -6,7 +6,7 @@
 namespace aerotrack::hal::sim {
 
 QuadrotorState inOdometryFrame(const OdometryFrameError& T_OW, const QuadrotorState& state_W) {
-  const Eigen::Matrix3d R_OW = T_OW.R_OW();
+  const Eigen::Matrix3d R_OW = T_OW.rotationOW();
   QuadrotorState s = state_W;
   s.p_W_m = R_OW * state_W.p_W_m + T_OW.t_m;
   s.v_W_mps = R_OW * state_W.v_W_mps;
@@ -16,7 +16,7 @@ QuadrotorState inOdometryFrame(const OdometryFrameError& T_OW, const QuadrotorSt
 }
 
 hal::Setpoint inOdometryFrame(const OdometryFrameError& T_OW, const hal::Setpoint& setpoint_W) {
-  const Eigen::Matrix3d R_OW = T_OW.R_OW();
+  const Eigen::Matrix3d R_OW = T_OW.rotationOW();
   hal::Setpoint s = setpoint_W;
   s.p_W_m = R_OW * setpoint_W.p_W_m + T_OW.t_m;
   s.v_W_mps = R_OW * setpoint_W.v_W_mps;

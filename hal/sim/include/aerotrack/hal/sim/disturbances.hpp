@@ -66,9 +66,9 @@ struct OdometryFrameError {
   Eigen::Vector3d t_m = Eigen::Vector3d::Zero();
   double yaw_rad = 0.0;
 
-  Eigen::Matrix3d R_OW() const { return Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
-  Eigen::Vector3d toOdometry(const Eigen::Vector3d& p_W_m) const { return R_OW() * p_W_m + t_m; }
-  Eigen::Vector3d toWorld(const Eigen::Vector3d& p_O_m) const { return R_OW().transpose() * (p_O_m - t_m); }
+  Eigen::Matrix3d rotationOW() const { return Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+  Eigen::Vector3d toOdometry(const Eigen::Vector3d& p_W_m) const { return rotationOW() * p_W_m + t_m; }
+  Eigen::Vector3d toWorld(const Eigen::Vector3d& p_O_m) const { return rotationOW().transpose() * (p_O_m - t_m); }
 };
 
 /// The vehicle's state expressed in the odometry frame (what VIO reports and what the flight
