@@ -75,6 +75,8 @@ class PlanningTask final : public rt::Task {
   double meanCorridorBoxes() const;
   /// Brakes published on entering hold, and descents on entering land.
   std::uint64_t holds() const { return holds_; }
+  /// Brakes to rest on entering the supervisor's degraded mode (issue 21).
+  std::uint64_t degradedBrakes() const { return degraded_brakes_; }
   std::uint64_t landings() const { return landings_; }
   /// Objects the trajectory pools added after start-up because all of theirs were lent (the only
   /// allocations of the task once warm; they stop once the pools are as large as the readers need).
@@ -132,6 +134,7 @@ class PlanningTask final : public rt::Task {
   std::uint64_t landings_ = 0;
   int failures_in_a_row_ = 0;
   supervisor::Mode last_mode_ = supervisor::Mode::kTakeOff;
+  std::uint64_t degraded_brakes_ = 0;  ///< Brakes to rest on entering degraded (issue 21).
   void publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_capture_ns);
   bool handleMode(supervisor::Mode mode, const PlanInputs& inputs);
   rt::TimingStats cycle_stats_;
