@@ -47,7 +47,8 @@ struct PlanningChannels {
   rt::SharedSlot<trajectory_server::TimedTrajectory>& trajectories;
   /// The supervisor's mode (optional: without it the task always tracks). In search it publishes
   /// nothing (the drone hovers while the gimbal sweeps), in relocate it plans along the last prediction,
-  /// in hold it brakes once and then publishes nothing, in land it descends once.
+  /// in hold it brakes once and then publishes nothing, in land it descends once, in degraded (issue 21) it
+  /// brakes once and then plans as in track, every cycle.
   const rt::LatestSlot<supervisor::SupervisorState>* supervisor = nullptr;
   /// Where it counts its failed cycles in a row, for the supervisor (optional).
   std::atomic<int>* failures_in_a_row = nullptr;
