@@ -124,13 +124,30 @@ nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::Tim
                            {"reason", std::string(supervisor::toString(t.reason))}});
   }
   nlohmann::json seconds = nlohmann::json::object();
-  for (const auto mode : {supervisor::Mode::kTakeOff, supervisor::Mode::kSearch, supervisor::Mode::kTrack,
-                          supervisor::Mode::kRelocate, supervisor::Mode::kHold, supervisor::Mode::kLand}) {
+  for (const auto mode :
+       {supervisor::Mode::kTakeOff, supervisor::Mode::kSearch, supervisor::Mode::kTrack, supervisor::Mode::kRelocate,
+        supervisor::Mode::kHold, supervisor::Mode::kLand, supervisor::Mode::kDegraded}) {
     seconds[std::string(supervisor::toString(mode))] = static_cast<double>(task->stepsIn(mode)) * step_s;
+  }
+  // Each relocation: when it began, when its timeout ran out (null: it did not), when and how it ended
+  // (end null: still searching when the run ended), and how long it took (to the end of the run if open).
+  nlohmann::json relocations = nlohmann::json::array();
+  const rt::TimeNs last_ns = task->lastStepNs();
+  for (std::size_t i = 0; i < task->relocationCount(); ++i) {
+    const supervisor::SupervisorTask::Relocation& r = task->relocations()[i];
+    const auto at = [&](rt::TimeNs t_ns) {
+      return t_ns >= 0 ? nlohmann::json(rt::nsToSeconds(t_ns - start_ns)) : nlohmann::json(nullptr);
+    };
+    relocations.push_back({{"start_s", at(r.start_ns)},
+                           {"timeout_s", at(r.timeout_ns)},
+                           {"end_s", at(r.end_ns)},
+                           {"duration_s", rt::nsToSeconds((r.end_ns >= 0 ? r.end_ns : last_ns) - r.start_ns)},
+                           {"outcome", std::string(supervisor::toString(r.outcome))}});
   }
   return {{"mode", std::string(supervisor::toString(task->state().mode))},
           {"reason", std::string(supervisor::toString(task->state().reason))},
           {"transitions", transitions},
+          {"relocations", relocations},
           {"seconds_in", seconds}};
 }
 

@@ -1,7 +1,7 @@
 // The closed loop on the sim HAL in lockstep (issue 9): the planner flies from the estimated person, the
 // gimbal controller keeps them in frame, the supervisor watches. Tracking through sharp_turn at 1.5 m/s;
 // relocation after a forced 2 s occlusion; each failsafe under its injected fault (camera frames stop,
-// odometry freezes, depth stops, the planner is forced to fail) holds the drone without collision.
+// odometry freezes, depth stops) holds the drone without collision; a planner forced to fail degrades to a hover.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -113,15 +113,24 @@ TEST_P(Failsafe, FiresAndTheDroneHoldsWithoutCollision) {
   EXPECT_LT(f.final_speed_mps, 0.3);  // braked to a hover
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Faults, Failsafe,
-    ::testing::Values(FaultCase{"camera_stop_s: [10.0, 1000.0]", "", "failsafe: no camera frames"},
-                      FaultCase{"odometry_freeze_s: [10.0, 1000.0]", "", "failsafe: stale odometry"},
-                      FaultCase{"depth_stop_s: [10.0, 1000.0]", "", "failsafe: no depth images"},
-                      // Every plan fails its final check (an impossible speed limit): failures in a row.
-                      FaultCase{"    max_velocity_mps: 3.0\n    max_acceleration_mps2: 4.0\n    max_jerk_mps3: 40.0",
-                                "    max_velocity_mps: 0.1\n    max_acceleration_mps2: 4.0\n    max_jerk_mps3: 40.0",
-                                "failsafe: planner failures in a row"}));
+INSTANTIATE_TEST_SUITE_P(Faults, Failsafe,
+                         ::testing::Values(FaultCase{"camera_stop_s: [10.0, 1000.0]", "", "failsafe: no camera frames"},
+                                           FaultCase{"odometry_freeze_s: [10.0, 1000.0]", "",
+                                                     "failsafe: stale odometry"},
+                                           FaultCase{"depth_stop_s: [10.0, 1000.0]", "", "failsafe: no depth images"}));
+
+// Every plan fails its final check (an impossible speed limit): failures in a row are no failsafe (issue 21).
+// The supervisor degrades: the drone brakes to a hover, the gimbal stays on the person, planning goes on.
+TEST(ClosedLoop, PlannerFailuresInARowDegradeToAHoverWithoutCollisionNotToALatchedHold) {
+  const std::string yaml =
+      simYaml("    max_velocity_mps: 3.0\n    max_acceleration_mps2: 4.0\n    max_jerk_mps3: 40.0",
+              "    max_velocity_mps: 0.1\n    max_acceleration_mps2: 4.0\n    max_jerk_mps3: 40.0");
+  const Flight f = fly(yaml, 1, 18.0);
+  EXPECT_EQ(f.mode, "degraded");
+  EXPECT_EQ(f.reason, "planner failures in a row");
+  EXPECT_EQ(f.summary["collisions"], 0);
+  EXPECT_LT(f.final_speed_mps, 0.3);  // braked to a hover
+}
 
 }  // namespace
 }  // namespace aerotrack::app

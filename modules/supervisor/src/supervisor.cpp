@@ -1,6 +1,8 @@
 // The mode machine: see supervisor.hpp.
 #include "aerotrack/supervisor/supervisor.hpp"
 
+#include "aerotrack/supervisor/supervisor_task.hpp"
+
 #include <cmath>
 
 namespace aerotrack::supervisor {
@@ -19,6 +21,8 @@ std::string_view toString(Mode mode) {
       return "hold";
     case Mode::kLand:
       return "land";
+    case Mode::kDegraded:
+      return "degraded";
   }
   return "unknown";
 }
@@ -42,13 +46,15 @@ std::string_view toString(Reason reason) {
     case Reason::kNoCameraFrames:
       return "failsafe: no camera frames";
     case Reason::kPlannerFailures:
-      return "failsafe: planner failures in a row";
+      return "planner failures in a row";
     case Reason::kOverrunStorm:
       return "failsafe: deadline overrun storm";
     case Reason::kVehicleLinkLost:
       return "failsafe: vehicle link lost";
     case Reason::kHoldTimeout:
       return "held too long";
+    case Reason::kPlanSucceeded:
+      return "a plan succeeded";
   }
   return "unknown";
 }
@@ -58,13 +64,29 @@ bool isFailsafe(Reason reason) {
     case Reason::kStaleOdometry:
     case Reason::kNoDepth:
     case Reason::kNoCameraFrames:
-    case Reason::kPlannerFailures:
     case Reason::kOverrunStorm:
     case Reason::kVehicleLinkLost:
       return true;
     default:
       return false;
   }
+}
+
+std::string_view toString(SupervisorTask::RelocationOutcome outcome) {
+  using O = SupervisorTask::RelocationOutcome;
+  switch (outcome) {
+    case O::kSearching:
+      return "searching";
+    case O::kFoundRelocating:
+      return "found while relocating";
+    case O::kFoundAfterTimeout:
+      return "found after the relocation timeout";
+    case O::kFailsafe:
+      return "failsafe";
+    case O::kLanded:
+      return "landed";
+  }
+  return "unknown";
 }
 
 rt::Status validate(const SupervisorParams& p) {
@@ -137,8 +159,6 @@ bool Supervisor::failsafe(const SupervisorInputs& in, Reason& reason) {
     reason = Reason::kNoDepth;
   } else if (stale(in.camera_stamp_ns, params_.camera_timeout_s)) {
     reason = Reason::kNoCameraFrames;
-  } else if (in.planner_failures_in_a_row >= params_.max_planner_failures) {
-    reason = Reason::kPlannerFailures;
   } else if (storm) {
     reason = Reason::kOverrunStorm;
   } else {
@@ -170,9 +190,14 @@ const SupervisorState& Supervisor::update(const SupervisorInputs& in) {
       if (in.person_live && fresh) enter(Mode::kTrack, Reason::kPersonFound, now);
       break;
     case Mode::kTrack:
+    case Mode::kDegraded:
       if (!fresh) {
         lost_accepted_ns_ = in.person_accepted_ns;
         enter(Mode::kRelocate, Reason::kPersonLost, now);
+      } else if (state_.mode == Mode::kTrack && in.planner_failures_in_a_row >= params_.max_planner_failures) {
+        enter(Mode::kDegraded, Reason::kPlannerFailures, now);
+      } else if (state_.mode == Mode::kDegraded && in.planner_failures_in_a_row == 0) {
+        enter(Mode::kTrack, Reason::kPlanSucceeded, now);
       }
       break;
     case Mode::kRelocate:

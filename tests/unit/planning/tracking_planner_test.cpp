@@ -516,9 +516,10 @@ struct TaskRig {
   rt::ManualClock clock{0};
   std::unique_ptr<PlanningTask> task;
 
-  explicit TaskRig(const TrackingPlannerParams& params = defaultParams()) {
+  explicit TaskRig(const TrackingPlannerParams& params = defaultParams(),
+                   const rt::LatestSlot<supervisor::SupervisorState>* modes = nullptr) {
     task = std::make_unique<PlanningTask>(makePlanner(params),
-                                          PlanningChannels{odometry, target, grid, octree, trajectories}, clock);
+                                          PlanningChannels{odometry, target, grid, octree, trajectories, modes}, clock);
   }
   void step(double t_s) { task->step(rt::secondsToNs(t_s)); }
 
@@ -564,6 +565,36 @@ TEST(PlanningTask, FailedCycleKeepsTheOldTrajectory) {
   EXPECT_EQ(rig.task->count(PlanStatus::kNoTarget), 1U);
   EXPECT_EQ(rig.trajectories.version(), version);
   EXPECT_EQ(rig.task->lastPublished().trajectory, before.trajectory);
+}
+
+TEST(PlanningTask, EnteringDegradedBrakesOnceAndThenEveryCyclePlansAgain) {
+  // Issue 21: degraded (failed plans in a row, the person seen) is a hover that keeps planning.
+  rt::LatestSlot<supervisor::SupervisorState> modes;
+  supervisor::SupervisorState state;
+  state.mode = supervisor::Mode::kTrack;
+  modes.write(state);
+  TaskRig rig(defaultParams(), &modes);
+  const trajectory_server::TimedTrajectory first = rig.planOnceAroundTheWall();
+  ASSERT_TRUE(first.trajectory);
+
+  state.mode = supervisor::Mode::kDegraded;
+  modes.write(state);
+  rig.odometry.write(odometryAt(first.trajectory->sample(0.05).p_W_m, rt::secondsToNs(0.05)));
+  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.05)));
+  rig.step(0.05);
+  EXPECT_EQ(rig.task->degradedBrakes(), 1U);
+  EXPECT_EQ(rig.task->count(PlanStatus::kPlanned), 1U);  // this cycle only braked
+  const trajectory_server::TimedTrajectory brake = rig.task->lastPublished();
+  ASSERT_TRUE(brake.trajectory);
+  EXPECT_NE(brake.trajectory, first.trajectory);
+  EXPECT_LT(brake.trajectory->sample(brake.trajectory->durationS()).v_W_mps.norm(), 1e-6);  // to rest
+
+  rig.odometry.write(odometryAt(brake.trajectory->sample(0.05).p_W_m, rt::secondsToNs(0.1)));
+  rig.target.write(personAt(Eigen::Vector3d(7.0, 0.0, 1.0), rt::secondsToNs(0.1)));
+  rig.step(0.1);  // still degraded: it plans again
+  EXPECT_EQ(rig.task->degradedBrakes(), 1U);
+  EXPECT_EQ(rig.task->count(PlanStatus::kPlanned), 2U);
+  EXPECT_NE(rig.task->lastPublished().trajectory, brake.trajectory);
 }
 
 TEST(PlanningTask, FailedCheckKeepsTheOldTrajectory) {

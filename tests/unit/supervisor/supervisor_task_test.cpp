@@ -1,5 +1,6 @@
 // The supervisor task reads every health signal from its channels: here the real-time executor's
-// missed deadlines reach the overrun-storm failsafe, and the gimbal is asked to sweep while searching.
+// missed deadlines reach the overrun-storm failsafe, the gimbal is asked to sweep while searching (also after a
+// relocation's timeout), planner failures degrade, and every relocation is logged with how it ended.
 #include "aerotrack/supervisor/supervisor_task.hpp"
 
 #include <gtest/gtest.h>
@@ -83,6 +84,71 @@ TEST(SupervisorTask, LostVehicleLinkHoldsAndTheHoldIsLatched) {
   for (const double end = t + 1.0; t < end; t += 0.02) rig.step(t, true);
   EXPECT_EQ(rig.out.read()->mode, Mode::kHold);
   EXPECT_EQ(rig.out.read()->reason, Reason::kVehicleLinkLost);
+}
+
+TEST(SupervisorTask, TheGimbalKeepsSweepingAfterTheRelocationTimeoutAndTheRelocationIsLogged) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  const double lost_s = t;
+  for (const double end = t + 8.0; t < end; t += 0.02) rig.step(t, false);  // 0.4 s + 5 s timeout, and more
+  ASSERT_EQ(rig.out.read()->mode, Mode::kHold);
+  ASSERT_EQ(rig.out.read()->reason, Reason::kPersonNotFound);
+  EXPECT_TRUE(rig.sweep.load());  // the search goes on from the hover
+  ASSERT_EQ(rig.task.relocationCount(), 1U);
+  EXPECT_EQ(rig.task.relocations()[0].outcome, SupervisorTask::RelocationOutcome::kSearching);
+  EXPECT_GE(rig.task.relocations()[0].timeout_ns, 0);
+  EXPECT_EQ(rig.task.relocations()[0].end_ns, -1);
+  for (const double end = t + 0.2; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kTrack);
+  EXPECT_FALSE(rig.sweep.load());
+  const SupervisorTask::Relocation& r = rig.task.relocations()[0];
+  EXPECT_EQ(r.outcome, SupervisorTask::RelocationOutcome::kFoundAfterTimeout);
+  // The rig's lost estimate carries no accepted measurement since t = 0: relocation begins at once.
+  EXPECT_NEAR(rt::nsToSeconds(r.start_ns), lost_s, 0.03);
+  EXPECT_NEAR(rt::nsToSeconds(r.timeout_ns - r.start_ns), 5.0, 0.03);
+  EXPECT_NEAR(rt::nsToSeconds(r.end_ns), lost_s + 8.0, 0.03);
+}
+
+TEST(SupervisorTask, ARelocationThatFindsThePersonIsLoggedAsFound) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  for (const double end = t + 1.0; t < end; t += 0.02) rig.step(t, false);
+  ASSERT_EQ(rig.out.read()->mode, Mode::kRelocate);
+  rig.step(t, true);
+  ASSERT_EQ(rig.task.relocationCount(), 1U);
+  EXPECT_EQ(rig.task.relocations()[0].outcome, SupervisorTask::RelocationOutcome::kFoundRelocating);
+  EXPECT_EQ(rig.task.relocations()[0].timeout_ns, -1);
+  EXPECT_NEAR(rt::nsToSeconds(rig.task.relocations()[0].end_ns - rig.task.relocations()[0].start_ns), 1.0, 0.03);
+}
+
+TEST(SupervisorTask, AFailsafeEndsARelocationAndTheFailsafeHoldDoesNotSweep) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  for (const double end = t + 1.0; t < end; t += 0.02) rig.step(t, false);
+  ASSERT_EQ(rig.out.read()->mode, Mode::kRelocate);
+  rig.link_lost.store(true);
+  rig.step(t, false);
+  EXPECT_EQ(rig.out.read()->reason, Reason::kVehicleLinkLost);
+  EXPECT_FALSE(rig.sweep.load());
+  EXPECT_EQ(rig.task.relocations()[0].outcome, SupervisorTask::RelocationOutcome::kFailsafe);
+}
+
+TEST(SupervisorTask, PlannerFailuresDegradeWithTheGimbalKeptOnThePersonAndAPlanReturnsToTrack) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  rig.planner_failures.store(SupervisorParams{}.max_planner_failures);
+  for (const double end = t + 5.0; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kDegraded);
+  EXPECT_FALSE(rig.sweep.load());                                                   // the gimbal tracks the estimate
+  EXPECT_NEAR(static_cast<double>(rig.task.stepsIn(Mode::kDegraded)), 250.0, 1.0);  // all of the 5 s
+  rig.planner_failures.store(0);
+  rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kTrack);
+  EXPECT_EQ(rig.out.read()->reason, Reason::kPlanSucceeded);
 }
 
 }  // namespace

@@ -89,7 +89,6 @@ TEST(Supervisor, EveryFailsafeHoldsWithItsReasonAndLatches) {
       {"depth stops", [](SupervisorInputs& in) { in.depth_stamp_ns = in.now_ns - sec(1.5); }, Reason::kNoDepth},
       {"camera frames stop", [](SupervisorInputs& in) { in.camera_stamp_ns = in.now_ns - sec(1.5); },
        Reason::kNoCameraFrames},
-      {"planner fails", [](SupervisorInputs& in) { in.planner_failures_in_a_row = 20; }, Reason::kPlannerFailures},
       {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
       {"vehicle link lost", [](SupervisorInputs& in) { in.vehicle_link_lost = true; }, Reason::kVehicleLinkLost},
   };
@@ -105,6 +104,106 @@ TEST(Supervisor, EveryFailsafeHoldsWithItsReasonAndLatches) {
     recovered.deadline_overruns = 1000;  // cumulative counter stays where it was
     EXPECT_EQ(s.update(recovered).mode, Mode::kHold) << fault.name;
   }
+}
+
+TEST(Supervisor, PlannerFailuresWhileTrackingDegradeAndAPlanReturnsToTrack) {
+  Supervisor s = tracking();
+  SupervisorInputs in = healthy(3.1, 3.1);
+  in.planner_failures_in_a_row = 19;
+  EXPECT_EQ(s.update(in).mode, Mode::kTrack);  // one short of max_planner_failures (20)
+  in = healthy(3.2, 3.2);
+  in.planner_failures_in_a_row = 20;
+  EXPECT_EQ(s.update(in).mode, Mode::kDegraded);
+  EXPECT_EQ(s.state().reason, Reason::kPlannerFailures);
+  EXPECT_FALSE(isFailsafe(s.state().reason));
+  in = healthy(3.3, 3.3);
+  in.planner_failures_in_a_row = 22;
+  EXPECT_EQ(s.update(in).mode, Mode::kDegraded);  // still failing: still degraded
+  in = healthy(3.4, 3.4);
+  in.planner_failures_in_a_row = 0;  // a plan succeeded
+  EXPECT_EQ(s.update(in).mode, Mode::kTrack);
+  EXPECT_EQ(s.state().reason, Reason::kPlanSucceeded);
+}
+
+TEST(Supervisor, PlannerFailuresAloneNeverHoldHoweverLongTheyLast) {
+  Supervisor s = tracking();
+  for (int k = 0; k < 600; ++k) {  // a minute of failed plans at 10 Hz, the person seen throughout
+    SupervisorInputs in = healthy(3.1 + 0.1 * k, 3.1 + 0.1 * k);
+    in.planner_failures_in_a_row = 20 + k;
+    ASSERT_EQ(s.update(in).mode, Mode::kDegraded) << k;
+  }
+  EXPECT_EQ(s.state().transitions, 3U);  // search, track, degraded: no flapping
+}
+
+TEST(Supervisor, DegradedDoesNotMaskADeadSensorAndTheFailsafeStillLatches) {
+  const Fault faults[] = {
+      {"odometry freezes", [](SupervisorInputs& in) { in.odometry_stamp_ns = in.now_ns - sec(0.5); },
+       Reason::kStaleOdometry},
+      {"depth stops", [](SupervisorInputs& in) { in.depth_stamp_ns = in.now_ns - sec(1.5); }, Reason::kNoDepth},
+      {"camera frames stop", [](SupervisorInputs& in) { in.camera_stamp_ns = in.now_ns - sec(1.5); },
+       Reason::kNoCameraFrames},
+      {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
+      {"vehicle link lost", [](SupervisorInputs& in) { in.vehicle_link_lost = true; }, Reason::kVehicleLinkLost},
+  };
+  for (const Fault& fault : faults) {
+    Supervisor s = tracking();
+    SupervisorInputs in = healthy(3.1, 3.1);
+    in.planner_failures_in_a_row = 20;
+    ASSERT_EQ(s.update(in).mode, Mode::kDegraded) << fault.name;
+    in = healthy(3.2, 3.2);
+    in.planner_failures_in_a_row = 21;
+    fault.apply(in);
+    EXPECT_EQ(s.update(in).mode, Mode::kHold) << fault.name;
+    EXPECT_EQ(s.state().reason, fault.reason) << fault.name;
+    // Latched: the streams recover and a plan succeeds; it still holds.
+    SupervisorInputs recovered = healthy(4.0, 4.0);
+    recovered.deadline_overruns = 1000;
+    recovered.planner_failures_in_a_row = 0;
+    EXPECT_EQ(s.update(recovered).mode, Mode::kHold) << fault.name;
+    EXPECT_EQ(s.state().reason, fault.reason) << fault.name;
+  }
+}
+
+TEST(Supervisor, PersonLostWhileDegradedRelocates) {
+  Supervisor s = tracking();
+  SupervisorInputs in = healthy(3.1, 3.1);
+  in.planner_failures_in_a_row = 20;
+  ASSERT_EQ(s.update(in).mode, Mode::kDegraded);
+  in = healthy(3.6, 3.1);  // 0.5 s without a measurement
+  in.planner_failures_in_a_row = 25;
+  EXPECT_EQ(s.update(in).mode, Mode::kRelocate);
+  EXPECT_EQ(s.state().reason, Reason::kPersonLost);
+  EXPECT_EQ(s.update(healthy(4.0, 3.95)).mode, Mode::kTrack);  // found again
+}
+
+TEST(Supervisor, PlannerFailuresWhileRelocatingOrSearchingDoNotDegradeOrHold) {
+  Supervisor s = tracking();
+  s.update(healthy(3.5, 3.0));
+  ASSERT_EQ(s.state().mode, Mode::kRelocate);
+  SupervisorInputs in = healthy(6.0, 3.0);
+  in.planner_failures_in_a_row = 100;
+  EXPECT_EQ(s.update(in).mode, Mode::kRelocate);  // the relocation timeout decides
+  in = healthy(8.6, 3.0);
+  in.planner_failures_in_a_row = 150;
+  EXPECT_EQ(s.update(in).mode, Mode::kHold);
+  EXPECT_EQ(s.state().reason, Reason::kPersonNotFound);
+  in = healthy(20.0, 3.0);
+  in.planner_failures_in_a_row = 300;
+  EXPECT_EQ(s.update(in).mode, Mode::kHold);
+  EXPECT_EQ(s.state().reason, Reason::kPersonNotFound);
+  EXPECT_EQ(s.update(healthy(30.0, 29.9)).mode, Mode::kTrack);  // found at last, minutes later
+}
+
+TEST(Supervisor, ADeadSensorWhileSearchingAfterTheTimeoutLatchesAFailsafeHold) {
+  Supervisor s = tracking();
+  s.update(healthy(3.5, 3.0));
+  s.update(healthy(8.6, 3.0));
+  ASSERT_EQ(s.state().reason, Reason::kPersonNotFound);
+  SupervisorInputs in = healthy(9.0, 3.0);
+  in.depth_stamp_ns = sec(7.0);
+  EXPECT_EQ(s.update(in).mode, Mode::kHold);
+  EXPECT_EQ(s.state().reason, Reason::kNoDepth);
+  EXPECT_EQ(s.update(healthy(10.0, 9.9)).mode, Mode::kHold);  // latched: finding the person does not end it
 }
 
 TEST(Supervisor, OverrunsAreCountedPerWindow) {

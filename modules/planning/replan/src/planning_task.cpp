@@ -43,17 +43,24 @@ void PlanningTask::publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_ca
   channels_.trajectories.write(std::move(lent.timed));
 }
 
-// Hold and land act once, on entering the mode; search publishes nothing. True when the cycle is done.
+// Hold and land act once, on entering the mode; search publishes nothing. Degraded (issue 21: planning
+// failed cycle after cycle while the person is seen) brakes to rest once on entering, like hold, and then
+// plans as in track, every cycle, so that the first plan that succeeds flies (and ends the mode). True
+// when the cycle is done.
 bool PlanningTask::handleMode(supervisor::Mode mode, const PlanInputs& inputs) {
   using supervisor::Mode;
   const bool entered = mode != last_mode_;
   last_mode_ = mode;
-  if (mode != Mode::kHold && mode != Mode::kLand && mode != Mode::kSearch) return false;
+  if (mode == Mode::kDegraded && !entered) return false;
+  if (mode != Mode::kHold && mode != Mode::kLand && mode != Mode::kSearch && mode != Mode::kDegraded) return false;
   if (!entered || mode == Mode::kSearch || inputs.odometry == nullptr) return true;
   const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(planner_.params().planning_budget_s);
   const StatePva start = planner_.startState(inputs, start_ns);
   Lent lent = lend();
-  if (mode == Mode::kHold) {
+  if (mode == Mode::kDegraded) {
+    planner_.makeStopTrajectory(start, lent.storage->trajectory);
+    ++degraded_brakes_;
+  } else if (mode == Mode::kHold) {
     planner_.makeStopTrajectory(start, lent.storage->trajectory);
     ++holds_;
   } else {

@@ -6,15 +6,23 @@
 //   relocate --(a new measurement accepted)--> track
 //   relocate --(relocate_timeout_s without one)--> hold (reason: person not found)
 //   hold (person not found) --(a new measurement accepted)--> track
+//   track    --(max_planner_failures failed planning cycles in a row)--> degraded (issue 21)
+//   degraded --(a planning cycle succeeds, the person still seen)--> track
+//   degraded --(no accepted measurement for relocate_after_s)--> relocate
+//            (failed plans while relocating or searching do not count: the relocation timeout ends those)
 //   any but land --(failsafe)--> hold, with the reason: the flight controller's link lost, stale odometry,
-//            no depth images, no camera frames, planner failures in a row, a storm of deadline overruns.
-//            A failsafe hold is latched.
+//            no depth images, no camera frames, a storm of deadline overruns. A failsafe hold is latched.
 //   hold --(hold_then_land_s, if > 0)--> land
 // In relocate the planner flies along the person's last predicted path and the gimbal sweeps (the
-// paper's strategy); in hold the drone brakes and hovers; in land it descends. Pure: the time and every
-// health signal come in; the supervisor reads no clock and no channel.
+// paper's strategy); in hold the drone brakes and hovers (and, in hold "person not found", the gimbal keeps
+// sweeping: the search goes on from the hover); in land it descends. In degraded the planner brakes to a
+// hover once and goes on planning every cycle, the gimbal kept on the person's estimate: a failed plan is
+// the planner's problem, not the sensors', so it must not end the flight (issue 21: a latched hold on a
+// planner streak lost a person who only doubled back past the drone). Pure: the time and every health
+// signal come in; the supervisor reads no clock and no channel.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string_view>
 
@@ -24,7 +32,8 @@
 
 namespace aerotrack::supervisor {
 
-enum class Mode : std::uint8_t { kTakeOff, kSearch, kTrack, kRelocate, kHold, kLand };
+enum class Mode : std::uint8_t { kTakeOff, kSearch, kTrack, kRelocate, kHold, kLand, kDegraded };
+inline constexpr std::size_t kModeCount = 7;
 std::string_view toString(Mode mode);
 
 /// Why the mode is what it is (the last transition's cause).
@@ -41,6 +50,7 @@ enum class Reason : std::uint8_t {
   kOverrunStorm,
   kVehicleLinkLost,
   kHoldTimeout,
+  kPlanSucceeded,  ///< Degraded ends: a planning cycle succeeded.
 };
 std::string_view toString(Reason reason);
 /// Whether the reason is a failsafe (a latched hold).
@@ -55,7 +65,7 @@ struct SupervisorParams {
   double odometry_timeout_s = 0.2;   ///< Newest odometry older than this: failsafe; > 0.
   double depth_timeout_s = 1.0;      ///< Newest depth image older than this: failsafe; > 0.
   double camera_timeout_s = 1.0;     ///< Newest gimbal-camera frame older than this: failsafe; > 0.
-  int max_planner_failures = 20;     ///< Failed planning cycles in a row: failsafe; >= 1.
+  int max_planner_failures = 20;     ///< Failed planning cycles in a row while tracking: degraded; >= 1.
   int overrun_storm = 50;            ///< Deadline overruns within overrun_window_s: failsafe; >= 1.
   double overrun_window_s = 1.0;     ///< > 0.
   double startup_grace_s = 2.0;      ///< Streams may be silent this long after start; >= 0.

@@ -1,8 +1,9 @@
 // Task glue for the supervisor (50 Hz in the task table): reads the health of every stream --
 // the newest odometry, depth image and gimbal-camera frame, the person estimate, the planner's failures
 // in a row, the real-time executor's missed deadlines, the vehicle link's loss -- updates the mode machine, publishes
-// the mode for the planner, and asks the gimbal to sweep while searching or relocating (when sweeping is enabled: the
-// baseline mode has a fixed camera).
+// the mode for the planner, and asks the gimbal to sweep while searching, relocating or holding because the person was
+// not found (when sweeping is enabled: the baseline mode has a fixed camera). It logs every relocation: when it began,
+// when its timeout ran out (if it did), and how it ended (issue 21: the summary says how each search went).
 #pragma once
 
 #include <array>
@@ -54,13 +55,16 @@ class SupervisorTask final : public rt::Task {
     in.vehicle_link_lost = channels_.vehicle_link_lost.load(std::memory_order_relaxed);
     const SupervisorState& state = supervisor_.update(in);
     channels_.out.write(state);
-    const bool searching = state.mode == Mode::kSearch || state.mode == Mode::kRelocate;
+    const bool searching = state.mode == Mode::kSearch || state.mode == Mode::kRelocate ||
+                           (state.mode == Mode::kHold && state.reason == Reason::kPersonNotFound);
     channels_.gimbal_search_requested.store(sweep_ && searching, std::memory_order_relaxed);
     if (state.transitions != last_transitions_) {
       last_transitions_ = state.transitions;
       if (log_count_ < log_.size()) log_[log_count_++] = {now_ns, state.mode, state.reason};
+      logRelocation(state, now_ns);
     }
     ++mode_steps_[static_cast<std::size_t>(state.mode)];
+    last_step_ns_ = now_ns;
   }
 
   struct Transition {
@@ -72,6 +76,26 @@ class SupervisorTask final : public rt::Task {
   const Transition* transitions() const { return log_.data(); }
   std::size_t transitionCount() const { return log_count_; }
   const SupervisorState& state() const { return supervisor_.state(); }
+  /// How a relocation ended (so far).
+  enum class RelocationOutcome : std::uint8_t {
+    kSearching,          ///< Not over yet (relocating, or hovering and sweeping after its timeout).
+    kFoundRelocating,    ///< Found before the timeout.
+    kFoundAfterTimeout,  ///< Found by the search that goes on after the timeout (hold "person not found").
+    kFailsafe,           ///< A failsafe (latched hold) ended it.
+    kLanded,             ///< Held too long: landed.
+  };
+  struct Relocation {
+    rt::TimeNs start_ns = 0;
+    rt::TimeNs timeout_ns = -1;  ///< When relocate_timeout_s ran out (-1: it did not).
+    rt::TimeNs end_ns = -1;      ///< -1: still searching.
+    RelocationOutcome outcome = RelocationOutcome::kSearching;
+  };
+  /// The first relocations, in order (at most 32 kept).
+  const Relocation* relocations() const { return relocations_.data(); }
+  std::size_t relocationCount() const { return relocation_count_; }
+  /// The newest step's time (-1 before the first): where an open relocation's duration ends.
+  rt::TimeNs lastStepNs() const { return last_step_ns_; }
+
   /// Steps spent in each mode (index: Mode).
   std::uint64_t stepsIn(Mode mode) const { return mode_steps_[static_cast<std::size_t>(mode)]; }
 
@@ -82,7 +106,39 @@ class SupervisorTask final : public rt::Task {
   std::uint64_t last_transitions_ = 0;
   std::array<Transition, 64> log_{};
   std::size_t log_count_ = 0;
-  std::array<std::uint64_t, 6> mode_steps_{};
+  std::array<std::uint64_t, kModeCount> mode_steps_{};
+  std::array<Relocation, 32> relocations_{};
+  std::size_t relocation_count_ = 0;
+  bool relocation_open_ = false;
+  rt::TimeNs last_step_ns_ = -1;
+
+  // Called on every transition: opens a relocation on entering relocate, marks its timeout, closes it.
+  void logRelocation(const SupervisorState& state, rt::TimeNs now_ns) {
+    if (!relocation_open_) {
+      if (state.mode != Mode::kRelocate || relocation_count_ >= relocations_.size()) return;
+      relocations_[relocation_count_++] = Relocation{now_ns, -1, -1, RelocationOutcome::kSearching};
+      relocation_open_ = true;
+      return;
+    }
+    Relocation& r = relocations_[relocation_count_ - 1];
+    if (state.mode == Mode::kHold && state.reason == Reason::kPersonNotFound) {
+      r.timeout_ns = now_ns;
+      return;
+    }
+    if (state.mode == Mode::kTrack) {
+      r.outcome = r.timeout_ns >= 0 ? RelocationOutcome::kFoundAfterTimeout : RelocationOutcome::kFoundRelocating;
+    } else if (state.mode == Mode::kLand) {
+      r.outcome = RelocationOutcome::kLanded;
+    } else if (state.mode == Mode::kHold) {
+      r.outcome = RelocationOutcome::kFailsafe;
+    } else {
+      return;  // relocate again (cannot happen without leaving it), still searching
+    }
+    r.end_ns = now_ns;
+    relocation_open_ = false;
+  }
 };
+
+std::string_view toString(SupervisorTask::RelocationOutcome outcome);
 
 }  // namespace aerotrack::supervisor

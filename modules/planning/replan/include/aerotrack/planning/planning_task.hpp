@@ -47,7 +47,8 @@ struct PlanningChannels {
   rt::SharedSlot<trajectory_server::TimedTrajectory>& trajectories;
   /// The supervisor's mode (optional: without it the task always tracks). In search it publishes
   /// nothing (the drone hovers while the gimbal sweeps), in relocate it plans along the last prediction,
-  /// in hold it brakes once and then publishes nothing, in land it descends once.
+  /// in hold it brakes once and then publishes nothing, in land it descends once, in degraded (issue 21) it
+  /// brakes once and then plans as in track, every cycle.
   const rt::LatestSlot<supervisor::SupervisorState>* supervisor = nullptr;
   /// Where it counts its failed cycles in a row, for the supervisor (optional).
   std::atomic<int>* failures_in_a_row = nullptr;
@@ -88,6 +89,8 @@ class PlanningTask final : public rt::Task {
   double meanCorridorBoxes() const;
   /// Brakes published on entering hold, and descents on entering land.
   std::uint64_t holds() const { return holds_; }
+  /// Brakes to rest on entering the supervisor's degraded mode (issue 21).
+  std::uint64_t degradedBrakes() const { return degraded_brakes_; }
   std::uint64_t landings() const { return landings_; }
   /// Objects the trajectory pools added after start-up because all of theirs were lent (the only
   /// allocations of the task once warm; they stop once the pools are as large as the readers need).
@@ -151,6 +154,7 @@ class PlanningTask final : public rt::Task {
   std::uint64_t landings_ = 0;
   int failures_in_a_row_ = 0;
   supervisor::Mode last_mode_ = supervisor::Mode::kTakeOff;
+  std::uint64_t degraded_brakes_ = 0;  ///< Brakes to rest on entering degraded (issue 21).
   void publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_capture_ns);
   bool handleMode(supervisor::Mode mode, const PlanInputs& inputs);
   rt::TimingStats cycle_stats_;
