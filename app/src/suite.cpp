@@ -419,7 +419,9 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
     drawSuitePanel(image, cv::Rect(2 * w, 30, w, h), {"mean distance, m", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo,
                    x_hi, distance, false);
     const std::string file = "plot-" + suiteScenarioTag(scenario) + ".png";
-    const std::string path = out_dir + "/" + file;
+    std::string path = out_dir;
+    path += '/';
+    path += file;
     try {
       if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
     } catch (const cv::Exception& e) {

@@ -180,14 +180,28 @@ std::vector<std::string> ConfigNode::getEnumList(const std::string& key,
   if (!value.IsSequence() || value.size() == 0)
     fail(key, "expected a non-empty list of names, got " + shortValue(value));
   std::string names;
-  for (const std::string& a : allowed) names += names.empty() ? a : ", " + a;
+  for (const std::string& a : allowed) {
+    if (!names.empty()) names += ", ";
+    names += a;
+  }
+  const std::string not_allowed = "' is not one of: " + names;
+  const auto item = [](std::size_t i, const std::string& v, const std::string& what) {
+    std::string message = "item ";
+    message += std::to_string(i);
+    message += ": '";
+    message += v;
+    message += what;
+    return message;
+  };
   std::vector<std::string> out;
   for (std::size_t i = 0; i < value.size(); ++i) {
-    const std::string v = scalarAs<std::string>(key + "[" + std::to_string(i) + "]", value[i], "a name");
-    if (std::find(allowed.begin(), allowed.end(), v) == allowed.end())
-      fail(key, "item " + std::to_string(i) + ": '" + v + "' is not one of: " + names);
-    if (std::find(out.begin(), out.end(), v) != out.end())
-      fail(key, "item " + std::to_string(i) + ": '" + v + "' is repeated");
+    std::string index_key = key;
+    index_key += '[';
+    index_key += std::to_string(i);
+    index_key += ']';
+    const std::string v = scalarAs<std::string>(index_key, value[i], "a name");
+    if (std::find(allowed.begin(), allowed.end(), v) == allowed.end()) fail(key, item(i, v, not_allowed));
+    if (std::find(out.begin(), out.end(), v) != out.end()) fail(key, item(i, v, "' is repeated"));
     out.push_back(v);
   }
   return out;

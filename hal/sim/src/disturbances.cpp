@@ -2,6 +2,7 @@
 #include "aerotrack/hal/sim/disturbances.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace aerotrack::hal::sim {
 
@@ -32,7 +33,7 @@ OdometryDrift::OdometryDrift(const OdometryDriftSpec& spec, std::mt19937_64 walk
 }
 
 double OdometryDrift::drawNextRandomJumpS(double after_s) {
-  if (!(spec_.random_jumps_per_min > 0.0)) return INFINITY;
+  if (!(spec_.random_jumps_per_min > 0.0)) return std::numeric_limits<double>::infinity();
   return after_s + std::exponential_distribution<double>(spec_.random_jumps_per_min / 60.0)(jump_rng_);
 }
 

@@ -43,7 +43,7 @@ Eigen::Vector2d vec2Of(const ConfigNode& n, const std::string& key, double lo = 
 }
 
 Eigen::Vector2d rangeOf(const ConfigNode& n, const std::string& key, double lo, double hi) {
-  const Eigen::Vector2d r = vec2Of(n, key, lo, hi);
+  Eigen::Vector2d r = vec2Of(n, key, lo, hi);
   if (r.y() < r.x()) n.fail(key, "expected [min, max] with min <= max");
   return r;
 }
@@ -398,10 +398,12 @@ AppearanceSignature signatureOf(const Clothing& clothing) {
     const int lower = static_cast<int>(std::floor(position)) % kSignatureHueBins;
     const int upper = (lower + 1) % kSignatureHueBins;
     const double upper_share = position - std::floor(position);
-    sig[static_cast<std::size_t>(lower * kSignatureSaturationBins + sat_bin)] +=
-        static_cast<float>(weight * (1.0 - upper_share));
-    sig[static_cast<std::size_t>(upper * kSignatureSaturationBins + sat_bin)] +=
-        static_cast<float>(weight * upper_share);
+    const auto bin = [&](int hue_bin) {
+      return static_cast<std::size_t>(hue_bin) * static_cast<std::size_t>(kSignatureSaturationBins) +
+             static_cast<std::size_t>(sat_bin);
+    };
+    sig[bin(lower)] += static_cast<float>(weight * (1.0 - upper_share));
+    sig[bin(upper)] += static_cast<float>(weight * upper_share);
   };
   const double coloured = 1.0 - clothing.grey_share;
   add(clothing.hue_deg, clothing.saturation, coloured * (1.0 - clothing.second_share));

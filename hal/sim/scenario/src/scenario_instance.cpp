@@ -140,8 +140,7 @@ std::vector<PathPoint> applyBehaviours(const std::vector<PathPoint>& in, const P
     turn.backwards = false;
     out.push_back(turn);
   }
-  PathPoint last = in.back();
-  out.push_back(last);
+  out.push_back(in.back());
   return out;
 }
 
