@@ -122,9 +122,10 @@ INSTANTIATE_TEST_SUITE_P(Faults, Failsafe,
 // Every plan fails its final check (an impossible speed limit): failures in a row are no failsafe (issue 21).
 // The supervisor degrades: the drone brakes to a hover, the gimbal stays on the person, planning goes on.
 TEST(ClosedLoop, PlannerFailuresInARowDegradeToAHoverWithoutCollisionNotToALatchedHold) {
+  // Every plan fails its final check: the collision sweep's sphere is made 3 m wide, so every
+  // trajectory touches the mapped building or pillars (the take-off is not checked against the map).
   const std::string yaml =
-      simYaml("    max_velocity_mps: 3.0\n    max_acceleration_mps2: 4.0\n    max_jerk_mps3: 40.0",
-              "    max_velocity_mps: 0.1\n    max_acceleration_mps2: 4.0\n    max_jerk_mps3: 40.0");
+      simYaml("    radius_m: 0.25\n    sample_step_m: 0.05", "    radius_m: 3.0\n    sample_step_m: 0.05");
   const Flight f = fly(yaml, 1, 18.0);
   EXPECT_EQ(f.mode, "degraded");
   EXPECT_EQ(f.reason, "planner failures in a row");
