@@ -82,17 +82,19 @@ struct Fault {
   Reason reason;
 };
 
+/// Every dead-sensor, link and overrun failsafe, each as a change to healthy inputs.
+const Fault kFailsafeFaults[] = {
+    {"odometry freezes", [](SupervisorInputs& in) { in.odometry_stamp_ns = in.now_ns - sec(0.5); },
+     Reason::kStaleOdometry},
+    {"depth stops", [](SupervisorInputs& in) { in.depth_stamp_ns = in.now_ns - sec(1.5); }, Reason::kNoDepth},
+    {"camera frames stop", [](SupervisorInputs& in) { in.camera_stamp_ns = in.now_ns - sec(1.5); },
+     Reason::kNoCameraFrames},
+    {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
+    {"vehicle link lost", [](SupervisorInputs& in) { in.vehicle_link_lost = true; }, Reason::kVehicleLinkLost},
+};
+
 TEST(Supervisor, EveryFailsafeHoldsWithItsReasonAndLatches) {
-  const Fault faults[] = {
-      {"odometry freezes", [](SupervisorInputs& in) { in.odometry_stamp_ns = in.now_ns - sec(0.5); },
-       Reason::kStaleOdometry},
-      {"depth stops", [](SupervisorInputs& in) { in.depth_stamp_ns = in.now_ns - sec(1.5); }, Reason::kNoDepth},
-      {"camera frames stop", [](SupervisorInputs& in) { in.camera_stamp_ns = in.now_ns - sec(1.5); },
-       Reason::kNoCameraFrames},
-      {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
-      {"vehicle link lost", [](SupervisorInputs& in) { in.vehicle_link_lost = true; }, Reason::kVehicleLinkLost},
-  };
-  for (const Fault& fault : faults) {
+  for (const Fault& fault : kFailsafeFaults) {
     Supervisor s = tracking();
     SupervisorInputs in = healthy(3.1, 3.1);
     fault.apply(in);
@@ -136,16 +138,7 @@ TEST(Supervisor, PlannerFailuresAloneNeverHoldHoweverLongTheyLast) {
 }
 
 TEST(Supervisor, DegradedDoesNotMaskADeadSensorAndTheFailsafeStillLatches) {
-  const Fault faults[] = {
-      {"odometry freezes", [](SupervisorInputs& in) { in.odometry_stamp_ns = in.now_ns - sec(0.5); },
-       Reason::kStaleOdometry},
-      {"depth stops", [](SupervisorInputs& in) { in.depth_stamp_ns = in.now_ns - sec(1.5); }, Reason::kNoDepth},
-      {"camera frames stop", [](SupervisorInputs& in) { in.camera_stamp_ns = in.now_ns - sec(1.5); },
-       Reason::kNoCameraFrames},
-      {"overrun storm", [](SupervisorInputs& in) { in.deadline_overruns = 1000; }, Reason::kOverrunStorm},
-      {"vehicle link lost", [](SupervisorInputs& in) { in.vehicle_link_lost = true; }, Reason::kVehicleLinkLost},
-  };
-  for (const Fault& fault : faults) {
+  for (const Fault& fault : kFailsafeFaults) {
     Supervisor s = tracking();
     SupervisorInputs in = healthy(3.1, 3.1);
     in.planner_failures_in_a_row = 20;
