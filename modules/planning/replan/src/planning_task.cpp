@@ -104,10 +104,13 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   ++counts_[static_cast<std::size_t>(report.status)];
   if (report.search_status == SearchStatus::kPartial) ++search_partial_;
   if (report.status == PlanStatus::kSearchFailed) ++search_failures_[static_cast<std::size_t>(report.search_status)];
-  if (report.status == PlanStatus::kCheckFailed) ++check_failures_[static_cast<std::size_t>(report.check)];
-  const bool checked = report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
-                       report.status == PlanStatus::kCheckFailed ||
-                       (report.status == PlanStatus::kStopped && report.check != CheckVerdict::kOk);
+  // An evasion after a failed check counts that check's verdict, as a stop does.
+  const bool failed_check = report.status == PlanStatus::kCheckFailed ||
+                            ((report.status == PlanStatus::kStopped || report.status == PlanStatus::kEvading) &&
+                             report.check != CheckVerdict::kOk);
+  if (failed_check) ++check_failures_[static_cast<std::size_t>(report.check)];
+  const bool checked =
+      report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating || failed_check;
   if (checked) {
     ++checks_run_;
     if (report.check != CheckVerdict::kOk) ++checks_rejected_;
@@ -130,7 +133,8 @@ void PlanningTask::step(rt::TimeNs now_ns) {
     if (report.optimizer_status == OptimizerStatus::kLineSearch) ++optimizer_line_search_;
   }
   const bool flies = report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
-                     report.status == PlanStatus::kStopped || report.status == PlanStatus::kTakeOff;
+                     report.status == PlanStatus::kStopped || report.status == PlanStatus::kTakeOff ||
+                     report.status == PlanStatus::kEvading;
   // The plan used the estimate's newest measurement (tracking) or none (relocation, stop, take-off).
   const bool tracked = report.status == PlanStatus::kPlanned && target && target->initialised && !target->lost;
   if (flies) publish(lent, report.start_ns, tracked ? target->last_accepted_ns : -1);

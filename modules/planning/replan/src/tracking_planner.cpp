@@ -2,7 +2,9 @@
 #include "aerotrack/planning/tracking_planner.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace aerotrack::planning {
 
@@ -32,6 +34,8 @@ std::string_view toString(PlanStatus status) {
       return "optimizer_failed";
     case PlanStatus::kCheckFailed:
       return "check_failed";
+    case PlanStatus::kEvading:
+      return "evading";
   }
   return "unknown";
 }
@@ -206,22 +210,30 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   const std::optional<PersonMotion> person = predictPerson(inputs);  // 1. Sect. V-A
   if (!person) return fail(PlanStatus::kNoTarget);
   report.predicted = person->prediction != nullptr;
+  // From here a failed cycle first asks whether the person is about to walk into a braking drone (7.).
+  auto fail_or_evade = [&](PlanStatus status) {
+    if (person->live && evadePerson(start, grid, inputs.octree, *person, start_ns, out)) {
+      report.status = PlanStatus::kEvading;
+      return report;
+    }
+    return fail(status);
+  };
 
   const KinematicState goal = selectGoal(grid, *person, start, start_ns);           // 2. Sect. V-B
   report.search_status = searchTrackingPath(grid, start, start_ns, goal, *person);  // 3. Sect. V-B
   report.search_expansions = path_.expansions;
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
-    return fail(PlanStatus::kSearchFailed);
+    return fail_or_evade(PlanStatus::kSearchFailed);
   if (path_.duration_s <= params_.min_piece_duration_s) {
     report.status = PlanStatus::kAtGoal;  // nothing to fly: the current trajectory (or its hold) stands
     return report;
   }
 
-  if (!buildCorridor(grid, start)) return fail(PlanStatus::kCorridorFailed);  // 4. Sect. V-C
+  if (!buildCorridor(grid, start)) return fail_or_evade(PlanStatus::kCorridorFailed);  // 4. Sect. V-C
   report.corridor_boxes = static_cast<int>(corridor_.boxes.size());
 
   const auto optimized = optimizeTrajectory(grid, start, out);  // 5. Sect. V-C
-  if (!optimized) return fail(PlanStatus::kOptimizerFailed);
+  if (!optimized) return fail_or_evade(PlanStatus::kOptimizerFailed);
   report.optimizer_status = optimized->status;
   report.optimizer_iterations = optimized->iterations;
 
@@ -230,9 +242,77 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   if (isDynamicLimit(check.verdict))
     check = repairPlannedTrajectory(check, start, out, grid, inputs.octree, *person, start_ns, report.repair_stretch);
   report.check = check.verdict;
-  if (report.check != CheckVerdict::kOk) return fail(PlanStatus::kCheckFailed);
+  if (report.check != CheckVerdict::kOk) return fail_or_evade(PlanStatus::kCheckFailed);
   report.status = person->live ? PlanStatus::kPlanned : PlanStatus::kRelocating;
   return report;
+}
+
+double TrackingPlanner::minPersonDistanceM(const PolynomialTrajectory& trajectory, const PersonMotion& person,
+                                           rt::TimeNs start_ns) const {
+  double min_m = std::numeric_limits<double>::infinity();
+  for (double t = 0.0; t <= params_.check.horizon_s; t += params_.check.sample_step_s) {
+    const Eigen::Vector3d d = trajectory.sample(t).p_W_m - person.positionAt(start_ns + rt::secondsToNs(t));
+    min_m = std::min(min_m, d.head<2>().norm());
+  }
+  return min_m;
+}
+
+bool TrackingPlanner::evadePerson(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+                                  const PersonMotion& person, rt::TimeNs start_ns, PolynomialTrajectory& out) {
+  if (!(params_.min_person_distance_m > 0.0)) return false;
+  // Candidate 0 is the brake to rest; its distance decides whether evading is needed at all.
+  const double brake_s = stopDurationS(start.col(1).norm(), params_.optimizer.max_acceleration_mps2);
+  const Eigen::Vector3d brake_end_W_m = start.col(0) + start.col(1) * (brake_s / 2.0);
+  if (!pieceToRest(start, brake_end_W_m, brake_s)) return false;
+  out.assign(stop_spline_);
+  if (minPersonDistanceM(out, person, start_ns) >= params_.min_person_distance_m) return false;
+
+  // Each candidate: a move of d metres (the tracking distance, where the goal would be held) to rest,
+  // timed as makeMoveTrajectory at the optimiser's full limits, then slowed by the stretch its dynamic peaks
+  // need (the start velocity, often towards the person, adds to them). Score: the minimum distance to the
+  // person, capped at the tracking distance (beyond it, farther is no better); ties go to the shorter move.
+  const double d_m = std::max(params_.goal.tracking_distance_m, params_.min_person_distance_m);
+  const double v_max = params_.optimizer.max_velocity_mps;
+  const double a_max = params_.optimizer.max_acceleration_mps2;
+  const double move_s = std::max({0.5, 1.875 * d_m / v_max, std::sqrt(5.7735 * d_m / a_max)});
+  struct Candidate {
+    Eigen::Vector3d end_W_m;
+    double duration_s = 0.0;
+    double score_m = -1.0;
+  };
+  std::array<Candidate, kEvasionDirections + 1> candidates;
+  candidates[0] = {brake_end_W_m, brake_s, std::min(minPersonDistanceM(out, person, start_ns), d_m)};
+  for (int k = 0; k < kEvasionDirections; ++k) {
+    const double angle_rad = 2.0 * M_PI * k / kEvasionDirections;
+    Candidate& c = candidates[static_cast<std::size_t>(k) + 1];
+    c.end_W_m = start.col(0) + d_m * Eigen::Vector3d(std::cos(angle_rad), std::sin(angle_rad), 0.0);
+    c.duration_s = move_s;
+    if (grid.isOccupied(c.end_W_m)) continue;  // score stays -1: never chosen
+    if (!pieceToRest(start, c.end_W_m, c.duration_s)) continue;
+    out.assign(stop_spline_);
+    c.duration_s *= dynamicStretchFactor(out, params_.check);
+    if (!pieceToRest(start, c.end_W_m, c.duration_s)) continue;
+    out.assign(stop_spline_);
+    c.score_m = std::min(minPersonDistanceM(out, person, start_ns), d_m);
+  }
+  // Best first; then the full check, until one passes.
+  std::array<int, kEvasionDirections + 1> order{};
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  // Scores within kTieM of each other are equal (whole steps of it, so the order is a strict weak one): among
+  // them the brake (the shortest move) wins, then the directions in order.
+  constexpr double kTieM = 0.05;
+  auto step_of = [&](int i) { return std::floor(candidates[static_cast<std::size_t>(i)].score_m / kTieM); };
+  for (std::size_t i = 1; i < order.size(); ++i) {  // insertion sort: stable, and no buffer to allocate
+    for (std::size_t j = i; j > 0 && step_of(order[j]) > step_of(order[j - 1]); --j) std::swap(order[j], order[j - 1]);
+  }
+  for (const int i : order) {
+    const Candidate& c = candidates[static_cast<std::size_t>(i)];
+    if (c.score_m < 0.0) break;
+    if (!pieceToRest(start, c.end_W_m, c.duration_s)) continue;
+    out.assign(stop_spline_);
+    if (checkTrajectory(out, params_.check, grid, checker_, octree).verdict == CheckVerdict::kOk) return true;
+  }
+  return false;
 }
 
 PlanReport TrackingPlanner::failCycle(PlanReport report, PlanStatus status, const PlanInputs& inputs,

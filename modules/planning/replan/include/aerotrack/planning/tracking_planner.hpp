@@ -15,9 +15,13 @@
 //      only (the optimiser's penalties are soft) is repaired first: re-timed slower by the stretch the
 //      worst violation needs, from the same start state, and checked again in full (issue 21).
 // A cycle that fails at any stage publishes nothing: the current trajectory continues (the trajectory
-// server holds its end at rest). If, in addition, the current trajectory's next stretch is no longer
-// clear in the newest grid, a stopping trajectory (a minimum-jerk brake to rest along the current
-// velocity) is issued instead. Pure: time, odometry, the estimate and the maps come in; no clock is read.
+// server holds its end at rest). If the person, on their predicted path, would come within
+// min_person_distance_m of the drone even if it braked (they walk at it, or double back past it), the drone
+// moves out of their way instead (evadePerson, issue 21: a person too close is a reason to back away, not
+// to stop planning; the gimbal stays on them and the next cycle plans to follow again). If, in addition, the current
+// trajectory's next stretch is no longer clear in the newest grid, a stopping trajectory (a minimum-jerk brake to rest
+// along the current velocity) is issued instead. Pure: time, odometry, the estimate and the maps come in; no clock is
+// read.
 #pragma once
 
 #include <cstdint>
@@ -98,8 +102,11 @@ enum class PlanStatus : std::uint8_t {
   kCorridorFailed,   ///< The corridor could not be built along the path.
   kOptimizerFailed,  ///< The optimiser refused the problem.
   kCheckFailed,      ///< The optimised trajectory failed the final check.
+  /// The cycle failed (any reason above) with the person coming within min_person_distance_m of a drone that
+  /// would only brake: a move away from their predicted path was flown instead (issue 21, evadePerson).
+  kEvading,
 };
-inline constexpr int kPlanStatusCount = 12;
+inline constexpr int kPlanStatusCount = 13;
 std::string_view toString(PlanStatus status);
 
 /// What a cycle reads.
@@ -155,6 +162,10 @@ class TrackingPlanner {
   const std::vector<Eigen::Vector3d>& polyline() const { return polyline_; }
   const Corridor& corridor() const { return corridor_; }
   const SearchPath& searchPath() const { return path_; }
+
+  /// Evasion's candidate directions, evenly spaced round the horizontal plane (22.5 degrees apart: fine
+  /// enough to find a gap between trees, few enough that scoring all costs a few hundred samples).
+  static constexpr int kEvasionDirections = 16;
 
   /// A minimum-jerk move from `start` to rest at end_W_m, at half the optimiser's limits.
   void makeMoveTrajectory(const StatePva& start, const Eigen::Vector3d& end_W_m, PolynomialTrajectory& out);
@@ -224,6 +235,18 @@ class TrackingPlanner {
   CheckResult repairPlannedTrajectory(CheckResult check, const StatePva& start, PolynomialTrajectory& out,
                                       const mapping::LocalGrid& grid, const octomap::OcTree* octree,
                                       const PersonMotion& person, rt::TimeNs start_ns, double& stretch);
+  /// Stage 7, evasion (issue 21 item 2), on a failed cycle with a live estimate: if braking to rest would let
+  /// the person's predicted path come within min_person_distance_m (horizontally, within check.horizon_s),
+  /// one minimum-jerk move to rest from `start` is written into `out` -- the brake itself, or a move of
+  /// goal.tracking_distance_m in one of kEvasionDirections horizontal directions -- whichever keeps the
+  /// largest minimum distance to the person (up to the tracking distance; ties: the shortest move) and passes
+  /// the final check's limits, grid and FCL. False (out undefined) when no evasion is needed or none passes.
+  bool evadePerson(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+                   const PersonMotion& person, rt::TimeNs start_ns, PolynomialTrajectory& out);
+  /// The smallest horizontal distance (m) between `trajectory` (held at its end after it) and the person's
+  /// predicted path over check.horizon_s from start_ns.
+  double minPersonDistanceM(const PolynomialTrajectory& trajectory, const PersonMotion& person,
+                            rt::TimeNs start_ns) const;
   /// A failed cycle: `status`, or kStopped with a stop written into `out` if the current trajectory is
   /// blocked ahead.
   PlanReport failCycle(PlanReport report, PlanStatus status, const PlanInputs& inputs, const StatePva& start,
