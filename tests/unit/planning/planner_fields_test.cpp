@@ -34,9 +34,9 @@ TEST(PlannerFields, GivenParamsWhenWrittenAndReadBackThenEveryFieldIsTheSame) {
 TEST(PlannerFields, GivenEachFieldAtTheEndsOfItsRangeThenParserAndValidateAgree) {
   int probes = 0;
   const std::set<std::string> refused_inside = field_checks::rangeEnds(planner(), TrackingPlannerParams{}, &probes);
-  // Four per number: 71 fields, max_box_size_m counting three (issue 21: the optimiser's three limits went,
-  // optimizer_limit_fraction and check.max_repair_stretch came).
-  EXPECT_EQ(probes, 4 * 73);
+  // Four per number: 72 fields, max_box_size_m counting three (issue 21: the optimiser's three limits went,
+  // optimizer_limit_fraction, check.max_repair_stretch and optimizer.corridor_margin_per_speed_s came).
+  EXPECT_EQ(probes, 4 * 74);
   // In range, yet refused by both because of a rule across fields, with the other field at its default.
   EXPECT_EQ(refused_inside, (std::set<std::string>{
                                 "flight_altitude_m@lo",        // 0.1 is not above takeoff_below_m (0.5)
@@ -65,8 +65,8 @@ TEST(PlannerFields, GivenThePlanningBudgetThenBothSidesTakeTheHalfOpenRange) {
 TEST(PlannerFields, GivenTheWrittenSectionThenItsKeysAreExactlyTheKeysTheParserReads) {
   const std::vector<std::string> written = field_checks::keys(planner(), TrackingPlannerParams{});
   // 82 before issue 21, which removed the optimizer's three limits (derived from the check's) and added
-  // optimizer_limit_fraction and check.max_repair_stretch.
-  EXPECT_EQ(written.size(), 81U);
+  // optimizer_limit_fraction, check.max_repair_stretch and optimizer.corridor_margin_per_speed_s.
+  EXPECT_EQ(written.size(), 82U);
   for (const char* key :
        {"planning_budget_s", "goal.visible_max_turn_rad", "search.occlusion_aware", "corridor.max_box_size_m",
         "optimizer.max_pieces", "prediction.qp_max_iterations", "check.margin_escape_s", "check.max_repair_stretch",

@@ -66,6 +66,16 @@ TEST(TrajectoryOptimizer, EveryTermsGradientMatchesCentralDifferences) {
       {kAllTerms, "all"},
   };
   for (const auto& [mask, name] : terms) expectGradientMatches(*opt, x, mask, name);
+
+  // The speed-dependent margin (issue 21 item 5): the corridor term then depends on v too.
+  params.corridor_margin_per_speed_s = 0.1;
+  auto speed_opt = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(speed_opt.has_value());
+  ASSERT_TRUE(speed_opt->setProblem(c.problem()).has_value());
+  expectGradientMatches(*speed_opt, x, kCorridorSamples, "rho_c with a margin per speed");
+  expectGradientMatches(*speed_opt, x, kAllTerms, "all with a margin per speed");
+  Eigen::VectorXd grad;
+  EXPECT_GT(speed_opt->evaluate(x, grad, kCorridorSamples), opt->evaluate(x, grad, kCorridorSamples));
 }
 
 TEST(TrajectoryOptimizer, SoftplusRoundTrips) {

@@ -99,6 +99,7 @@ const rt::FieldTable<TrajectoryOptimizerParams>& trajectoryOptimizerFields() {
       rt::number("waypoint_acceleration_weight", &P::waypoint_acceleration_weight, Range::closed(0.0, 1e9)),
       rt::number("corridor_weight", &P::corridor_weight, Range::closed(0.0, 1e12)),
       rt::number("corridor_margin_m", &P::corridor_margin_m, Range::closed(0.0, 1.0)),
+      rt::number("corridor_margin_per_speed_s", &P::corridor_margin_per_speed_s, Range::closed(0.0, 1.0)),
       rt::number("sample_velocity_weight", &P::sample_velocity_weight, Range::closed(0.0, 1e9)),
       rt::number("sample_acceleration_weight", &P::sample_acceleration_weight, Range::closed(0.0, 1e9)),
       rt::number("sample_jerk_weight", &P::sample_jerk_weight, Range::closed(0.0, 1e9)),
@@ -305,6 +306,52 @@ void TrajectoryOptimizer::addWaypointTerms(std::uint32_t terms, double& cost) {
   }
 }
 
+// The speed-dependent margin (issue 21 item 5): the sample should lie corridor_margin_m + corridor_margin_per_speed_s
+// * |v| inside a box -- its own piece's or a neighbour's, whichever it is deepest in (every box is free space,
+// so depth in any of them is clearance; against its own box alone, every junction, where the path leaves one
+// box for the next, would count as a wall and the drone would slow down at each). The penalty is that box's
+// l(.) sum; each violated face also pushes on v along v / |v| (d|v|/dv), so the optimiser may slow down as well
+// as move. True when active.
+bool TrajectoryOptimizer::addSpeedMarginTerm(Eigen::Index piece, const Eigen::Vector3d& p, const Eigen::Vector3d& v,
+                                             double& cost, Eigen::Vector3d& gp, Eigen::Vector3d& gv) const {
+  const double speed = v.norm();
+  const double margin_m = params_.corridor_margin_m + params_.corridor_margin_per_speed_s * speed;
+  double best_penalty = kInf;
+  Eigen::Vector3d best_gp = Eigen::Vector3d::Zero();
+  double best_push = 0.0;
+  for (Eigen::Index b = std::max<Eigen::Index>(0, piece - 1); b <= std::min(pieces_ - 1, piece + 1); ++b) {
+    const CorridorBox& box = boxes_[static_cast<std::size_t>(b)];
+    double box_penalty = 0.0;
+    double push = 0.0;
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (int axis = 0; axis < 3; ++axis) {
+      const double above = p(axis) - box.hi_W_m(axis) + margin_m;
+      const double below = box.lo_W_m(axis) - p(axis) + margin_m;
+      if (above > 0.0) {  // both faces of a box narrower than twice the margin may count
+        box_penalty += penalty(above);
+        g(axis) += penaltyDerivative(above);
+        push += penaltyDerivative(above);
+      }
+      if (below > 0.0) {
+        box_penalty += penalty(below);
+        g(axis) -= penaltyDerivative(below);
+        push += penaltyDerivative(below);
+      }
+    }
+    if (box_penalty < best_penalty) {
+      best_penalty = box_penalty;
+      best_gp = g;
+      best_push = push;
+    }
+  }
+  if (!(best_penalty > 0.0)) return false;
+  const double w = params_.corridor_weight;
+  cost += w * best_penalty;
+  gp += w * best_gp;
+  if (speed > 0.0) gv += (w * best_push * params_.corridor_margin_per_speed_s / speed) * v;
+  return true;
+}
+
 void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
   const bool corridor = (terms & kCorridorSamples) != 0U && params_.corridor_weight > 0.0;
   const bool velocity = (terms & kVelocitySamples) != 0U && params_.sample_velocity_weight > 0.0;
@@ -315,6 +362,7 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
   const double v_limit2 = params_.max_velocity_mps * params_.max_velocity_mps;
   const double a_limit2 = params_.max_acceleration_mps2 * params_.max_acceleration_mps2;
   const double j_limit2 = params_.max_jerk_mps3 * params_.max_jerk_mps3;
+  const double margin_per_speed = params_.corridor_margin_per_speed_s;
   const RowMatrixX3d& coeffs = spline_.coefficients();
   for (Eigen::Index i = 0; i < pieces_; ++i) {
     // Coefficient rows c0..c5 of piece i (x, y, z each).
@@ -359,9 +407,10 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
             active = true;
           }
         }
+        if (margin_per_speed > 0.0) active |= addSpeedMarginTerm(i, p, v, cost, gp, gv);
       }
       if (velocity && v.squaredNorm() > v_limit2) {
-        gv = addNormPenalty(v, params_.max_velocity_mps, params_.sample_velocity_weight, cost);
+        gv += addNormPenalty(v, params_.max_velocity_mps, params_.sample_velocity_weight, cost);
         active = true;
       }
       if (acceleration && a.squaredNorm() > a_limit2) {

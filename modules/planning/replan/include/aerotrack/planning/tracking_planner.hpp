@@ -219,8 +219,8 @@ class TrackingPlanner {
   rt::Status buildCorridor(const mapping::LocalGrid& grid, const StatePva& start);
   /// Stage 5, optimisation (Sect. V-C): the minimum-jerk spline through corridor_ from `start` to the end
   /// of path_ (initial guess: the corridor's waypoints, timed as the path passes them), then a brake to
-  /// rest appended (appendStop). The path's end velocity is kept if the drone can brake from it in free
-  /// space, else (and after a partial search) the end is at rest.
+  /// rest appended (appendStop). The path's end velocity (a partial search's too) is kept if the drone can
+  /// brake from it in free space, else lowered until it can (in steps of a fifth), else the end is at rest.
   rt::Expected<OptimizerResult> optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
                                                    PolynomialTrajectory& out);
   /// Stage 6, final check (issue 8 item 3): limits, inflated grid and FCL against the octree (when there is

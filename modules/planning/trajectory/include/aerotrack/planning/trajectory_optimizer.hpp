@@ -45,15 +45,20 @@ struct TrajectoryOptimizerParams {
   double waypoint_acceleration_weight = 1e3;  ///< rho_a; >= 0.
   double corridor_weight = 1e6;               ///< rho_c on samples outside their box (per m^3); >= 0.
   double corridor_margin_m = 0.0;             ///< Samples are pushed this far inside their box; >= 0.
-  double sample_velocity_weight = 1e3;        ///< rho_vs; >= 0.
-  double sample_acceleration_weight = 1e3;    ///< rho_as; >= 0.
-  double sample_jerk_weight = 1.0;            ///< rho_js; >= 0.
-  int samples_per_piece = 12;                 ///< K; >= 1.
-  int max_iterations = 80;                    ///< L-BFGS iterations; >= 1.
-  double relative_cost_tolerance = 1e-4;      ///< Stop when the cost changed less than this over 3 iterations; > 0.
-  double gradient_tolerance = 1e-5;           ///< Stop when |grad| <= this * max(1, |x|); > 0.
-  int memory = 8;                             ///< L-BFGS history; >= 1.
-  int max_pieces = 32;                        ///< Scratch sized for this many pieces (more allocates); >= 1.
+  /// A second margin, corridor_margin_m plus this times the sample's speed (issue 21 item 5), inside its own
+  /// box or a neighbouring piece's: the faster the drone, the deeper in free space, so the tracking error that
+  /// grows with speed eats into this margin, not into the clearance; a narrow gap is flown slower, not
+  /// closer. Seconds; >= 0 (0: none).
+  double corridor_margin_per_speed_s = 0.0;
+  double sample_velocity_weight = 1e3;      ///< rho_vs; >= 0.
+  double sample_acceleration_weight = 1e3;  ///< rho_as; >= 0.
+  double sample_jerk_weight = 1.0;          ///< rho_js; >= 0.
+  int samples_per_piece = 12;               ///< K; >= 1.
+  int max_iterations = 80;                  ///< L-BFGS iterations; >= 1.
+  double relative_cost_tolerance = 1e-4;    ///< Stop when the cost changed less than this over 3 iterations; > 0.
+  double gradient_tolerance = 1e-5;         ///< Stop when |grad| <= this * max(1, |x|); > 0.
+  int memory = 8;                           ///< L-BFGS history; >= 1.
+  int max_pieces = 32;                      ///< Scratch sized for this many pieces (more allocates); >= 1.
 };
 
 /// The `optimizer:` config section: every field above but the three limits by its name, all required (the
@@ -137,6 +142,9 @@ class TrajectoryOptimizer {
   struct Solver;
   explicit TrajectoryOptimizer(const TrajectoryOptimizerParams& params);
   void addWaypointTerms(std::uint32_t terms, double& cost);
+  /// The speed-dependent corridor margin of one sample of `piece` (see the .cpp); true when active.
+  bool addSpeedMarginTerm(Eigen::Index piece, const Eigen::Vector3d& p, const Eigen::Vector3d& v, double& cost,
+                          Eigen::Vector3d& gp, Eigen::Vector3d& gv) const;
   void addSampleTerms(std::uint32_t terms, double& cost);
 
   TrajectoryOptimizerParams params_;
