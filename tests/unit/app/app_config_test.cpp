@@ -141,7 +141,7 @@ TEST(AppConfig, GivenBadRealDriverKeysThenErrorsNameThem) {
 }
 
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
-  const std::string yaml = simYamlWith("  max_speed_mps: 3.0", "  max_speed_mps: 3.0\n  max_sped_mps: 2.0");
+  const std::string yaml = simYamlWith("  max_speed_mps: 6.0", "  max_speed_mps: 6.0\n  max_sped_mps: 2.0");
   EXPECT_EQ(errorOf(yaml), at(yaml, "max_sped_mps") + ": vehicle.max_sped_mps: unknown key");
 }
 
@@ -153,7 +153,7 @@ TEST(AppConfig, GivenMissingKeyThenErrorNamesIt) {
 }
 
 TEST(AppConfig, GivenWrongTypeThenErrorNamesIt) {
-  const std::string yaml = simYamlWith("max_accel_mps2: 4.0", "max_accel_mps2: fast");
+  const std::string yaml = simYamlWith("max_accel_mps2: 6.0", "max_accel_mps2: fast");
   EXPECT_EQ(errorOf(yaml),
             at(yaml, "max_accel_mps2: fast") + ": vehicle.max_accel_mps2: expected a number, got 'fast'");
 }
