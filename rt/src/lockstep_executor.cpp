@@ -173,6 +173,11 @@ Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
     for (std::size_t i = 0; i < tasks_.entries().size(); ++i) {
       const TaskSet::Entry& e = tasks_.entries()[i];
       if (!e.binding.spec.triggered() || !e.binding.doorbell->pending()) continue;
+      // A timed release due now (a cap's end, the fallback) runs in its priority order among the
+      // releases of this instant, not after whichever step came first: so that when a task runs
+      // depends only on its own writers and releases, not on the other tasks in the table (a replay
+      // leaves the simulator's out and must run the same).
+      if (next_release_ns_[i] <= now_ns) continue;
       const TimeNs earliest_ns = last_run_ns_[i] == kNever ? now_ns : last_run_ns_[i] + e.min_period_ns;
       if (earliest_ns > now_ns) {
         // Inside the rate cap: a timed release at its end (left pending, consumed by that release).
