@@ -32,8 +32,8 @@ namespace aerotrack::app {
 
 class TargetTruthCheckTask;
 
-/// With --record, the modules' outputs are polled this often (above the target task's 50 Hz, so every
-/// estimate is seen).
+/// With --record, the modules' outputs are polled this often: the target task's fastest (its 10 ms rate
+/// cap in the shipped tables; it runs on each detection and at 50 Hz), so estimates are seen as they come.
 inline constexpr double kOutputRecordRateHz = 100.0;
 
 /// The channels a task's `trigger` may name (System::attachTrigger), for messages.
