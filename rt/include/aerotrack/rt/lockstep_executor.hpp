@@ -6,10 +6,11 @@
 // Order: timed releases by time, ties by priority (higher first) then table order. After each
 // step, triggered tasks whose doorbell rang run at the same simulated time, in table order, until
 // none is pending. A ring inside a task's rate cap (TaskSpec::min_period_ms) schedules a timed
-// release at the cap's end instead, which runs in priority order among that instant's releases (not
-// after whichever step came first, so removing unrelated tasks, as a replay does, changes nothing); a triggered task
-// with a rate also has a timed release one period after its previous run (task.hpp). So when a task runs is a function
-// of the simulated time and of which steps wrote to its channel, nothing else: the run stays deterministic.
+// release at the cap's end instead, which runs in priority order among that instant's releases
+// (not after whichever step came first: removing unrelated tasks, as a replay does, changes
+// nothing); a triggered task with a rate also has a timed release one period after its previous
+// run (task.hpp). So when a task runs is a function of the simulated time and of which steps wrote
+// to its channel, nothing else: the run stays deterministic.
 //
 // Overlap: an OverlappedTask with a latency (TaskSpec::latency_ms > 0) has its gather() run at the
 // release, its work() on the executor's one worker thread while the other tasks go on, and its
