@@ -1,6 +1,8 @@
 // Composition of the config sections: see app_config.hpp.
 #include "app_config.hpp"
 
+#include <array>
+#include <cstdio>
 #include <filesystem>
 
 #include <yaml-cpp/yaml.h>
@@ -18,6 +20,7 @@ rt::TaskSpec parseTaskSpec(const rt::ConfigNode& node) {
   t.name = node.getString("name");
   t.rate_hz = node.getDoubleOr("rate_hz", 0.0, 0.0, 100000.0);
   t.trigger = node.getStringOr("trigger", "");
+  t.min_period_ms = node.getDoubleOr("min_period_ms", 0.0, 0.0, 10000.0);
   t.budget_ms = node.getDouble("budget_ms", 1e-6, 10000.0);
   t.priority = node.getIntOr("priority", 0, 0, 99);
   t.cpu = node.getIntOr("cpu", -1, -1, 1023);
@@ -25,6 +28,12 @@ rt::TaskSpec parseTaskSpec(const rt::ConfigNode& node) {
   node.finish();
   if (const rt::Status s = rt::validate(t); !s) node.fail("", s.error().message);
   return t;
+}
+
+std::string formatMs(double ms) {
+  std::array<char, 32> text{};
+  std::snprintf(text.data(), text.size(), "%g ms", ms);
+  return text.data();
 }
 
 AppConfig parseRoot(const rt::ConfigNode& root) {
@@ -72,6 +81,13 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   const std::vector<rt::ConfigNode> tasks = root.childList("tasks");
   for (const rt::ConfigNode& t : tasks) c.tasks.push_back(parseTaskSpec(t));
   if (const rt::Status s = rt::validate(c.tasks); !s) root.fail("tasks", s.error().message);
+  // The hand-over: a new trajectory takes over planning_budget_s after the cycle's release, so it must
+  // cover every cycle that keeps the task's budget, or a trajectory would arrive after its own start.
+  for (const rt::TaskSpec& t : c.tasks) {
+    if (t.name == "planning" && c.planning && c.planning->planning_budget_s * 1e3 < t.budget_ms - 1e-9)
+      root.fail("planning", "planning_budget_s, the hand-over (" + formatMs(c.planning->planning_budget_s * 1e3) +
+                                ") is shorter than the planning task's budget_ms (" + formatMs(t.budget_ms) + ")");
+  }
   root.finish();
   return c;
 }
@@ -244,10 +260,9 @@ std::string toYaml(const AppConfig& c) {
   out << YAML::Key << "tasks" << YAML::Value << YAML::BeginSeq;
   for (const rt::TaskSpec& t : c.tasks) {
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << t.name;
-    if (t.periodic())
-      out << YAML::Key << "rate_hz" << YAML::Value << t.rate_hz;
-    else
-      out << YAML::Key << "trigger" << YAML::Value << t.trigger;
+    if (t.periodic()) out << YAML::Key << "rate_hz" << YAML::Value << t.rate_hz;
+    if (t.triggered()) out << YAML::Key << "trigger" << YAML::Value << t.trigger;
+    if (t.min_period_ms > 0.0) out << YAML::Key << "min_period_ms" << YAML::Value << t.min_period_ms;
     out << YAML::Key << "budget_ms" << YAML::Value << t.budget_ms;
     out << YAML::Key << "priority" << YAML::Value << t.priority;
     out << YAML::Key << "cpu" << YAML::Value << t.cpu;

@@ -268,21 +268,43 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
   std::unique_ptr<rt::Task> task = std::move(made_task.value());
 
   rt::Doorbell* doorbell = nullptr;
-  if (!spec.periodic()) {
+  if (spec.triggered()) {
     doorbells_.push_back(std::make_unique<rt::Doorbell>());
     doorbell = doorbells_.back().get();
-    if (spec.trigger == "odometry")
-      channels_.odometry.attachDoorbell(doorbell);
-    else if (spec.trigger == "setpoints")
-      channels_.setpoints.attachDoorbell(doorbell);
-    else if (spec.trigger == "trajectories")
-      channels_.trajectories.attachDoorbell(doorbell);
-    else
-      return rt::Error{where + ".trigger: unknown channel '" + spec.trigger +
-                       "' (known: odometry, setpoints, trajectories)"};
+    if (const rt::Status s = attachTrigger(spec.trigger, doorbell); !s)
+      return rt::Error{where + ".trigger: " + s.error().message};
+    triggered_by_.emplace_back(spec.trigger, spec.name);
   }
   tasks_.push_back(std::move(task));
   bindings_.push_back({spec, tasks_.back().get(), doorbell});
+  return rt::ok();
+}
+
+rt::Status System::attachTrigger(const std::string& channel, rt::Doorbell* doorbell) {
+  // Each channel has one doorbell: one task may be triggered by it.
+  for (const auto& [name, task] : triggered_by_)
+    if (name == channel) return rt::Error{"channel '" + channel + "' already triggers task '" + task + "'"};
+  Channels& c = channels_;
+  if (channel == "odometry")
+    c.odometry.attachDoorbell(doorbell);
+  else if (channel == "setpoints")
+    c.setpoints.attachDoorbell(doorbell);
+  else if (channel == "trajectories")
+    c.trajectories.attachDoorbell(doorbell);
+  else if (channel == "detections")
+    c.detections.attachDoorbell(doorbell);
+  else if (channel == "images")
+    c.images.attachDoorbell(doorbell);
+  else if (channel == "target")
+    c.target.attachDoorbell(doorbell);
+  else if (channel == "depth")
+    c.depth.attachDoorbell(doorbell);
+  else if (channel == "gimbal_state")
+    c.gimbal_state.attachDoorbell(doorbell);
+  else if (channel == "local_grid")
+    c.local_grid.attachDoorbell(doorbell);
+  else
+    return rt::Error{"unknown channel '" + channel + "' (known: " + kTriggerChannels + ")"};
   return rt::ok();
 }
 

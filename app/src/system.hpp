@@ -8,6 +8,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "aerotrack/hal/factory.hpp"
@@ -31,9 +32,13 @@ namespace aerotrack::app {
 
 class TargetTruthCheckTask;
 
-/// With --record, the modules' outputs are polled this often (above the target task's 50 Hz, so every
-/// estimate is seen).
+/// With --record, the modules' outputs are polled this often: the target task's fastest (its 10 ms rate
+/// cap in the shipped tables; it runs on each detection and at 50 Hz), so estimates are seen as they come.
 inline constexpr double kOutputRecordRateHz = 100.0;
+
+/// The channels a task's `trigger` may name (System::attachTrigger), for messages.
+inline constexpr const char* kTriggerChannels =
+    "odometry, setpoints, trajectories, detections, images, target, depth, gimbal_state, local_grid";
 
 /// Every channel of the process. Names here are the names a task's `trigger` may use.
 struct Channels {
@@ -127,6 +132,8 @@ class System {
 
   explicit System(AppConfig config) : config_(std::move(config)) {}
   rt::Status addTask(const rt::TaskSpec& spec, std::size_t index);
+  /// Rings doorbell on every write to the named channel (one triggered task per channel).
+  rt::Status attachTrigger(const std::string& channel, rt::Doorbell* doorbell);
 
   AppConfig config_;
   std::unique_ptr<hal::replay::DatasetRecorder> recorder_;  // before devices_: the recording decorators use it
@@ -134,6 +141,7 @@ class System {
   Channels channels_;
   std::vector<std::unique_ptr<rt::Task>> tasks_;
   std::vector<std::unique_ptr<rt::Doorbell>> doorbells_;
+  std::vector<std::pair<std::string, std::string>> triggered_by_;  ///< (channel, the task it triggers)
   std::vector<rt::TaskBinding> bindings_;
   const mapping::MappingTask* mapping_task_ = nullptr;
   const perception::DetectionTask* detection_task_ = nullptr;

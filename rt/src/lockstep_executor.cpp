@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <limits>
 #include <mutex>
 #include <thread>
 
@@ -15,6 +16,8 @@ namespace {
 
 // Event tasks that keep re-triggering each other at one instant would never let time advance.
 constexpr int kMaxEventRoundsPerInstant = 1000;
+// No timed release scheduled (an event task with nothing deferred), or never run.
+constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
 
 void hashMix(std::uint64_t& hash, std::uint64_t value) {
   for (int byte = 0; byte < 8; ++byte) {
@@ -152,14 +155,36 @@ void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
   ++steps_;
 }
 
+void LockstepExecutor::release(std::size_t index, TimeNs now_ns) {
+  const TaskSet::Entry& entry = tasks_.entries()[index];
+  const TaskSpec& spec = entry.binding.spec;
+  if (spec.triggered()) entry.binding.doorbell->consume();
+  runOne(index, now_ns);
+  last_run_ns_[index] = now_ns;
+  if (!spec.triggered())
+    next_release_ns_[index] += entry.period_ns;  // the fixed grid (now_ns was the release on it)
+  else
+    next_release_ns_[index] = spec.periodic() ? now_ns + entry.period_ns : kNever;  // the fallback restarts
+}
+
 Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
   for (int round = 0; round < kMaxEventRoundsPerInstant; ++round) {
     bool ran = false;
     for (std::size_t i = 0; i < tasks_.entries().size(); ++i) {
-      const TaskBinding& b = tasks_.entries()[i].binding;
-      if (b.spec.periodic() || !b.doorbell->pending()) continue;
-      b.doorbell->consume();
-      runOne(i, now_ns);
+      const TaskSet::Entry& e = tasks_.entries()[i];
+      if (!e.binding.spec.triggered() || !e.binding.doorbell->pending()) continue;
+      // A timed release due now (a cap's end, the fallback) runs in its priority order among the
+      // releases of this instant, not after whichever step came first: so that when a task runs
+      // depends only on its own writers and releases, not on the other tasks in the table (a replay
+      // leaves the simulator's out and must run the same).
+      if (next_release_ns_[i] <= now_ns) continue;
+      const TimeNs earliest_ns = last_run_ns_[i] == kNever ? now_ns : last_run_ns_[i] + e.min_period_ns;
+      if (earliest_ns > now_ns) {
+        // Inside the rate cap: a timed release at its end (left pending, consumed by that release).
+        next_release_ns_[i] = std::min(next_release_ns_[i], earliest_ns);
+        continue;
+      }
+      release(i, now_ns);
       ran = true;
     }
     if (!ran) return ok();
@@ -169,12 +194,15 @@ Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
 
 Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) {
   const std::vector<TaskSet::Entry>& entries = tasks_.entries();
-  next_release_ns_.resize(entries.size(), clock_.now());  // new tasks start now
+  for (std::size_t i = next_release_ns_.size(); i < entries.size(); ++i) {  // new tasks start now
+    next_release_ns_.push_back(entries[i].binding.spec.periodic() ? clock_.now() : kNever);
+    last_run_ns_.push_back(kNever);
+  }
   for (;;) {
     if (stop != nullptr && stop->load(std::memory_order_acquire)) break;
     std::size_t next = entries.size();
     for (std::size_t i = 0; i < entries.size(); ++i) {
-      if (!entries[i].binding.spec.periodic()) continue;
+      if (next_release_ns_[i] == kNever) continue;
       if (next == entries.size() || next_release_ns_[i] < next_release_ns_[next] ||
           (next_release_ns_[i] == next_release_ns_[next] &&
            entries[i].binding.spec.priority > entries[next].binding.spec.priority))
@@ -204,8 +232,7 @@ Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) 
     }
     const TimeNs release_ns = next_release_ns_[next];
     clock_.set(release_ns);
-    runOne(next, release_ns);
-    next_release_ns_[next] += entries[next].period_ns;
+    release(next, release_ns);
     if (Status s = runPendingEvents(release_ns); !s) {
       joinWorker();
       return s;

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include <limits>
 
 #include "aerotrack/rt/doorbell.hpp"
 
@@ -65,10 +66,10 @@ Expected<std::vector<std::string>> RealtimeExecutor::start() {
     for (TaskSet::Entry& e : tasks_.entries()) {
       threads_.emplace_back([this, &e, &go, &first_release_ns] {
         go.wait(false, std::memory_order_acquire);
-        if (e.binding.spec.periodic())
-          runPeriodic(e, first_release_ns);
+        if (e.binding.spec.triggered())
+          runTriggered(e, first_release_ns);
         else
-          runEvent(e);
+          runPeriodic(e, first_release_ns);
       });
     }
   } catch (const std::system_error& ex) {
@@ -132,17 +133,46 @@ void RealtimeExecutor::runPeriodic(TaskSet::Entry& e, TimeNs first_release_ns) {
   }
 }
 
-void RealtimeExecutor::runEvent(TaskSet::Entry& e) {
+void RealtimeExecutor::runTriggered(TaskSet::Entry& e, TimeNs first_release_ns) {
   started_.fetch_add(1, std::memory_order_acq_rel);
   started_.notify_all();
+  constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
   TimingStats& stats = *e.stats;
   Doorbell& doorbell = *e.binding.doorbell;
+  // The fallback release (kNever without a rate) and the previous run (kNever: none yet).
+  TimeNs fallback_ns = e.period_ns > 0 ? first_release_ns : kNever;
+  TimeNs last_run_ns = kNever;
   while (!stop_.load(std::memory_order_acquire)) {
-    if (!doorbell.waitFor(options_.stop_poll_ns)) continue;
-    doorbell.consume();
-    const TimeNs begin_ns = clock_.now();
-    e.binding.task->step(begin_ns);
-    stats.recordRun(clock_.now() - begin_ns);
+    const TimeNs now_ns = clock_.now();
+    const bool rang = doorbell.pending();
+    // A ring releases it now, the fallback at its time, and neither before the cap's end (a late
+    // wake-up must not bring the fallback closer to it than the cap either).
+    TimeNs release_ns = rang ? std::min(fallback_ns, now_ns) : fallback_ns;
+    if (last_run_ns != kNever) release_ns = std::max(release_ns, last_run_ns + e.min_period_ns);
+    if (now_ns < release_ns) {
+      if (rang)  // inside the rate cap: sleep to its end (the ring stays pending)
+        sleepUntil(release_ns, clock_, options_.stop_poll_ns, stop_);
+      else  // wait for a ring, or the fallback release
+        doorbell.waitFor(std::min(release_ns - now_ns, options_.stop_poll_ns));
+      continue;
+    }
+    doorbell.consume();  // before the step reads its inputs: a ring during the step stays pending
+    const TimeNs wake_ns = clock_.now();
+    stats.recordWakeLatency(wake_ns - release_ns);
+    e.binding.task->step(wake_ns);
+    const TimeNs end_ns = clock_.now();
+    stats.recordRun(end_ns - wake_ns);
+    last_run_ns = wake_ns;
+    if (e.period_ns > 0) {
+      fallback_ns = release_ns + e.period_ns;  // the fallback restarts at every run
+      if (end_ns > fallback_ns) {
+        const auto skipped = static_cast<std::uint64_t>((end_ns - fallback_ns) / e.period_ns) + 1;
+        stats.addMissedDeadlines(skipped);
+        if (options_.deadline_misses != nullptr)
+          options_.deadline_misses->fetch_add(skipped, std::memory_order_relaxed);
+        fallback_ns += static_cast<DurationNs>(skipped) * e.period_ns;
+      }
+    }
   }
 }
 

@@ -11,8 +11,14 @@ Status validate(const TaskSpec& spec) {
   if (spec.name.empty()) return Error{"task with an empty name"};
   if (!std::isfinite(spec.rate_hz) || spec.rate_hz < 0.0 || spec.rate_hz > 100000.0)
     return Error{where + "rate_hz must be in [0, 100000]"};
-  if (spec.periodic() == !spec.trigger.empty())
-    return Error{where + "needs exactly one of rate_hz (periodic) or trigger (event)"};
+  if (!spec.periodic() && !spec.triggered())
+    return Error{where + "needs a rate_hz (periodic), a trigger (event) or both (event, periodic fallback)"};
+  if (!std::isfinite(spec.min_period_ms) || spec.min_period_ms < 0.0 || spec.min_period_ms > 10000.0)
+    return Error{where + "min_period_ms must be in [0, 10000]"};
+  if (spec.min_period_ms > 0.0 && !spec.triggered())
+    return Error{where + "min_period_ms (a rate cap) needs a trigger: a periodic task runs at its rate"};
+  if (spec.periodic() && spec.min_period_ms * 1e-3 * spec.rate_hz > 1.0)
+    return Error{where + "min_period_ms must be at most the fallback period (1 / rate_hz)"};
   if (!std::isfinite(spec.budget_ms) || spec.budget_ms <= 0.0 || spec.budget_ms > 10000.0)
     return Error{where + "budget_ms must be in (0, 10000]"};
   if (spec.priority < 0 || spec.priority > 99) return Error{where + "priority must be in [0, 99]"};

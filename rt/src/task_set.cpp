@@ -7,13 +7,14 @@ Status TaskSet::add(const TaskBinding& binding) {
   const TaskSpec& spec = binding.spec;
   if (Status s = validate(spec); !s) return s;
   if (binding.task == nullptr) return Error{"task '" + spec.name + "' has no implementation"};
-  if (!spec.periodic() && binding.doorbell == nullptr)
+  if (spec.triggered() && binding.doorbell == nullptr)
     return Error{"event task '" + spec.name + "' has no doorbell for trigger '" + spec.trigger + "'"};
   for (const Entry& e : entries_)
     if (e.binding.spec.name == spec.name) return Error{"task '" + spec.name + "' added twice"};
   Entry entry;
   entry.binding = binding;
   entry.period_ns = spec.periodic() ? periodFromRateHz(spec.rate_hz) : 0;
+  entry.min_period_ns = millisecondsToNs(spec.min_period_ms);
   entry.stats = std::make_unique<TimingStats>(millisecondsToNs(spec.budget_ms));
   entries_.push_back(std::move(entry));
   return ok();

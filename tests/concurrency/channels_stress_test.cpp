@@ -13,6 +13,7 @@
 #include "aerotrack/rt/doorbell.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/lending_pool.hpp"
+#include "aerotrack/rt/realtime_executor.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
 
@@ -214,6 +215,73 @@ TEST(DoorbellStress, NoRingIsLost) {
   bell.ring();
   consumer.join();
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+}
+
+/// Reads the slot on every run; checks that values never go back and that runs respect the cap.
+class CappedReader final : public Task {
+ public:
+  CappedReader(const LatestSlot<std::uint64_t>& slot, DurationNs cap_ns) : slot_(slot), cap_ns_(cap_ns) {}
+  void step(TimeNs now_ns) override {
+    if (last_run_ns_ >= 0 && now_ns - last_run_ns_ < cap_ns_) cap_broken_.store(true, std::memory_order_relaxed);
+    last_run_ns_ = now_ns;
+    const std::uint64_t v = slot_.read().value_or(0);
+    if (v < seen_.load(std::memory_order_relaxed)) went_back_.store(true, std::memory_order_relaxed);
+    seen_.store(v, std::memory_order_release);
+    runs_.fetch_add(1, std::memory_order_relaxed);
+  }
+  std::uint64_t seen() const { return seen_.load(std::memory_order_acquire); }
+  bool capBroken() const { return cap_broken_.load(std::memory_order_relaxed); }
+  bool wentBack() const { return went_back_.load(std::memory_order_relaxed); }
+  std::uint64_t runs() const { return runs_.load(std::memory_order_relaxed); }
+
+ private:
+  const LatestSlot<std::uint64_t>& slot_;
+  DurationNs cap_ns_;
+  TimeNs last_run_ns_ = -1;
+  std::atomic<std::uint64_t> seen_{0};
+  std::atomic<std::uint64_t> runs_{0};
+  std::atomic<bool> cap_broken_{false};
+  std::atomic<bool> went_back_{false};
+};
+
+TEST(TriggeredTaskStress, AWriterNeverBlocksAndTheLastWriteIsAlwaysServedWithinTheCap) {
+  // A writer hammers a slot whose doorbell triggers a task on the real-time executor (a 1 ms cap, a
+  // 10 s fallback). After every burst the reader must see the burst's last value: a lost wake-up
+  // would leave it waiting for the 10 s fallback. The writer is wait-free (no lock to contend).
+  LatestSlot<std::uint64_t> slot;
+  Doorbell bell;
+  slot.attachDoorbell(&bell);
+  CappedReader reader(slot, kNsPerMillisecond);
+  MonotonicClock clock;
+  RealtimeOptions options;
+  options.use_realtime_priority = false;
+  options.lock_memory = false;
+  RealtimeExecutor ex(clock, options);
+  TaskSpec spec;
+  spec.name = "reader";
+  spec.trigger = "slot";
+  spec.rate_hz = 0.1;
+  spec.min_period_ms = 1.0;
+  spec.budget_ms = 1.0;
+  ASSERT_TRUE(ex.add({spec, &reader, &bell}));
+  ASSERT_TRUE(ex.start());
+  constexpr int kBursts = 50;
+  const std::uint64_t per_burst = kItems / 200;
+  std::uint64_t value = 0;
+  bool all_served = true;
+  for (int burst = 0; burst < kBursts && all_served; ++burst) {
+    for (std::uint64_t i = 0; i < per_burst; ++i) slot.write(++value);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (reader.seen() != value && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    all_served = reader.seen() == value;
+  }
+  ex.requestStop();
+  ex.join();
+  EXPECT_TRUE(all_served) << "a burst's last write was not served: a lost wake-up";
+  EXPECT_FALSE(reader.capBroken());
+  EXPECT_FALSE(reader.wentBack());
+  EXPECT_GE(reader.runs(), static_cast<std::uint64_t>(kBursts));
 }
 
 }  // namespace

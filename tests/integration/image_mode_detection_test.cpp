@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/rt/lockstep_executor.hpp"
@@ -66,10 +67,17 @@ TEST(ImageModeDetection, GivenRenderedFramesOfSharpTurn_WhenTheRealDetectorRuns_
   std::vector<double> centre_error_torsos, length_error_ratio;
   std::size_t frames = 0, with_target = 0, truth_visible = 0;
   const rt::TimeNs step_ns = 5 * rt::kNsPerMillisecond;
+  std::uint64_t detection_version = 0;
   for (rt::TimeNs t = 0; t <= rt::secondsToNs(12.0); t += step_ns) {
     ASSERT_TRUE(executor.runUntil(t));
     truth_at[sim.truth().stamp_ns] = projectTruth(sim.truth(), intrinsics);
-    while (const auto frame = (*system)->channels().detections.try_pop()) {
+    // Each detector output as it comes (newest_detection; the detections queue is the target task's,
+    // which takes every frame at once since it is triggered by it). One output at most per step: the
+    // detection task's rate cap (30 ms) is longer than the 5 ms step.
+    hal::DetectionFrame newest;
+    const bool fresh = (*system)->channels().newest_detection.readIfNewer(detection_version, newest);
+    for (std::optional<hal::DetectionFrame> frame = fresh ? std::optional(newest) : std::nullopt; frame;
+         frame.reset()) {
       ++frames;
       // Exposures fall between the 5 ms truth samples: interpolate the projection linearly (the
       // person moves under 1 cm and the image a few pixels in that time).

@@ -33,6 +33,7 @@ Outcome fly(const std::string& scenario, std::uint64_t seed, double max_sim_s) {
   const hal::sim::Simulation& sim = aerotrack::test::require(system->devices().simulation.get(), "the simulation");
   RunInfo info;  // no timings: they are wall-clock measurements and differ between runs
   info.sim_time_s = rt::nsToSeconds(clock.now());
+  info.latency = latencySummary(system->trajectoryServerTask());  // simulated time: deterministic
   return {executor.traceHash(), simSummary(sim, info), sim.truth().drone.p_W_m};
 }
 
@@ -44,6 +45,19 @@ TEST(SimLockstep, GivenSameSeedWhenRunTwiceThenSummariesAreIdentical) {
   EXPECT_EQ(a.drone_m, b.drone_m);  // bit for bit
   const Outcome c = fly("sharp_turn", 4, 20.0);
   EXPECT_NE(a.summary.dump(), c.summary.dump());
+}
+
+// Issue 21 item 4: image capture to the first setpoint from the plan that used it, in simulated time
+// (deterministic, so a fixed bound is safe here; the real-time executor's number is measured, not
+// tested: docs/benchmarks.md). The camera's 40 ms delivery, the detection at once to the target task,
+// the new estimate at once to the planner, an 8 ms hand-over: the paper's 60 ms median.
+TEST(SimLockstep, GivenTheShippedConfigThenCaptureToFirstSetpointMedianIsWithinThePapers60Ms) {
+  const Outcome o = fly("sharp_turn", 1, 20.0);
+  const nlohmann::json& latency = o.summary["latency"];
+  ASSERT_GT(latency["samples"].get<int>(), 300);  // ~30 plans a second from 1 s on
+  EXPECT_LE(latency["capture_to_setpoint_ms_p50"].get<double>(), 60.0);
+  EXPECT_GE(latency["capture_to_setpoint_ms_p50"].get<double>(), 48.0);  // no faster than delivery + hand-over
+  EXPECT_LE(latency["capture_to_setpoint_ms_p99"].get<double>(), 130.0);
 }
 
 class EveryScenario : public ::testing::TestWithParam<std::string> {};

@@ -94,7 +94,14 @@ void TargetTask::step(rt::TimeNs now_ns) {
   std::move(pending_.begin() + static_cast<std::ptrdiff_t>(done),
             pending_.begin() + static_cast<std::ptrdiff_t>(pending_count_), pending_.begin());
   pending_count_ -= done;
-  out_.write(estimator_.estimate(now_ns));
+  const TargetEstimate estimate = estimator_.estimate(now_ns);
+  const bool news =
+      estimate.initialised && (estimate.last_accepted_ns != notified_accepted_ns_ || estimate.lost != notified_lost_);
+  if (news) {
+    notified_accepted_ns_ = estimate.last_accepted_ns;
+    notified_lost_ = estimate.lost;
+  }
+  out_.write(estimate, news ? rt::Notify::kYes : rt::Notify::kNo);
 }
 
 }  // namespace aerotrack::estimation

@@ -79,6 +79,7 @@ TEST(AppConfig, PrintedConfigParsesBackToTheSameConfig) {
     EXPECT_EQ(b.name, a.name);
     EXPECT_EQ(b.rate_hz, a.rate_hz) << a.name;
     EXPECT_EQ(b.trigger, a.trigger) << a.name;
+    EXPECT_EQ(b.min_period_ms, a.min_period_ms) << a.name;
     EXPECT_EQ(b.budget_ms, a.budget_ms) << a.name;
     EXPECT_EQ(b.priority, a.priority) << a.name;
     EXPECT_EQ(b.cpu, a.cpu) << a.name;
@@ -166,13 +167,53 @@ TEST(AppConfig, GivenOutOfRangeThenErrorNamesIt) {
 }
 
 TEST(AppConfig, GivenBadTaskRowsThenErrorNamesTheRow) {
-  const std::string both =
-      simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, trigger: x, rate_hz: 100,");
-  EXPECT_EQ(errorOf(both),
-            at(both, "{name: odometry") +
-                ": tasks[1]: task 'odometry': needs exactly one of rate_hz (periodic) or trigger (event)");
+  const std::string neither = simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry,");
+  EXPECT_EQ(errorOf(neither), at(neither, "{name: odometry") +
+                                  ": tasks[1]: task 'odometry': needs a rate_hz (periodic), a trigger "
+                                  "(event) or both (event, periodic fallback)");
+  const std::string cap_over_period = simYamlWith("{name: odometry,          rate_hz: 100,",
+                                                  "{name: odometry, trigger: x, min_period_ms: 20, rate_hz: 100,");
+  EXPECT_EQ(errorOf(cap_over_period),
+            at(cap_over_period, "{name: odometry") +
+                ": tasks[1]: task 'odometry': min_period_ms must be at most the fallback period (1 / rate_hz)");
+  const std::string cap_without_trigger =
+      simYamlWith("{name: odometry,          rate_hz: 100,", "{name: odometry, min_period_ms: 5, rate_hz: 100,");
+  EXPECT_EQ(errorOf(cap_without_trigger),
+            at(cap_without_trigger, "{name: odometry") +
+                ": tasks[1]: task 'odometry': min_period_ms (a rate cap) needs a trigger: a periodic task runs at its "
+                "rate");
   const std::string twice = simYamlWith("{name: odometry, ", "{name: sim_world, ");
   EXPECT_EQ(errorOf(twice), at(twice, "  - {name: sim_world") + ": tasks: task 'sim_world' appears twice in the table");
+}
+
+TEST(AppConfig, GivenAHandOverShorterThanThePlanningBudgetThenErrorNamesBoth) {
+  const std::string yaml = simYamlWith("planning_budget_s: 0.008", "planning_budget_s: 0.005");
+  EXPECT_NE(errorOf(yaml).find("planning_budget_s, the hand-over (5 ms) is shorter than the planning task's "
+                               "budget_ms (8 ms)"),
+            std::string::npos)
+      << errorOf(yaml);
+}
+
+TEST(AppConfig, GivenTheShippedConfigsThenTheChainFromDetectionToPlanningIsTriggered) {
+  for (const char* file : {"/sim.yaml", "/drone.yaml"}) {
+    const auto c = loadAppConfig(kConfigDir + file);
+    ASSERT_TRUE(c) << c.error().message;
+    int triggered = 0;
+    for (const rt::TaskSpec& t : c->tasks) {
+      if (t.name == "target") {
+        EXPECT_EQ(t.trigger, "detections") << file;
+        ++triggered;
+      }
+      if (t.name == "planning") {
+        EXPECT_EQ(t.trigger, "target") << file;
+        EXPECT_GT(t.min_period_ms, 0.0) << file;  // the rate cap
+        EXPECT_GT(t.rate_hz, 0.0) << file;        // the fallback
+        EXPECT_LE(c->planning->planning_budget_s * 1e3, t.budget_ms + 1e-9) << file;
+        ++triggered;
+      }
+    }
+    EXPECT_EQ(triggered, 2) << file;
+  }
 }
 
 TEST(AppConfig, GivenAMissingLocalizationFileThenErrorNamesTheKeyAndTheFile) {
@@ -223,6 +264,18 @@ TEST(System, GivenEventTaskOnUnknownChannelThenError) {
   const auto s = System::build(*c, &trial, 0);
   ASSERT_FALSE(s);
   EXPECT_EQ(s.error().message.rfind("sim.yaml: tasks[1].trigger: unknown channel 'imu'", 0), 0U);
+}
+
+TEST(System, GivenTwoTasksTriggeredByOneChannelThenErrorNamesTheFirst) {
+  const auto c = parseAppConfig(
+      simYamlWith("{name: supervisor,        rate_hz: 50,", "{name: supervisor,        rate_hz: 50, trigger: target,"),
+      "sim.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  const auto trial = openTrial();
+  const auto s = System::build(*c, &trial, 0);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find(".trigger: channel 'target' already triggers task 'planning'"), std::string::npos)
+      << s.error().message;
 }
 
 TEST(System, GivenShippedSimConfigThenOneBindingPerRowInTableOrder) {

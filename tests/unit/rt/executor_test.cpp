@@ -3,6 +3,8 @@
 // overrun accounting.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -53,9 +55,21 @@ TaskSpec event(const std::string& name, const std::string& trigger) {
 
 TEST(TaskSpecValidation, RejectsInconsistentRows) {
   EXPECT_TRUE(validate(periodic("a", 10)));
-  TaskSpec both = periodic("a", 10);
+  TaskSpec both = periodic("a", 10);  // triggered, with a periodic fallback
   both.trigger = "x";
+  EXPECT_TRUE(validate(both));
+  both.min_period_ms = 100.0;  // the cap may equal the fallback period
+  EXPECT_TRUE(validate(both));
+  both.min_period_ms = 101.0;  // but not exceed it
   EXPECT_FALSE(validate(both));
+  both.min_period_ms = -1.0;
+  EXPECT_FALSE(validate(both));
+  TaskSpec capped_timer = periodic("a", 10);  // a cap without a trigger means nothing
+  capped_timer.min_period_ms = 5.0;
+  EXPECT_FALSE(validate(capped_timer));
+  TaskSpec capped_event = event("a", "x");
+  capped_event.min_period_ms = 5000.0;
+  EXPECT_TRUE(validate(capped_event));
   TaskSpec neither = periodic("a", 0);
   EXPECT_FALSE(validate(neither));
   TaskSpec no_budget = periodic("a", 10);
@@ -377,6 +391,156 @@ TEST(LockstepExecutor, GivenNoLatencyThenAnOverlappedTaskRunsInlineLikeAnyTask) 
     ASSERT_EQ(release_ns, (when_ns / (100 * kNsPerMillisecond)) * 100 * kNsPerMillisecond) << "at " << when_ns;
 }
 
+/// Writes a latest slot at the listed times (its period must divide them), counting from 1.
+class ScheduledWriter final : public Task {
+ public:
+  ScheduledWriter(LatestSlot<int>& slot, std::vector<TimeNs> at_ns) : slot_(slot), at_ns_(std::move(at_ns)) {}
+  void step(TimeNs now_ns) override {
+    for (const TimeNs t : at_ns_)
+      if (t == now_ns) slot_.write(++written_);
+  }
+
+ private:
+  LatestSlot<int>& slot_;
+  std::vector<TimeNs> at_ns_;
+  int written_ = 0;
+};
+
+TaskSpec triggered(const std::string& name, double fallback_rate_hz, double min_period_ms) {
+  TaskSpec s = event(name, "slot");
+  s.rate_hz = fallback_rate_hz;
+  s.min_period_ms = min_period_ms;
+  return s;
+}
+
+constexpr TimeNs kMs = kNsPerMillisecond;
+
+/// Lockstep: a 1 kHz writer writes at the given times; the reader is triggered by the slot.
+std::vector<TimeNs> runTriggeredReader(const TaskSpec& reader_spec, std::vector<TimeNs> writes_ns, TimeNs end_ns,
+                                       std::uint64_t* trace_hash = nullptr) {
+  ManualClock clock(0);
+  MonotonicClock wall;
+  LockstepExecutor ex(clock, wall);
+  LatestSlot<int> slot;
+  Doorbell bell;
+  slot.attachDoorbell(&bell);
+  ScheduledWriter writer(slot, std::move(writes_ns));
+  RecordingTask reader;
+  EXPECT_TRUE(ex.add({periodic("writer", 1000, 10), &writer, nullptr}));
+  EXPECT_TRUE(ex.add({reader_spec, &reader, &bell}));
+  EXPECT_TRUE(ex.runUntil(end_ns));
+  if (trace_hash != nullptr) *trace_hash = ex.traceHash();
+  return reader.times;
+}
+
+TEST(LockstepExecutor, GivenATriggeredTaskWithAFallbackWhenAWriteComesThenItRunsAtTheWriteAndTheFallbackRestarts) {
+  // Fallback 10 Hz, no cap: the timer at 0 and 100 ms, the write at 137 ms, then the timer 100 ms after it.
+  const std::vector<TimeNs> times = runTriggeredReader(triggered("r", 10, 0.0), {137 * kMs}, 400 * kMs);
+  EXPECT_EQ(times, (std::vector<TimeNs>{0, 100 * kMs, 137 * kMs, 237 * kMs, 337 * kMs}));
+}
+
+TEST(LockstepExecutor, GivenNoWritesThenATriggeredTaskRunsAtItsFallbackRate) {
+  const std::vector<TimeNs> times = runTriggeredReader(triggered("r", 20, 10.0), {}, 200 * kMs);
+  EXPECT_EQ(times, (std::vector<TimeNs>{0, 50 * kMs, 100 * kMs, 150 * kMs, 200 * kMs}));
+}
+
+TEST(LockstepExecutor, GivenWritesFasterThanTheRateCapThenRunsAreCapAndARingInsideItIsDeferredNotDropped) {
+  // Writes every 10 ms from 5 ms, a 30 ms cap, no fallback: a run at the first write, then each at the
+  // end of the cap (the ring inside it waits), reading the newest value.
+  std::vector<TimeNs> writes;
+  for (TimeNs t = 5 * kMs; t <= 95 * kMs; t += 10 * kMs) writes.push_back(t);
+  const std::vector<TimeNs> times = runTriggeredReader(triggered("r", 0, 30.0), writes, 300 * kMs);
+  EXPECT_EQ(times, (std::vector<TimeNs>{5 * kMs, 35 * kMs, 65 * kMs, 95 * kMs}));
+  // One write inside the cap, after which nothing: still served at the cap's end.
+  EXPECT_EQ(runTriggeredReader(triggered("r", 0, 30.0), {5 * kMs, 12 * kMs}, 300 * kMs),
+            (std::vector<TimeNs>{5 * kMs, 35 * kMs}));
+  // A write after the cap has passed runs at once.
+  EXPECT_EQ(runTriggeredReader(triggered("r", 0, 30.0), {5 * kMs, 50 * kMs}, 300 * kMs),
+            (std::vector<TimeNs>{5 * kMs, 50 * kMs}));
+}
+
+TEST(LockstepExecutor, GivenATriggeredTaskThenTheSameWritesGiveTheSameRunBitForBit) {
+  std::vector<TimeNs> writes;
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 200; ++i) writes.push_back(static_cast<TimeNs>(rng() % 2000) * kMs);
+  std::uint64_t hash_a = 0;
+  std::uint64_t hash_b = 0;
+  std::uint64_t hash_c = 0;
+  const auto a = runTriggeredReader(triggered("r", 20, 25.0), writes, 2 * kNsPerSecond, &hash_a);
+  const auto b = runTriggeredReader(triggered("r", 20, 25.0), writes, 2 * kNsPerSecond, &hash_b);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(hash_a, hash_b);
+  writes.push_back(1999 * kMs + 1);  // not on the writer's grid: no write, same run
+  EXPECT_EQ(runTriggeredReader(triggered("r", 20, 25.0), writes, 2 * kNsPerSecond, &hash_c), a);
+  EXPECT_EQ(hash_c, hash_a);
+  for (std::size_t i = 1; i < a.size(); ++i) {
+    EXPECT_GE(a[i] - a[i - 1], 25 * kMs);  // the cap
+    EXPECT_LE(a[i] - a[i - 1], 50 * kMs);  // the fallback
+  }
+}
+
+/// Writes the time (ms) into a slot at each step, without waking anyone.
+class ClockWriter final : public Task {
+ public:
+  explicit ClockWriter(LatestSlot<int>& slot) : slot_(slot) {}
+  void step(TimeNs now_ns) override { slot_.write(static_cast<int>(now_ns / kMs), Notify::kNo); }
+
+ private:
+  LatestSlot<int>& slot_;
+};
+
+/// Records what a slot held at each of its steps.
+class SlotReader final : public Task {
+ public:
+  explicit SlotReader(const LatestSlot<int>& slot) : slot_(slot) {}
+  void step(TimeNs now_ns) override { seen.push_back({now_ns, slot_.read().value_or(-1)}); }
+  std::vector<std::pair<TimeNs, int>> seen;
+
+ private:
+  const LatestSlot<int>& slot_;
+};
+
+std::vector<std::pair<TimeNs, int>> runDeferred(bool with_unrelated_task) {
+  ManualClock clock(0);
+  MonotonicClock wall;
+  LockstepExecutor ex(clock, wall);
+  LatestSlot<int> trigger;
+  LatestSlot<int> fresh;
+  Doorbell bell;
+  trigger.attachDoorbell(&bell);
+  RecordingTask unrelated;
+  ClockWriter clock_writer(fresh);
+  ScheduledWriter writer(trigger, {10 * kMs, 20 * kMs});
+  SlotReader reader(fresh);
+  if (with_unrelated_task) {
+    EXPECT_TRUE(ex.add({periodic("unrelated", 200, 90), &unrelated, nullptr}));
+  }
+  EXPECT_TRUE(ex.add({periodic("clock", 100, 50), &clock_writer, nullptr}));
+  EXPECT_TRUE(ex.add({periodic("writer", 1000, 10), &writer, nullptr}));
+  EXPECT_TRUE(ex.add({triggered("reader", 0, 30.0), &reader, &bell}));
+  EXPECT_TRUE(ex.runUntil(100 * kMs));
+  return reader.seen;
+}
+
+TEST(LockstepExecutor, GivenADeferredReleaseThenItRunsInPriorityOrderWhateverElseRunsAtThatInstant) {
+  // The write at 20 ms falls inside the cap: the reader runs at 40 ms, after the higher-priority clock
+  // task's step at 40 ms, with or without an unrelated task stepping first at that instant (a replay
+  // leaves the simulator's tasks out and must run the same).
+  const auto alone = runDeferred(false);
+  EXPECT_EQ(alone, (std::vector<std::pair<TimeNs, int>>{{10 * kMs, 10}, {40 * kMs, 40}}));
+  EXPECT_EQ(runDeferred(true), alone);
+}
+
+TEST(LatestSlotDoorbell, GivenAWriteThatDoesNotNotifyThenTheDoorbellStaysQuiet) {
+  LatestSlot<int> slot;
+  Doorbell bell;
+  slot.attachDoorbell(&bell);
+  slot.write(1, Notify::kNo);
+  EXPECT_FALSE(bell.pending());
+  slot.write(2);
+  EXPECT_TRUE(bell.pending());
+}
+
 class CountingTask final : public Task {
  public:
   explicit CountingTask(std::chrono::microseconds work = std::chrono::microseconds(0)) : work_(work) {}
@@ -442,6 +606,95 @@ TEST(RealtimeExecutor, GivenTaskSlowerThanItsPeriodThenOverrunsAndMissedDeadline
   EXPECT_EQ(s.overruns, s.runs);
   EXPECT_GE(s.missed_deadlines, 2 * s.runs - 2);                    // each run spans at least two more periods
   EXPECT_EQ(misses_seen_by_supervisor.load(), s.missed_deadlines);  // the sink sees every one
+}
+
+/// Records the time of every step (the executor's wake-up time), for the real-time executor.
+class TimedTask final : public Task {
+ public:
+  void step(TimeNs now_ns) override {
+    if (count_.load(std::memory_order_relaxed) < times_.size()) times_[count_.load(std::memory_order_relaxed)] = now_ns;
+    count_.fetch_add(1, std::memory_order_release);
+  }
+  std::size_t count() const { return count_.load(std::memory_order_acquire); }
+  /// After the executor has joined: the time of step i (i below count() and 4096).
+  TimeNs at(std::size_t i) const { return times_.at(i); }
+  /// After the executor has joined.
+  std::vector<TimeNs> times() const {
+    return {times_.begin(), times_.begin() + static_cast<std::ptrdiff_t>(std::min(count(), times_.size()))};
+  }
+
+ private:
+  std::array<TimeNs, 4096> times_{};
+  std::atomic<std::size_t> count_{0};
+};
+
+/// Waits up to `limit` for pred(); true if it held.
+template <typename Pred>
+bool waitFor(Pred pred, std::chrono::milliseconds limit) {
+  const auto until = std::chrono::steady_clock::now() + limit;
+  while (!pred()) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return true;
+}
+
+TEST(RealtimeExecutor, GivenATriggeredTaskWithASlowFallbackWhenAWriteComesThenItRunsLongBeforeTheFallback) {
+  MonotonicClock clock;
+  RealtimeExecutor ex(clock, unprivileged());
+  LatestSlot<int> slot;
+  Doorbell bell;
+  slot.attachDoorbell(&bell);
+  TimedTask reader;
+  ASSERT_TRUE(ex.add({triggered("reader", 0.1, 0.0), &reader, &bell}));  // fallback every 10 s
+  ASSERT_TRUE(ex.start());
+  ASSERT_TRUE(waitFor([&] { return reader.count() >= 1; }, std::chrono::milliseconds(5000)));  // at the start
+  const TimeNs written_ns = clock.now();
+  slot.write(1);
+  const bool woken = waitFor([&] { return reader.count() >= 2; }, std::chrono::milliseconds(5000));
+  ex.requestStop();
+  ex.join();
+  ASSERT_TRUE(woken);
+  const TimeNs woken_ns = reader.at(1);
+  EXPECT_GE(woken_ns, written_ns);
+  EXPECT_LT(woken_ns - written_ns, 5 * kNsPerSecond);  // loose (a loaded machine); the fallback was 10 s away
+}
+
+TEST(RealtimeExecutor, GivenNoWritesThenATriggeredTaskRunsAtItsFallbackRate) {
+  MonotonicClock clock;
+  RealtimeExecutor ex(clock, unprivileged());
+  Doorbell bell;
+  TimedTask reader;
+  ASSERT_TRUE(ex.add({triggered("reader", 100, 5.0), &reader, &bell}));
+  ASSERT_TRUE(ex.start());
+  const bool ran = waitFor([&] { return reader.count() >= 5; }, std::chrono::milliseconds(5000));
+  ex.requestStop();
+  ex.join();
+  EXPECT_TRUE(ran);
+  const std::vector<TimeNs> times = reader.times();
+  for (std::size_t i = 1; i < times.size(); ++i) EXPECT_GE(times[i] - times[i - 1], 5 * kNsPerMillisecond);
+}
+
+TEST(RealtimeExecutor, GivenWritesFasterThanTheRateCapThenRunsNeverComeCloserThanTheCap) {
+  MonotonicClock clock;
+  RealtimeExecutor ex(clock, unprivileged());
+  LatestSlot<int> slot;
+  Doorbell bell;
+  slot.attachDoorbell(&bell);
+  TimedTask reader;
+  ASSERT_TRUE(ex.add({triggered("reader", 10, 20.0), &reader, &bell}));
+  ASSERT_TRUE(ex.start());
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+  for (int i = 0; std::chrono::steady_clock::now() < until; ++i) {
+    slot.write(i);
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  ex.requestStop();
+  ex.join();
+  const std::vector<TimeNs> times = reader.times();
+  ASSERT_GE(times.size(), 2U);  // about 10 in 200 ms
+  // The cap is a rule on the executor's own wake-up times, so it holds however loaded the machine is.
+  for (std::size_t i = 1; i < times.size(); ++i) EXPECT_GE(times[i] - times[i - 1], 20 * kNsPerMillisecond);
 }
 
 TEST(RealtimeExecutor, GivenAddAfterStartThenRefused) {

@@ -11,6 +11,10 @@
 
 namespace aerotrack::rt {
 
+/// Whether a write to a channel rings the doorbell attached to it: a writer whose every step writes
+/// (an estimate refreshed at its rate) can wake its triggered reader only when there is news.
+enum class Notify : bool { kNo, kYes };
+
 class Doorbell {
  public:
   /// Producer side, any thread: marks new data. Wait-free apart from the wake system call.

@@ -32,15 +32,15 @@ class LatestSlot {
   /// Optional doorbell rung after each write (for an event-triggered reader). Set before start.
   void attachDoorbell(Doorbell* doorbell) { doorbell_ = doorbell; }
 
-  /// Single writer. Wait-free, no allocation.
-  void write(const T& value) {
+  /// Single writer. Wait-free, no allocation. notify: whether to ring the attached doorbell.
+  void write(const T& value, Notify notify = Notify::kYes) {
     std::array<std::uint64_t, kWords> buffer{};
     std::memcpy(static_cast<void*>(buffer.data()), static_cast<const void*>(&value), sizeof(T));
     const std::uint64_t seq = seq_.load(std::memory_order_relaxed);
     seq_.store(seq + 1, std::memory_order_relaxed);  // odd: write in progress
     for (std::size_t i = 0; i < kWords; ++i) words_[i].store(buffer[i], std::memory_order_release);
     seq_.store(seq + 2, std::memory_order_release);
-    if (doorbell_ != nullptr) doorbell_->ring();
+    if (doorbell_ != nullptr && notify == Notify::kYes) doorbell_->ring();
   }
 
   /// Any reader thread. Returns the newest value, or nothing if none was ever written.

@@ -3,9 +3,14 @@
 // the same inputs the sequence of (task, time) steps is identical, bit for bit; traceHash()
 // summarises it so tests can compare runs.
 //
-// Order: periodic releases by time, ties by priority (higher first) then table order. After each
-// step, event-triggered tasks whose doorbell rang run at the same simulated time, in table order,
-// until none is pending.
+// Order: timed releases by time, ties by priority (higher first) then table order. After each
+// step, triggered tasks whose doorbell rang run at the same simulated time, in table order, until
+// none is pending. A ring inside a task's rate cap (TaskSpec::min_period_ms) schedules a timed
+// release at the cap's end instead, which runs in priority order among that instant's releases
+// (not after whichever step came first: removing unrelated tasks, as a replay does, changes
+// nothing); a triggered task with a rate also has a timed release one period after its previous
+// run (task.hpp). So when a task runs is a function of the simulated time and of which steps wrote
+// to its channel, nothing else: the run stays deterministic.
 //
 // Overlap: an OverlappedTask with a latency (TaskSpec::latency_ms > 0) has its gather() run at the
 // release, its work() on the executor's one worker thread while the other tasks go on, and its
@@ -68,7 +73,12 @@ class LockstepExecutor {
   ManualClock& clock_;
   const Clock& stats_clock_;
   TaskSet tasks_;
-  std::vector<TimeNs> next_release_ns_;  // per task, in table order
+  /// Runs task `index` at now_ns: consumes its doorbell first (a ring during the step stays pending),
+  /// runs it, and sets its next timed release.
+  void release(std::size_t index, TimeNs now_ns);
+
+  std::vector<TimeNs> next_release_ns_;  // per task, in table order; kNever: none scheduled
+  std::vector<TimeNs> last_run_ns_;      // per task; kNever: not run yet
   std::vector<Publication> pending_;     // at most one per overlapped task, in start order
   std::unique_ptr<Worker> worker_;       // started with the first overlapped step
   std::size_t in_flight_ = 0;            // task whose work the worker has (if busy)

@@ -2,7 +2,9 @@
 // absolute deadlines with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME); a run that ends after
 // the next release counts the skipped periods as missed deadlines and resynchronises to the next
 // future release rather than bursting to catch up (as ArduPilot's PeriodicThread does).
-// Event-triggered tasks wait on their doorbell. SCHED_FIFO priorities, CPU affinity and
+// Triggered tasks wait on their doorbell (a futex: no allocation, writers never block), with the
+// rules of task.hpp: a ring inside the rate cap is served at the cap's end, and a periodic fallback
+// releases the task one period after its previous run. SCHED_FIFO priorities, CPU affinity and
 // mlockall are applied when the process is permitted; when not, start() reports a warning per
 // refusal and the tasks run at normal priority.
 #pragma once
@@ -55,7 +57,7 @@ class RealtimeExecutor {
 
  private:
   void runPeriodic(TaskSet::Entry& entry, TimeNs first_release_ns);
-  void runEvent(TaskSet::Entry& entry);
+  void runTriggered(TaskSet::Entry& entry, TimeNs first_release_ns);
 
   const MonotonicClock& clock_;
   RealtimeOptions options_;

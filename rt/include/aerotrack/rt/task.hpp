@@ -1,6 +1,16 @@
 // Tasks and the task table. A task is a thin adapter that connects a pure library to channels;
 // the executor decides when it runs. Its TaskSpec is one row of the task table (config YAML),
-// which reads as the system's timing contract: rate or trigger, time budget, priority, CPU.
+// which reads as the system's timing contract: rate and/or trigger, rate cap, time budget, priority,
+// CPU.
+//
+// When a task runs (both executors apply the same rules; TaskSpec::periodic() and triggered()):
+//   periodic (rate_hz, no trigger): released every period on a fixed grid from the start.
+//   event (trigger, no rate_hz): released when its doorbell rang (a write to the channel it names),
+//     but not sooner than min_period_ms after its previous run (the rate cap): a ring inside the cap
+//     is deferred to the cap's end, never dropped.
+//   event with a periodic fallback (trigger and rate_hz): as event, and also released one period
+//     after its previous run when no ring came (the period restarts at every run). So it runs at most
+//     every min_period_ms and at least every period.
 #pragma once
 
 #include <string>
@@ -16,8 +26,10 @@ class Doorbell;
 /// One row of the task table.
 struct TaskSpec {
   std::string name;
-  double rate_hz = 0.0;    ///< > 0: periodic at this rate. 0: event-triggered.
-  std::string trigger;     ///< Event-triggered: name of the channel whose data wakes the task.
+  double rate_hz = 0.0;  ///< > 0: periodic at this rate (with a trigger: the fallback rate).
+  std::string trigger;   ///< Non-empty: name of the channel whose data wakes the task.
+  /// With a trigger: the rate cap, the least time between two runs (0: none). At most the period.
+  double min_period_ms = 0.0;
   double budget_ms = 0.0;  ///< Execution-time budget per run; a longer run counts as an overrun.
   int priority = 0;        ///< SCHED_FIFO priority 1..99 on the real-time executor; 0: normal.
   int cpu = -1;            ///< CPU to pin the task's thread to; -1: any.
@@ -26,10 +38,14 @@ struct TaskSpec {
   /// period (a task delivers before it is released again) and at most budget_ms (the contract).
   double latency_ms = 0.0;
 
+  /// Released by a timer (alone, or as the fallback of a trigger).
   bool periodic() const { return rate_hz > 0.0; }
+  /// Released by its doorbell (and, if also periodic, by the fallback timer).
+  bool triggered() const { return !trigger.empty(); }
 };
 
-/// Checks one spec for consistency (exactly one of rate_hz/trigger, budget > 0, ranges).
+/// Checks one spec for consistency (a rate_hz or a trigger or both, a rate cap only with a trigger and
+/// at most the period, budget > 0, ranges).
 Status validate(const TaskSpec& spec);
 
 /// Checks a whole table: each spec valid and names unique.
@@ -71,7 +87,7 @@ class OverlappedTask : public Task {
 struct TaskBinding {
   TaskSpec spec;
   Task* task = nullptr;          ///< Not owned; outlives the executor run.
-  Doorbell* doorbell = nullptr;  ///< Required for event-triggered tasks, ignored otherwise.
+  Doorbell* doorbell = nullptr;  ///< Required for triggered tasks, ignored otherwise.
 };
 
 }  // namespace aerotrack::rt

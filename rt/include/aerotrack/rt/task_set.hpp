@@ -17,7 +17,8 @@ class TaskSet {
  public:
   struct Entry {
     TaskBinding binding;
-    DurationNs period_ns = 0;  ///< 0 for event-triggered tasks.
+    DurationNs period_ns = 0;      ///< 0 for event tasks without a periodic fallback.
+    DurationNs min_period_ns = 0;  ///< The rate cap of a triggered task (0: none).
     std::unique_ptr<TimingStats> stats;
   };
 
@@ -26,7 +27,7 @@ class TaskSet {
     const TimingStats* stats;
   };
 
-  /// Adds a task. Fails on an invalid spec, a duplicate name, a null task, or an event task
+  /// Adds a task. Fails on an invalid spec, a duplicate name, a null task, or a triggered task
   /// without a doorbell.
   Status add(const TaskBinding& binding);
 

@@ -5,6 +5,10 @@
 // the target estimator, whose newest estimate is published. A detection waits (up to max_wait)
 // until odometry and encoder readings cover its capture time; the measurement noise grows with
 // distance as the localization's error does (measured: about 2.5 % of the distance).
+//
+// The estimate is written at every step; the write wakes a task triggered by it (the planner) only when
+// there is news: a newly accepted measurement, or the person found or lost. A step that only carries
+// the estimate forward in time does not.
 #pragma once
 
 #include <array>
@@ -73,6 +77,8 @@ class TargetTask final : public rt::Task {
   std::size_t pending_count_ = 0;
   rt::TimeNs newest_pose_ns_ = -1;
   rt::TimeNs newest_gimbal_ns_ = -1;
+  rt::TimeNs notified_accepted_ns_ = -1;  ///< last_accepted_ns of the last estimate that woke its readers
+  bool notified_lost_ = true;
   TargetTaskStats stats_;
 };
 
