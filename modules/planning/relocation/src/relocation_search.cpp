@@ -185,7 +185,7 @@ void RelocationSearch::look(const mapping::LocalGrid& grid, const Eigen::Vector3
   if (!(dt_s > 0.0)) return;
   const double range2 = params_.camera_range_m * params_.camera_range_m;
   for (std::size_t c = 0; c < weight_.size(); ++c) {
-    if (weight_[c] <= 0.0 || seen_s_[c] >= params_.full_look_s) continue;
+    if (unseenMass(c) < kNegligibleMass) continue;
     const Eigen::Vector3d centre = cellCenterM(c);
     if ((centre - p_WC_m).head<2>().squaredNorm() > range2) continue;
     if (grid.lineOfSight(p_WC_m, centre)) seen_s_[c] += dt_s;
@@ -199,7 +199,7 @@ double RelocationSearch::visibleMass(const mapping::LocalGrid& grid, const Eigen
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (std::size_t c = 0; c < weight_.size(); ++c) {
     const double m = unseenMass(c);
-    if (m <= 0.0) continue;
+    if (m < kNegligibleMass) continue;
     const Eigen::Vector3d centre = cellCenterM(c);
     if ((centre - p_WC_m).head<2>().squaredNorm() > range2) continue;
     if (!grid.lineOfSight(p_WC_m, centre)) continue;

@@ -52,6 +52,10 @@ struct RelocationSearchParams {
 const rt::FieldTable<RelocationSearchParams>& relocationSearchFields();
 rt::Status validate(const RelocationSearchParams& params);
 
+/// Cells with less unseen mass than this (of 1) are not looked at: the Gaussian's far tail, thousands of cells
+/// whose lines of sight cost most of a viewpoint's score and add < 0.3 % of the mass in all.
+inline constexpr double kNegligibleMass = 1e-6;
+
 /// Where to fly and what to look at.
 struct Viewpoint {
   Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();     ///< At the flight altitude.
