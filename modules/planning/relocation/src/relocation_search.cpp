@@ -67,6 +67,7 @@ RelocationSearch::RelocationSearch(const RelocationSearchParams& params, double 
   distance_m_.assign(cells, kInfinity);
   blocked_.assign(cells, 0);
   heap_.reserve(8 * cells + 1);
+  abandoned_W_m_.fill(Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
   candidates_.reserve(2 * params.viewpoint_radii_m.size() * static_cast<std::size_t>(params.viewpoint_bearings));
 }
 
@@ -82,6 +83,8 @@ void RelocationSearch::start(const Eigen::Vector3d& p_WT_m, const Eigen::Vector3
   std::fill(distance_m_.begin(), distance_m_.end(), kInfinity);
   current_.reset();
   chosen_ns_ = 0;
+  abandoned_W_m_.fill(Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  abandoned_next_ = 0;
 }
 
 Eigen::Vector3d RelocationSearch::cellCenterM(std::size_t cell) const {
@@ -102,12 +105,16 @@ double RelocationSearch::totalUnseenMass() const {
 }
 
 bool RelocationSearch::cellBlocked(const mapping::LocalGrid& grid, const Eigen::Vector3d& centre_W_m) const {
-  const double q = params_.cell_m / 4.0;
-  const double offsets[5][2] = {{0.0, 0.0}, {q, q}, {q, -q}, {-q, q}, {-q, -q}};
+  // Every map cell under the belief cell, at each height: a wall's mapped surface is one map cell thick.
+  const double step_m = grid.params().resolution_m;
+  const int per_side = std::max(1, static_cast<int>(std::ceil(params_.cell_m / step_m)));
+  const double first_m = -0.5 * params_.cell_m + 0.5 * step_m;
   for (const double z : kBlockSampleHeightsM) {
-    for (const auto& o : offsets) {
-      if (grid.state(Eigen::Vector3d(centre_W_m.x() + o[0], centre_W_m.y() + o[1], z)) == mapping::CellState::kOccupied)
-        return true;
+    for (int j = 0; j < per_side; ++j) {
+      for (int i = 0; i < per_side; ++i) {
+        const Eigen::Vector3d p(centre_W_m.x() + first_m + i * step_m, centre_W_m.y() + first_m + j * step_m, z);
+        if (grid.state(p) == mapping::CellState::kOccupied) return true;
+      }
     }
   }
   return false;
@@ -222,7 +229,11 @@ Eigen::Vector3d RelocationSearch::unseenCentroid() const {
 }
 
 bool RelocationSearch::viewpointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_W_m) const {
-  if (!grid.inWindow(p_W_m) || grid.isOccupied(p_W_m)) return false;
+  // Known free (seen by the depth camera): the unknown inside of a building is no place to look from.
+  if (!grid.isFree(p_W_m)) return false;
+  for (const Eigen::Vector3d& tabu : abandoned_W_m_) {
+    if ((tabu - p_W_m).head<2>().norm() < params_.reached_m) return false;
+  }
   if (!(params_.clearance_m > 0.0)) return true;
   constexpr int kDirections = 8;
   for (int k = 0; k < kDirections; ++k) {
@@ -268,6 +279,11 @@ std::optional<Viewpoint> RelocationSearch::update(const mapping::LocalGrid& grid
   last_update_ns_ = now_ns;
   look(grid, p_WC_m, dt_s);
   const bool reached = current_ && (current_->p_W_m - p_WC_m).head<2>().norm() < params_.reached_m;
+  // Not reached in twice the time it should take (the planner cannot get there): never chosen again.
+  if (current_ && !reached && rt::nsToSeconds(now_ns - heading_since_ns_) > give_up_s_) {
+    abandoned_W_m_[abandoned_next_++ % abandoned_W_m_.size()] = current_->p_W_m;
+    current_.reset();
+  }
   const bool stale = !current_ || rt::nsToSeconds(now_ns - chosen_ns_) >= params_.reselect_s;
   if (!reached && !stale) return current_;
   chosen_ns_ = now_ns;
@@ -279,6 +295,10 @@ std::optional<Viewpoint> RelocationSearch::update(const mapping::LocalGrid& grid
     kept.score = kept.mass / ((kept.p_W_m - p_WC_m).norm() / params_.travel_speed_mps + params_.full_look_s);
     if (kept.mass >= kMinMass && viewpointFree(grid, kept.p_W_m) && (!best || kSwitchGain * kept.score >= best->score))
       best = kept;
+  }
+  if (best && (!current_ || best->p_W_m != current_->p_W_m)) {  // a new goal: its time to get there starts
+    heading_since_ns_ = now_ns;
+    give_up_s_ = 2.0 * ((best->p_W_m - p_WC_m).norm() / params_.travel_speed_mps) + params_.full_look_s;
   }
   current_ = best;
   return current_;

@@ -2,7 +2,7 @@
 // look from next. A belief over a horizontal grid of cells (cell_m) centred on the person's last accepted position:
 //   - reach: the person walks at most max_person_speed_mps (or 1.2 x their last speed, if faster) since they were
 //     lost, round obstacles: a cell counts only if its walking distance from the last position (8-connected
-//     Dijkstra through cells not blocked in the LocalGrid at the person's height) is within that reach;
+//     Dijkstra through cells with no raw-occupied map cell under them at 0.5 m or 1.1 m) is within that reach;
 //   - bias: inside the reach, cells along the last velocity and at the distance it would have carried the person
 //     weigh more: w = exp(kappa cos(bearing to the velocity)) exp(-(r - s)^2 / (2 sigma^2)), r the walking
 //     distance, s = |v| t, sigma = max(1 m, s / 2), kappa = heading_concentration x min(|v| / 1 m/s, 1);
@@ -14,7 +14,9 @@
 // centroid and the last position, at the flight altitude, free with clearance_m round them in the inflated grid;
 // each scores the unseen mass it sees (in range, in line of sight) per second of getting there and looking
 // (distance / travel_speed_mps + full_look_s); the best is kept until it is reached or reselect_s passes (a
-// better one must beat it by 20 %). Pure: the grid, positions and the time come in; no allocation once started
+// better one must beat it by 20 %). Viewpoints must be known free (the depth camera saw them: not the unknown inside
+// of a building); one not reached within twice its travel time plus full_look_s is abandoned for good (the planner
+// cannot get there). Pure: the grid, positions and the time come in; no allocation once started
 // (storage is sized in create()). Not thread-safe (the planning task's thread).
 #pragma once
 
@@ -130,6 +132,11 @@ class RelocationSearch {
   std::vector<Eigen::Vector3d> candidates_;
   std::optional<Viewpoint> current_;
   rt::TimeNs chosen_ns_ = 0;
+  rt::TimeNs heading_since_ns_ = 0;  ///< When the current viewpoint was first chosen.
+  double give_up_s_ = 0.0;           ///< Not reached by then: abandoned.
+  /// The last viewpoints abandoned (NaN: none); candidates within reached_m of them are not chosen again.
+  std::array<Eigen::Vector3d, 8> abandoned_W_m_{};
+  std::size_t abandoned_next_ = 0;
 };
 
 }  // namespace aerotrack::planning
