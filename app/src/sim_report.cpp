@@ -98,7 +98,10 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
                                 {"max_repair_stretch", task->maxRepairStretch()}};
   const rt::TimingSnapshot cycle = task->cycleStats().snapshot();
   return {{"cycles", task->cycles()},
-          {"relocation_search", {{"cycles", task->searchCycles()}, {"idle_cycles", task->searchIdleCycles()}}},
+          {"relocation_search",
+           {{"cycles", task->searchCycles()},
+            {"idle_cycles", task->searchIdleCycles()},
+            {"update_ms_max", task->searchUpdateMaxMs()}}},
           {"check", check},
           {"search_failures", search_failures},
           {"check_failures", check_failures},

@@ -217,7 +217,9 @@ System::TaskResult System::makeSupervisorTask(System& s, const std::string& wher
                                                 c.gimbal_search_requested};
   supervisor::SupervisorParams params = *s.config_.supervisor;
   // A simulated scenario may set how long to search after a relocation (its `supervisor:` section).
-  if (s.devices_.simulation) {
+  // The baseline (Fast-Tracker 1.0) has no search after its relocation: it stays the paper's comparison.
+  if (s.config_.baseline_mode) params.search_timeout_s = 0.0;
+  if (s.devices_.simulation && !s.config_.baseline_mode) {
     if (const auto search_s = s.devices_.simulation->scenario().spec.search_timeout_s)
       params.search_timeout_s = *search_s;
   }

@@ -1,11 +1,13 @@
 // The relocation's search in the closed loop (issue 21 item 3), on the sim HAL in lockstep: the person is hidden
 // (a forced occlusion) just before a building's corner, turns round it and stops behind it. The relocation's
 // predicted path is cut short (relocate_timeout_s 1 s), so the drone is left before the corner: hovering there (no
-// search) it never sees the person again; searching, it flies to where they can be and finds them.
+// search: the scenario file's override of supervisor.search_timeout_s) it never sees the person again; searching, it
+// flies to where they can be and finds them.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "aerotrack/rt/lockstep_executor.hpp"
@@ -43,10 +45,20 @@ struct SearchFlight {
   std::string mode;
 };
 
-SearchFlight flyCornerHide(double search_timeout_s) {
-  auto config = parseAppConfig(searchYaml(search_timeout_s), "relocation_search.yaml");
+// The config searches for 15 s; `scenario_search_timeout_s` (if given) overrides that in the scenario's file (its
+// `supervisor:` section), as a scenario may.
+SearchFlight flyCornerHide(std::optional<double> scenario_search_timeout_s) {
+  auto config = parseAppConfig(searchYaml(15.0), "relocation_search.yaml");
   EXPECT_TRUE(config) << (config ? "" : config.error().message);
-  auto trial = loadTrial(AEROTRACK_SOURCE_DIR "/tests/data/corner_hide.yaml", 1, std::nullopt);
+  std::string scenario = AEROTRACK_SOURCE_DIR "/tests/data/corner_hide.yaml";
+  if (scenario_search_timeout_s) {
+    std::ifstream in(scenario);
+    std::stringstream text;
+    text << in.rdbuf() << "supervisor:\n  search_timeout_s: " << *scenario_search_timeout_s << "\n";
+    scenario = ::testing::TempDir() + "/corner_hide_override.yaml";
+    std::ofstream(scenario) << text.str();
+  }
+  auto trial = loadTrial(scenario, 1, std::nullopt);
   EXPECT_TRUE(trial) << (trial ? "" : trial.error().message);
   if (!config || !trial) return {};
   auto system = System::build(*config, &trial.value(), 0);
@@ -70,14 +82,14 @@ SearchFlight flyCornerHide(double search_timeout_s) {
 }
 
 TEST(ClosedLoopSearch, TheSearchFindsAPersonHiddenRoundACornerWhereTheHoverDoesNot) {
-  const SearchFlight hover = flyCornerHide(0.0);  // no search: hold "person not found" at once
+  const SearchFlight hover = flyCornerHide(0.0);  // the scenario says: no search, hold "person not found" at once
   ASSERT_FALSE(hover.summary["supervisor"]["relocations"].empty()) << hover.summary["supervisor"].dump(2);
   EXPECT_EQ(hover.summary["supervisor"]["relocations"][0]["outcome"], "not found")
       << hover.summary["supervisor"].dump(2);
   EXPECT_TRUE(hover.summary["supervisor"]["relocations"][0]["search_s"].is_null());
   EXPECT_EQ(hover.mode, "hold");
 
-  const SearchFlight search = flyCornerHide(15.0);
+  const SearchFlight search = flyCornerHide(std::nullopt);
   const nlohmann::json& relocations = search.summary["supervisor"]["relocations"];
   ASSERT_FALSE(relocations.empty()) << search.summary["supervisor"].dump(2);
   const nlohmann::json& r = relocations[0];

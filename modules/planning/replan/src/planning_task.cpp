@@ -163,8 +163,11 @@ bool PlanningTask::updateRelocationSearch(const supervisor::SupervisorState& sta
   if (!relocation_search_->active() && last_live_target_)
     relocation_search_->start(last_live_target_->p_WT_m, last_live_target_->v_WT_mps,
                               last_live_target_->last_accepted_ns);
-  if (inputs.odometry != nullptr && inputs.grid != nullptr)
+  if (inputs.odometry != nullptr && inputs.grid != nullptr) {
+    const rt::TimeNs begin_ns = stats_clock_.now();
     viewpoint_ = relocation_search_->update(*inputs.grid, inputs.odometry->p_WB_m, inputs.now_ns);
+    search_update_max_ns_ = std::max(search_update_max_ns_, stats_clock_.now() - begin_ns);
+  }
   if (!searching) return false;
   if (!viewpoint_) {
     ++search_idle_cycles_;

@@ -100,6 +100,8 @@ class PlanningTask final : public rt::Task {
   /// Cycles of the search after a relocation that planned towards a viewpoint, and those with none to fly to.
   std::uint64_t searchCycles() const { return search_cycles_; }
   std::uint64_t searchIdleCycles() const { return search_idle_cycles_; }
+  /// The longest update of the search pattern (belief, look, any viewpoint choice), by the stats clock (ms).
+  double searchUpdateMaxMs() const { return rt::nsToSeconds(search_update_max_ns_) * 1e3; }
   std::uint64_t landings() const { return landings_; }
   /// Objects the trajectory pools added after start-up because all of theirs were lent (the only
   /// allocations of the task once warm; they stop once the pools are as large as the readers need).
@@ -173,6 +175,7 @@ class PlanningTask final : public rt::Task {
   std::optional<Viewpoint> viewpoint_;
   std::uint64_t search_cycles_ = 0;
   std::uint64_t search_idle_cycles_ = 0;
+  rt::TimeNs search_update_max_ns_ = 0;
   rt::TimingStats cycle_stats_;
 };
 
