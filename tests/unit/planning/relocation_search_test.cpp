@@ -243,7 +243,7 @@ TEST(RelocationSearch, FlyingFromViewpointToViewpointSeesMostOfTheMassAndKeepsAV
   const std::optional<Viewpoint> again = s.update(corner.grid, drone, rt::secondsToNs(t_s + 0.05));
   ASSERT_TRUE(again.has_value());
   EXPECT_EQ(again->p_W_m, v->p_W_m);
-  Corner hover;  // the same time spent hovering where the person was lost
+  Corner hover;                             // the same time spent hovering where the person was lost
   for (int hop = 0; hop < 6 && v; ++hop) {  // teleport to each viewpoint and look round for 3 s
     drone = v->p_W_m;
     for (int k = 0; k < 30; ++k) {
