@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "../malloc_counter.hpp"
 #include "search_test_util.hpp"
 
 namespace aerotrack::planning {
@@ -254,6 +255,25 @@ TEST(RelocationSearch, FlyingFromViewpointToViewpointSeesMostOfTheMassAndKeepsAV
   }
   EXPECT_LT(s.totalUnseenMass(), 0.5);
   EXPECT_LT(s.totalUnseenMass(), 0.6 * hover.search.totalUnseenMass());
+}
+
+TEST(RelocationSearch, StartedItNeverAllocates) {
+  if (!aerotrack::test::kMallocCounted) GTEST_SKIP() << "malloc belongs to the sanitizer";
+  Corner corner;
+  RelocationSearch& s = corner.search;
+  EXPECT_GE(aerotrack::test::mallocsOfAHeapBuffer(), 1);  // the interposition works
+  long mallocs = 0;
+  int viewpoints = 0;
+  {
+    const aerotrack::test::MallocCount count;
+    s.start(Eigen::Vector3d(5.6, 1.6, 0.0), Eigen::Vector3d(0.0, 1.5, 0.0), 0);
+    for (int k = 0; k < 40; ++k) {  // 4 s: four viewpoint choices
+      viewpoints += s.update(corner.grid, corner.drone, rt::secondsToNs(0.5 + 0.1 * k)) ? 1 : 0;
+    }
+    mallocs = count.count();
+  }
+  EXPECT_EQ(mallocs, 0);
+  EXPECT_GT(viewpoints, 30);
 }
 
 TEST(RelocationSearch, ParametersAreCheckedWithOneLine) {
