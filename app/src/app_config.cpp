@@ -238,6 +238,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "takeoff_tolerance_m" << YAML::Value << v.takeoff_tolerance_m;
     out << YAML::Key << "relocate_after_s" << YAML::Value << v.relocate_after_s;
     out << YAML::Key << "relocate_timeout_s" << YAML::Value << v.relocate_timeout_s;
+    out << YAML::Key << "search_timeout_s" << YAML::Value << v.search_timeout_s;
     out << YAML::Key << "hold_then_land_s" << YAML::Value << v.hold_then_land_s;
     out << YAML::Key << "odometry_timeout_s" << YAML::Value << v.odometry_timeout_s;
     out << YAML::Key << "depth_timeout_s" << YAML::Value << v.depth_timeout_s;

@@ -98,6 +98,10 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
                                 {"max_repair_stretch", task->maxRepairStretch()}};
   const rt::TimingSnapshot cycle = task->cycleStats().snapshot();
   return {{"cycles", task->cycles()},
+          {"relocation_search",
+           {{"cycles", task->searchCycles()},
+            {"idle_cycles", task->searchIdleCycles()},
+            {"update_ms_max", task->searchUpdateMaxMs()}}},
           {"check", check},
           {"search_failures", search_failures},
           {"check_failures", check_failures},
@@ -129,8 +133,9 @@ nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::Tim
         supervisor::Mode::kHold, supervisor::Mode::kLand, supervisor::Mode::kDegraded}) {
     seconds[std::string(supervisor::toString(mode))] = static_cast<double>(task->stepsIn(mode)) * step_s;
   }
-  // Each relocation: when it began, when its timeout ran out (null: it did not), when and how it ended
-  // (end null: still searching when the run ended), and how long it took (to the end of the run if open).
+  // Each relocation: when it began, when its timeout ran out and the search began (null: it did not), when and
+  // how it ended (end null: still relocating or searching when the run ended), how long it took (to the end of the
+  // run if open) and how much of that was the search (null: no search).
   nlohmann::json relocations = nlohmann::json::array();
   const rt::TimeNs last_ns = task->lastStepNs();
   for (std::size_t i = 0; i < task->relocationCount(); ++i) {
@@ -138,11 +143,14 @@ nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::Tim
     const auto at = [&](rt::TimeNs t_ns) {
       return t_ns >= 0 ? nlohmann::json(rt::nsToSeconds(t_ns - start_ns)) : nlohmann::json(nullptr);
     };
-    relocations.push_back({{"start_s", at(r.start_ns)},
-                           {"timeout_s", at(r.timeout_ns)},
-                           {"end_s", at(r.end_ns)},
-                           {"duration_s", rt::nsToSeconds((r.end_ns >= 0 ? r.end_ns : last_ns) - r.start_ns)},
-                           {"outcome", std::string(supervisor::toString(r.outcome))}});
+    relocations.push_back(
+        {{"start_s", at(r.start_ns)},
+         {"timeout_s", at(r.timeout_ns)},
+         {"end_s", at(r.end_ns)},
+         {"duration_s", rt::nsToSeconds((r.end_ns >= 0 ? r.end_ns : last_ns) - r.start_ns)},
+         {"search_s", r.searched ? nlohmann::json(rt::nsToSeconds((r.end_ns >= 0 ? r.end_ns : last_ns) - r.timeout_ns))
+                                 : nlohmann::json(nullptr)},
+         {"outcome", std::string(supervisor::toString(r.outcome))}});
   }
   return {{"mode", std::string(supervisor::toString(task->state().mode))},
           {"reason", std::string(supervisor::toString(task->state().reason))},

@@ -215,7 +215,15 @@ System::TaskResult System::makeSupervisorTask(System& s, const std::string& wher
                                                 c.vehicle_link_lost,
                                                 c.supervisor,
                                                 c.gimbal_search_requested};
-  auto task = std::make_unique<supervisor::SupervisorTask>(*s.config_.supervisor, s.start_ns_, channels,
+  supervisor::SupervisorParams params = *s.config_.supervisor;
+  // A simulated scenario may set how long to search after a relocation (its `supervisor:` section).
+  // The baseline (Fast-Tracker 1.0) has no search after its relocation: it stays the paper's comparison.
+  if (s.config_.baseline_mode) params.search_timeout_s = 0.0;
+  if (s.devices_.simulation && !s.config_.baseline_mode) {
+    if (const auto search_s = s.devices_.simulation->scenario().spec.search_timeout_s)
+      params.search_timeout_s = *search_s;
+  }
+  auto task = std::make_unique<supervisor::SupervisorTask>(params, s.start_ns_, channels,
                                                            /*sweep_when_searching=*/!s.config_.baseline_mode);
   s.supervisor_task_ = task.get();
   return made(std::move(task));

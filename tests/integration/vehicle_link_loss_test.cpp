@@ -60,6 +60,7 @@ supervisor:
   takeoff_tolerance_m: 0.3
   relocate_after_s: 0.4
   relocate_timeout_s: 5.0
+  search_timeout_s: 20.0
   hold_then_land_s: 0.0
   odometry_timeout_s: 2.0   # longer than the link's timeout: the link's loss is seen first
   depth_timeout_s: 1.0

@@ -55,6 +55,8 @@ std::string_view toString(Reason reason) {
       return "held too long";
     case Reason::kPlanSucceeded:
       return "a plan succeeded";
+    case Reason::kPathFlown:
+      return "relocation path flown, searching";
   }
   return "unknown";
 }
@@ -79,8 +81,10 @@ std::string_view toString(SupervisorTask::RelocationOutcome outcome) {
       return "searching";
     case O::kFoundRelocating:
       return "found while relocating";
-    case O::kFoundAfterTimeout:
-      return "found after the relocation timeout";
+    case O::kFoundSearching:
+      return "found while searching";
+    case O::kNotFound:
+      return "not found";
     case O::kFailsafe:
       return "failsafe";
     case O::kLanded:
@@ -94,6 +98,7 @@ rt::Status validate(const SupervisorParams& p) {
   if (!(p.takeoff_tolerance_m >= 0.0)) return rt::Error{"takeoff_tolerance_m must be >= 0"};
   if (!(p.relocate_after_s > 0.0)) return rt::Error{"relocate_after_s must be > 0"};
   if (!(p.relocate_timeout_s > 0.0)) return rt::Error{"relocate_timeout_s must be > 0"};
+  if (!(p.search_timeout_s >= 0.0)) return rt::Error{"search_timeout_s must be >= 0"};
   if (!(p.hold_then_land_s >= 0.0)) return rt::Error{"hold_then_land_s must be >= 0"};
   if (!(p.odometry_timeout_s > 0.0)) return rt::Error{"odometry_timeout_s must be > 0"};
   if (!(p.depth_timeout_s > 0.0)) return rt::Error{"depth_timeout_s must be > 0"};
@@ -111,6 +116,7 @@ SupervisorParams parseSupervisorParams(const rt::ConfigNode& node) {
   p.takeoff_tolerance_m = node.getDouble("takeoff_tolerance_m", 0.0, 10.0);
   p.relocate_after_s = node.getDouble("relocate_after_s", 0.01, 60.0);
   p.relocate_timeout_s = node.getDouble("relocate_timeout_s", 0.01, 600.0);
+  p.search_timeout_s = node.getDouble("search_timeout_s", 0.0, 3600.0);
   p.hold_then_land_s = node.getDouble("hold_then_land_s", 0.0, 3600.0);
   p.odometry_timeout_s = node.getDouble("odometry_timeout_s", 0.01, 60.0);
   p.depth_timeout_s = node.getDouble("depth_timeout_s", 0.01, 60.0);
@@ -187,7 +193,15 @@ const SupervisorState& Supervisor::update(const SupervisorInputs& in) {
         enter(Mode::kSearch, Reason::kAltitudeReached, now);
       break;
     case Mode::kSearch:
-      if (in.person_live && fresh) enter(Mode::kTrack, Reason::kPersonFound, now);
+      if (state_.reason == Reason::kPathFlown) {  // the search after a relocation
+        if (in.person_accepted_ns > lost_accepted_ns_ && fresh) {
+          enter(Mode::kTrack, Reason::kPersonFound, now);
+        } else if (rt::nsToSeconds(now - state_.since_ns) > params_.search_timeout_s) {
+          enter(Mode::kHold, Reason::kPersonNotFound, now);
+        }
+      } else if (in.person_live && fresh) {
+        enter(Mode::kTrack, Reason::kPersonFound, now);
+      }
       break;
     case Mode::kTrack:
     case Mode::kDegraded:
@@ -206,7 +220,11 @@ const SupervisorState& Supervisor::update(const SupervisorInputs& in) {
         enter(Mode::kTrack, Reason::kPersonFound, now);
       } else if (state_.mode == Mode::kRelocate &&
                  rt::nsToSeconds(now - state_.since_ns) > params_.relocate_timeout_s) {
-        enter(Mode::kHold, Reason::kPersonNotFound, now);
+        if (params_.search_timeout_s > 0.0) {
+          enter(Mode::kSearch, Reason::kPathFlown, now);
+        } else {
+          enter(Mode::kHold, Reason::kPersonNotFound, now);
+        }
       } else if (state_.mode == Mode::kHold && params_.hold_then_land_s > 0.0 &&
                  rt::nsToSeconds(now - state_.since_ns) > params_.hold_then_land_s) {
         enter(Mode::kLand, Reason::kHoldTimeout, now);

@@ -86,15 +86,15 @@ TEST(SupervisorTask, LostVehicleLinkHoldsAndTheHoldIsLatched) {
   EXPECT_EQ(rig.out.read()->reason, Reason::kVehicleLinkLost);
 }
 
-TEST(SupervisorTask, TheGimbalKeepsSweepingAfterTheRelocationTimeoutAndTheRelocationIsLogged) {
+TEST(SupervisorTask, TheGimbalKeepsSweepingInTheSearchAfterTheRelocationTimeoutAndTheRelocationIsLogged) {
   Rig rig;
   double t = 0.0;
   for (; t < 3.0; t += 0.02) rig.step(t, true);
   const double lost_s = t;
   for (const double end = t + 8.0; t < end; t += 0.02) rig.step(t, false);  // 0.4 s + 5 s timeout, and more
-  ASSERT_EQ(rig.out.read()->mode, Mode::kHold);
-  ASSERT_EQ(rig.out.read()->reason, Reason::kPersonNotFound);
-  EXPECT_TRUE(rig.sweep.load());  // the search goes on from the hover
+  ASSERT_EQ(rig.out.read()->mode, Mode::kSearch);
+  ASSERT_EQ(rig.out.read()->reason, Reason::kPathFlown);
+  EXPECT_TRUE(rig.sweep.load());  // the search pattern, the gimbal sweeping
   ASSERT_EQ(rig.task.relocationCount(), 1U);
   EXPECT_EQ(rig.task.relocations()[0].outcome, SupervisorTask::RelocationOutcome::kSearching);
   EXPECT_GE(rig.task.relocations()[0].timeout_ns, 0);
@@ -103,11 +103,33 @@ TEST(SupervisorTask, TheGimbalKeepsSweepingAfterTheRelocationTimeoutAndTheReloca
   EXPECT_EQ(rig.out.read()->mode, Mode::kTrack);
   EXPECT_FALSE(rig.sweep.load());
   const SupervisorTask::Relocation& r = rig.task.relocations()[0];
-  EXPECT_EQ(r.outcome, SupervisorTask::RelocationOutcome::kFoundAfterTimeout);
+  EXPECT_EQ(r.outcome, SupervisorTask::RelocationOutcome::kFoundSearching);
+  EXPECT_TRUE(r.searched);
   // The rig's lost estimate carries no accepted measurement since t = 0: relocation begins at once.
   EXPECT_NEAR(rt::nsToSeconds(r.start_ns), lost_s, 0.03);
   EXPECT_NEAR(rt::nsToSeconds(r.timeout_ns - r.start_ns), 5.0, 0.03);
   EXPECT_NEAR(rt::nsToSeconds(r.end_ns), lost_s + 8.0, 0.03);
+}
+
+TEST(SupervisorTask, ASearchThatTimesOutIsLoggedAsNotFoundAndTheHoverKeepsSweeping) {
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  const double lost_s = t;
+  for (const double end = t + 26.0; t < end; t += 0.02) rig.step(t, false);  // 0.4 + 5 + 20 s, and more
+  ASSERT_EQ(rig.out.read()->mode, Mode::kHold);
+  ASSERT_EQ(rig.out.read()->reason, Reason::kPersonNotFound);
+  EXPECT_TRUE(rig.sweep.load());
+  ASSERT_EQ(rig.task.relocationCount(), 1U);
+  const SupervisorTask::Relocation& r = rig.task.relocations()[0];
+  EXPECT_EQ(r.outcome, SupervisorTask::RelocationOutcome::kNotFound);
+  EXPECT_EQ(toString(r.outcome), "not found");
+  EXPECT_NEAR(rt::nsToSeconds(r.start_ns), lost_s, 0.03);
+  EXPECT_NEAR(rt::nsToSeconds(r.timeout_ns - r.start_ns), 5.0, 0.03);
+  EXPECT_NEAR(rt::nsToSeconds(r.end_ns - r.timeout_ns), 20.0, 0.03);
+  for (const double end = t + 0.2; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kTrack);  // found from the hover: the closed relocation stays as it was
+  EXPECT_EQ(rig.task.relocations()[0].outcome, SupervisorTask::RelocationOutcome::kNotFound);
 }
 
 TEST(SupervisorTask, ARelocationThatFindsThePersonIsLoggedAsFound) {

@@ -53,8 +53,10 @@ TEST(Supervisor, LostForRelocateAfterThenRelocatesAndReturnsOnReacquisition) {
   EXPECT_EQ(s.update(healthy(5.0, 4.95)).mode, Mode::kTrack);  // a new measurement
 }
 
-TEST(Supervisor, RelocationTimesOutIntoHoldAndHoldEndsWhenFound) {
-  Supervisor s = tracking();
+TEST(Supervisor, WithoutASearchRelocationTimesOutIntoHoldAndHoldEndsWhenFound) {
+  SupervisorParams p;
+  p.search_timeout_s = 0.0;  // no search: the hold at once (the behaviour before issue 21 item 3)
+  Supervisor s = tracking(p);
   s.update(healthy(3.5, 3.0));
   ASSERT_EQ(s.state().mode, Mode::kRelocate);
   EXPECT_EQ(s.update(healthy(8.4, 3.0)).mode, Mode::kRelocate);
@@ -64,9 +66,48 @@ TEST(Supervisor, RelocationTimesOutIntoHoldAndHoldEndsWhenFound) {
   EXPECT_EQ(s.update(healthy(10.0, 9.9)).mode, Mode::kTrack);
 }
 
+// Issue 21 item 3: after the relocation's predicted path, a search where the person can be, for search_timeout_s.
+TEST(Supervisor, RelocationTimesOutIntoTheSearchAndANewMeasurementEndsItInTrack) {
+  Supervisor s = tracking();
+  s.update(healthy(3.5, 3.0));
+  ASSERT_EQ(s.state().mode, Mode::kRelocate);
+  EXPECT_EQ(s.update(healthy(8.4, 3.0)).mode, Mode::kRelocate);
+  EXPECT_EQ(s.update(healthy(8.6, 3.0)).mode, Mode::kSearch);  // 5.1 s relocating
+  EXPECT_EQ(s.state().reason, Reason::kPathFlown);
+  EXPECT_FALSE(isFailsafe(s.state().reason));
+  EXPECT_EQ(s.update(healthy(20.0, 3.0)).mode, Mode::kSearch);
+  EXPECT_EQ(s.update(healthy(21.0, 20.95)).mode, Mode::kTrack);  // a new measurement
+  EXPECT_EQ(s.state().reason, Reason::kPersonFound);
+}
+
+TEST(Supervisor, TheSearchTimesOutIntoHoldPersonNotFoundWhichStillEndsWhenFound) {
+  SupervisorParams p;
+  p.search_timeout_s = 7.0;
+  Supervisor s = tracking(p);
+  s.update(healthy(3.5, 3.0));
+  s.update(healthy(8.6, 3.0));
+  ASSERT_EQ(s.state().mode, Mode::kSearch);
+  EXPECT_EQ(s.update(healthy(15.5, 3.0)).mode, Mode::kSearch);  // 6.9 s searching
+  EXPECT_EQ(s.update(healthy(15.7, 3.0)).mode, Mode::kHold);    // 7.1 s
+  EXPECT_EQ(s.state().reason, Reason::kPersonNotFound);
+  EXPECT_EQ(s.update(healthy(30.0, 29.9)).mode, Mode::kTrack);
+}
+
+TEST(Supervisor, OnlyAMeasurementNewerThanTheLossEndsTheSearch) {
+  Supervisor s = tracking();
+  s.update(healthy(3.5, 3.0));
+  s.update(healthy(8.6, 3.0));
+  ASSERT_EQ(s.state().mode, Mode::kSearch);
+  SupervisorInputs in = healthy(9.0, 3.0);
+  in.person_live = true;  // an estimate that claims to be live, but on the measurement before the loss
+  EXPECT_EQ(s.update(in).mode, Mode::kSearch);
+  EXPECT_EQ(s.state().reason, Reason::kPathFlown);
+}
+
 TEST(Supervisor, HoldLandsAfterItsTimeoutWhenConfigured) {
   SupervisorParams p;
   p.hold_then_land_s = 10.0;
+  p.search_timeout_s = 0.0;
   Supervisor s = tracking(p);
   s.update(healthy(3.5, 3.0));
   s.update(healthy(9.0, 3.0));
@@ -178,9 +219,13 @@ TEST(Supervisor, PlannerFailuresWhileRelocatingOrSearchingDoNotDegradeOrHold) {
   EXPECT_EQ(s.update(in).mode, Mode::kRelocate);  // the relocation timeout decides
   in = healthy(8.6, 3.0);
   in.planner_failures_in_a_row = 150;
+  EXPECT_EQ(s.update(in).mode, Mode::kSearch);  // the search timeout decides
+  EXPECT_EQ(s.state().reason, Reason::kPathFlown);
+  in = healthy(28.7, 3.0);
+  in.planner_failures_in_a_row = 250;
   EXPECT_EQ(s.update(in).mode, Mode::kHold);
   EXPECT_EQ(s.state().reason, Reason::kPersonNotFound);
-  in = healthy(20.0, 3.0);
+  in = healthy(29.0, 3.0);
   in.planner_failures_in_a_row = 300;
   EXPECT_EQ(s.update(in).mode, Mode::kHold);
   EXPECT_EQ(s.state().reason, Reason::kPersonNotFound);
@@ -188,15 +233,19 @@ TEST(Supervisor, PlannerFailuresWhileRelocatingOrSearchingDoNotDegradeOrHold) {
 }
 
 TEST(Supervisor, ADeadSensorWhileSearchingAfterTheTimeoutLatchesAFailsafeHold) {
-  Supervisor s = tracking();
-  s.update(healthy(3.5, 3.0));
-  s.update(healthy(8.6, 3.0));
-  ASSERT_EQ(s.state().reason, Reason::kPersonNotFound);
-  SupervisorInputs in = healthy(9.0, 3.0);
-  in.depth_stamp_ns = sec(7.0);
-  EXPECT_EQ(s.update(in).mode, Mode::kHold);
-  EXPECT_EQ(s.state().reason, Reason::kNoDepth);
-  EXPECT_EQ(s.update(healthy(10.0, 9.9)).mode, Mode::kHold);  // latched: finding the person does not end it
+  for (const double search_timeout_s : {20.0, 0.0}) {  // in the search, and in hold "person not found"
+    SupervisorParams p;
+    p.search_timeout_s = search_timeout_s;
+    Supervisor s = tracking(p);
+    s.update(healthy(3.5, 3.0));
+    s.update(healthy(8.6, 3.0));
+    ASSERT_EQ(s.state().reason, search_timeout_s > 0.0 ? Reason::kPathFlown : Reason::kPersonNotFound);
+    SupervisorInputs in = healthy(9.0, 3.0);
+    in.depth_stamp_ns = sec(7.0);
+    EXPECT_EQ(s.update(in).mode, Mode::kHold);
+    EXPECT_EQ(s.state().reason, Reason::kNoDepth);
+    EXPECT_EQ(s.update(healthy(10.0, 9.9)).mode, Mode::kHold);  // latched: finding the person does not end it
+  }
 }
 
 TEST(Supervisor, OverrunsAreCountedPerWindow) {
@@ -224,7 +273,8 @@ TEST(Supervisor, SilentStreamsAreToleratedDuringStartupGraceOnly) {
 TEST(SupervisorParams, EveryKeyIsRequiredAndChecked) {
   auto node = rt::ConfigNode::fromString(
       "s:\n  takeoff_altitude_m: 1.5\n  takeoff_tolerance_m: 0.3\n  relocate_after_s: 0.4\n"
-      "  relocate_timeout_s: 5.0\n  hold_then_land_s: 0.0\n  odometry_timeout_s: 0.2\n  depth_timeout_s: 1.0\n"
+      "  relocate_timeout_s: 5.0\n  search_timeout_s: 20.0\n  hold_then_land_s: 0.0\n  odometry_timeout_s: 0.2\n  "
+      "depth_timeout_s: 1.0\n"
       "  camera_timeout_s: 1.0\n  max_planner_failures: 20\n  overrun_storm: 50\n  overrun_window_s: 1.0\n"
       "  startup_grace_s: 2.0\n",
       "s.yaml");
@@ -232,6 +282,10 @@ TEST(SupervisorParams, EveryKeyIsRequiredAndChecked) {
   const SupervisorParams p = parseSupervisorParams(node->child("s"));
   EXPECT_TRUE(validate(p).has_value());
   EXPECT_EQ(p.relocate_after_s, 0.4);
+  EXPECT_EQ(p.search_timeout_s, 20.0);
+  SupervisorParams bad = p;
+  bad.search_timeout_s = -1.0;
+  EXPECT_EQ(validate(bad).error().message, "search_timeout_s must be >= 0");
   auto missing = rt::ConfigNode::fromString("s:\n  takeoff_altitude_m: 1.5\n", "s.yaml");
   ASSERT_TRUE(missing.has_value());
   EXPECT_THROW(parseSupervisorParams(missing->child("s")), rt::ConfigError);

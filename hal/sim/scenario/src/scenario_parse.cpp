@@ -363,6 +363,11 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
                                        rt::formatConfigNumber(s.success.tracking_distance_m) + " m)");
   success.finish();
   if (root.has("bystanders")) s.bystanders = parseBystanders(root.child("bystanders"), s.boxes, s.cylinders);
+  if (root.has("supervisor")) {  // overrides of the config's supervisor section
+    const ConfigNode supervisor = root.child("supervisor");
+    s.search_timeout_s = supervisor.getDouble("search_timeout_s", 0.0, 3600.0);
+    supervisor.finish();
+  }
   root.finish();
   return s;
 }

@@ -27,6 +27,7 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::section("prediction", &P::prediction, prediction::targetPredictorFields()),
           rt::section("check", &P::check, trajectoryCheckFields()),
           rt::section("collision", &P::collision, mapping::trajectoryCheckerFields()),
+          rt::section("relocation", &P::relocation, relocationSearchFields()),
       },
       {{"flight_altitude_m", "must be > takeoff_below_m",
         [](const P& p) { return p.flight_altitude_m > p.takeoff_below_m; }}});

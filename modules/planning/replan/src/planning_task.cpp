@@ -10,7 +10,11 @@ PlanningTask::PlanningTask(TrackingPlanner planner, const PlanningChannels& chan
       stats_clock_(stats_clock),
       // + 1 piece: the brake to rest appended at the end
       trajectory_pool_(kTrajectoryPoolSize, TrajectoryStorage(planner_.params().corridor.max_boxes + 1)),
-      timed_pool_(kTimedPoolSize, trajectory_server::TimedTrajectory{}) {}
+      timed_pool_(kTimedPoolSize, trajectory_server::TimedTrajectory{}) {
+  const TrackingPlannerParams& p = planner_.params();
+  if (auto search = RelocationSearch::create(p.relocation, p.person_sight_height_m, p.flight_altitude_m))
+    relocation_search_.emplace(std::move(search.value()));
+}
 
 PlanningTask::Lent PlanningTask::lend() {
   Lent lent;
@@ -47,11 +51,13 @@ void PlanningTask::publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_ca
 // failed cycle after cycle while the person is seen) brakes to rest once on entering, like hold, and then
 // plans as in track, every cycle, so that the first plan that succeeds flies (and ends the mode). True
 // when the cycle is done.
-bool PlanningTask::handleMode(supervisor::Mode mode, const PlanInputs& inputs) {
+bool PlanningTask::handleMode(const supervisor::SupervisorState& state, const PlanInputs& inputs) {
   using supervisor::Mode;
+  const Mode mode = state.mode;
   const bool entered = mode != last_mode_;
   last_mode_ = mode;
   if (mode == Mode::kDegraded && !entered) return false;
+  if (mode == Mode::kSearch && state.reason == supervisor::Reason::kPathFlown) return false;  // plans (a search)
   if (mode != Mode::kHold && mode != Mode::kLand && mode != Mode::kSearch && mode != Mode::kDegraded) return false;
   if (!entered || mode == Mode::kSearch || inputs.odometry == nullptr) return true;
   const rt::TimeNs start_ns = inputs.now_ns + rt::secondsToNs(planner_.params().planning_budget_s);
@@ -78,6 +84,7 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   const auto grid = channels_.grid.read();
   const auto octree = channels_.octree.read();
   if (target) planner_.observeTarget(*target);
+  if (target && target->initialised && !target->lost) last_live_target_ = *target;
 
   PlanInputs inputs;
   inputs.now_ns = now_ns;
@@ -88,8 +95,9 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   inputs.current = published_.trajectory ? &published_ : nullptr;
   if (channels_.supervisor != nullptr) {
     if (const auto state = channels_.supervisor->read()) {
-      if (handleMode(state->mode, inputs)) return;
+      if (handleMode(*state, inputs)) return;
       inputs.relocate = state->mode == supervisor::Mode::kRelocate;
+      if (updateRelocationSearch(*state, inputs)) return;
     }
   }
 
@@ -144,6 +152,34 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   failures_in_a_row_ = failed ? failures_in_a_row_ + 1 : 0;
   if (channels_.failures_in_a_row != nullptr)
     channels_.failures_in_a_row->store(failures_in_a_row_, std::memory_order_relaxed);
+}
+
+// The search pattern runs while relocating (what the camera sees along the predicted path counts) and in the
+// search after it, where its viewpoint is the plan's goal; a search cycle without one publishes nothing (the
+// drone holds the end of its last trajectory, the gimbal sweeping). Any other mode ends it.
+bool PlanningTask::updateRelocationSearch(const supervisor::SupervisorState& state, PlanInputs& inputs) {
+  const bool searching = state.mode == supervisor::Mode::kSearch && state.reason == supervisor::Reason::kPathFlown;
+  if (!relocation_search_ || (state.mode != supervisor::Mode::kRelocate && !searching)) {
+    if (relocation_search_) relocation_search_->stop();
+    viewpoint_.reset();
+    return false;
+  }
+  if (!relocation_search_->active() && last_live_target_)
+    relocation_search_->start(last_live_target_->p_WT_m, last_live_target_->v_WT_mps,
+                              last_live_target_->last_accepted_ns);
+  if (inputs.odometry != nullptr && inputs.grid != nullptr) {
+    const rt::TimeNs begin_ns = stats_clock_.now();
+    viewpoint_ = relocation_search_->update(*inputs.grid, inputs.odometry->p_WB_m, inputs.now_ns);
+    search_update_max_ns_ = std::max(search_update_max_ns_, stats_clock_.now() - begin_ns);
+  }
+  if (!searching) return false;
+  if (!viewpoint_) {
+    ++search_idle_cycles_;
+    return true;
+  }
+  ++search_cycles_;
+  inputs.look = &*viewpoint_;
+  return false;
 }
 
 }  // namespace aerotrack::planning

@@ -219,7 +219,12 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
     return fail(status);
   };
 
-  const KinematicState goal = selectGoal(grid, *person, start, start_ns);           // 2. Sect. V-B
+  KinematicState goal = selectGoal(grid, *person, start, start_ns);  // 2. Sect. V-B
+  // A relocation's search (issue 21 item 3): to the viewpoint, to rest.
+  if (inputs.look != nullptr && !person->live) {
+    goal.p_W_m = inputs.look->p_W_m;
+    goal.v_W_mps.setZero();
+  }
   report.search_status = searchTrackingPath(grid, start, start_ns, goal, *person);  // 3. Sect. V-B
   report.search_expansions = path_.expansions;
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
@@ -357,6 +362,13 @@ std::optional<TrackingPlanner::PersonMotion> TrackingPlanner::predictPerson(cons
       last_prediction_ = *predicted;
       person.prediction = &*last_prediction_;
     }
+  } else if (inputs.look != nullptr) {  // a relocation's search: the look point, as a person standing still
+    look_estimate_.stamp_ns = inputs.now_ns;
+    look_estimate_.initialised = true;
+    look_estimate_.p_WT_m = inputs.look->look_W_m;
+    look_estimate_.v_WT_mps.setZero();
+    person.estimate = &look_estimate_;
+    person.keep_away = false;
   } else if (inputs.relocate && last_prediction_) {
     person.prediction = &*last_prediction_;  // relocation: the last predicted path
   } else {
@@ -488,7 +500,7 @@ CheckResult TrackingPlanner::checkPlannedTrajectory(const PolynomialTrajectory& 
                                                     const mapping::LocalGrid& grid, const octomap::OcTree* octree,
                                                     const PersonMotion& person, rt::TimeNs start_ns) const {
   CheckResult check = checkTrajectory(trajectory, params_.check, grid, checker_, octree);
-  if (check.verdict != CheckVerdict::kOk || !(params_.min_person_distance_m > 0.0)) return check;
+  if (check.verdict != CheckVerdict::kOk || !(params_.min_person_distance_m > 0.0) || !person.keep_away) return check;
   auto distance_at = [&](double t_s) {
     const Eigen::Vector3d d = trajectory.sample(t_s).p_W_m - person.positionAt(start_ns + rt::secondsToNs(t_s));
     return d.head<2>().norm();

@@ -4,7 +4,10 @@
 //   search   --(person estimate live)--> track
 //   track    --(no accepted measurement for relocate_after_s)--> relocate   (paper: target relocating)
 //   relocate --(a new measurement accepted)--> track
-//   relocate --(relocate_timeout_s without one)--> hold (reason: person not found)
+//   relocate --(relocate_timeout_s without one; search_timeout_s > 0)--> search (reason: relocation path flown)
+//   relocate --(relocate_timeout_s without one; search_timeout_s = 0)--> hold (reason: person not found)
+//   search (relocation path flown) --(a new measurement accepted)--> track
+//   search (relocation path flown) --(search_timeout_s without one)--> hold (reason: person not found)
 //   hold (person not found) --(a new measurement accepted)--> track
 //   track    --(max_planner_failures failed planning cycles in a row)--> degraded (issue 21)
 //   degraded --(a planning cycle succeeds, the person still seen)--> track
@@ -14,11 +17,12 @@
 //            no depth images, no camera frames, a storm of deadline overruns. A failsafe hold is latched.
 //   hold --(hold_then_land_s, if > 0)--> land
 // In relocate the planner flies along the person's last predicted path and the gimbal sweeps (the
-// paper's strategy); in hold the drone brakes and hovers (and, in hold "person not found", the gimbal keeps
-// sweeping: the search goes on from the hover); in land it descends. In degraded the planner brakes to a
-// hover once and goes on planning every cycle, the gimbal kept on the person's estimate: a failed plan is
-// the planner's problem, not the sensors', so it must not end the flight (issue 21: a latched hold on a
-// planner streak lost a person who only doubled back past the drone). Pure: the time and every health
+// paper's strategy); in search after a relocation (issue 21 item 3) the planner flies a search pattern over where
+// the person can be (modules/planning/relocation) while the gimbal sweeps; in hold the drone brakes and hovers (and, in
+// hold "person not found", the gimbal keeps sweeping: the search goes on from the hover); in land it descends. In
+// degraded the planner brakes to a hover once and goes on planning every cycle, the gimbal kept on the person's
+// estimate: a failed plan is the planner's problem, not the sensors', so it must not end the flight (issue 21: a
+// latched hold on a planner streak lost a person who only doubled back past the drone). Pure: the time and every health
 // signal come in; the supervisor reads no clock and no channel.
 #pragma once
 
@@ -51,6 +55,7 @@ enum class Reason : std::uint8_t {
   kVehicleLinkLost,
   kHoldTimeout,
   kPlanSucceeded,  ///< Degraded ends: a planning cycle succeeded.
+  kPathFlown,      ///< Relocation's predicted path flown without finding them: search where they can be.
 };
 std::string_view toString(Reason reason);
 /// Whether the reason is a failsafe (a latched hold).
@@ -60,7 +65,8 @@ struct SupervisorParams {
   double takeoff_altitude_m = 1.5;   ///< Take-off ends within takeoff_tolerance_m of this; > 0.
   double takeoff_tolerance_m = 0.3;  ///< >= 0.
   double relocate_after_s = 0.4;     ///< Lost this long (no accepted measurement): relocate; > 0.
-  double relocate_timeout_s = 5.0;   ///< Relocating this long without finding them: hold; > 0.
+  double relocate_timeout_s = 5.0;   ///< Relocating this long without finding them: search; > 0.
+  double search_timeout_s = 20.0;    ///< Searching this long after that: hold (0: no search, hold at once); >= 0.
   double hold_then_land_s = 0.0;     ///< Holding this long: land (0: hold forever); >= 0.
   double odometry_timeout_s = 0.2;   ///< Newest odometry older than this: failsafe; > 0.
   double depth_timeout_s = 1.0;      ///< Newest depth image older than this: failsafe; > 0.

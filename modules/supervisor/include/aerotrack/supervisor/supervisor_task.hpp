@@ -3,7 +3,8 @@
 // in a row, the real-time executor's missed deadlines, the vehicle link's loss -- updates the mode machine, publishes
 // the mode for the planner, and asks the gimbal to sweep while searching, relocating or holding because the person was
 // not found (when sweeping is enabled: the baseline mode has a fixed camera). It logs every relocation: when it began,
-// when its timeout ran out (if it did), and how it ended (issue 21: the summary says how each search went).
+// when its timeout ran out and the search began (if it did), and how it ended -- found while relocating, found while
+// searching, not found (the search timed out), failsafe, landed (issue 21: the summary says how each search went).
 #pragma once
 
 #include <array>
@@ -78,16 +79,18 @@ class SupervisorTask final : public rt::Task {
   const SupervisorState& state() const { return supervisor_.state(); }
   /// How a relocation ended (so far).
   enum class RelocationOutcome : std::uint8_t {
-    kSearching,          ///< Not over yet (relocating, or hovering and sweeping after its timeout).
-    kFoundRelocating,    ///< Found before the timeout.
-    kFoundAfterTimeout,  ///< Found by the search that goes on after the timeout (hold "person not found").
-    kFailsafe,           ///< A failsafe (latched hold) ended it.
-    kLanded,             ///< Held too long: landed.
+    kSearching,        ///< Not over yet (relocating, or searching after the relocation's timeout).
+    kFoundRelocating,  ///< Found before the relocation's timeout (along the predicted path).
+    kFoundSearching,   ///< Found by the search after it (issue 21 item 3).
+    kNotFound,         ///< Timed out: hold "person not found" (the gimbal sweeps on from the hover).
+    kFailsafe,         ///< A failsafe (latched hold) ended it.
+    kLanded,           ///< Landed (held too long).
   };
   struct Relocation {
     rt::TimeNs start_ns = 0;
-    rt::TimeNs timeout_ns = -1;  ///< When relocate_timeout_s ran out (-1: it did not).
-    rt::TimeNs end_ns = -1;      ///< -1: still searching.
+    rt::TimeNs timeout_ns = -1;  ///< When relocate_timeout_s ran out (-1: it did not), and any search began.
+    rt::TimeNs end_ns = -1;      ///< -1: still relocating or searching.
+    bool searched = false;       ///< The search after the timeout ran (search_timeout_s > 0).
     RelocationOutcome outcome = RelocationOutcome::kSearching;
   };
   /// The first relocations, in order (at most 32 kept).
@@ -116,17 +119,21 @@ class SupervisorTask final : public rt::Task {
   void logRelocation(const SupervisorState& state, rt::TimeNs now_ns) {
     if (!relocation_open_) {
       if (state.mode != Mode::kRelocate || relocation_count_ >= relocations_.size()) return;
-      relocations_[relocation_count_++] = Relocation{now_ns, -1, -1, RelocationOutcome::kSearching};
+      relocations_[relocation_count_++] = Relocation{now_ns, -1, -1, false, RelocationOutcome::kSearching};
       relocation_open_ = true;
       return;
     }
     Relocation& r = relocations_[relocation_count_ - 1];
-    if (state.mode == Mode::kHold && state.reason == Reason::kPersonNotFound) {
+    if (state.mode == Mode::kSearch && state.reason == Reason::kPathFlown) {
       r.timeout_ns = now_ns;
+      r.searched = true;
       return;
     }
     if (state.mode == Mode::kTrack) {
-      r.outcome = r.timeout_ns >= 0 ? RelocationOutcome::kFoundAfterTimeout : RelocationOutcome::kFoundRelocating;
+      r.outcome = r.timeout_ns >= 0 ? RelocationOutcome::kFoundSearching : RelocationOutcome::kFoundRelocating;
+    } else if (state.mode == Mode::kHold && state.reason == Reason::kPersonNotFound) {
+      if (r.timeout_ns < 0) r.timeout_ns = now_ns;  // search_timeout_s = 0: no search, the hold at once
+      r.outcome = RelocationOutcome::kNotFound;
     } else if (state.mode == Mode::kLand) {
       r.outcome = RelocationOutcome::kLanded;
     } else if (state.mode == Mode::kHold) {

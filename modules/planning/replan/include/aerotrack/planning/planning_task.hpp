@@ -20,6 +20,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <octomap/OcTree.h>
@@ -46,7 +47,10 @@ struct PlanningChannels {
   const rt::SharedSlot<octomap::OcTree>& octree;
   rt::SharedSlot<trajectory_server::TimedTrajectory>& trajectories;
   /// The supervisor's mode (optional: without it the task always tracks). In search it publishes
-  /// nothing (the drone hovers while the gimbal sweeps), in relocate it plans along the last prediction,
+  /// nothing (the drone hovers while the gimbal sweeps), except in the search after a relocation (reason
+  /// kPathFlown, issue 21 item 3), where it flies to the viewpoints of its RelocationSearch (which starts on
+  /// entering relocate, from the last live estimate, and marks what the camera sees from then on); in relocate
+  /// it plans along the last prediction,
   /// in hold it brakes once and then publishes nothing, in land it descends once, in degraded (issue 21) it
   /// brakes once and then plans as in track, every cycle.
   const rt::LatestSlot<supervisor::SupervisorState>* supervisor = nullptr;
@@ -91,6 +95,13 @@ class PlanningTask final : public rt::Task {
   std::uint64_t holds() const { return holds_; }
   /// Brakes to rest on entering the supervisor's degraded mode (issue 21).
   std::uint64_t degradedBrakes() const { return degraded_brakes_; }
+  /// The relocation's search pattern (issue 21 item 3; null if it could not be created).
+  const RelocationSearch* relocationSearch() const { return relocation_search_ ? &*relocation_search_ : nullptr; }
+  /// Cycles of the search after a relocation that planned towards a viewpoint, and those with none to fly to.
+  std::uint64_t searchCycles() const { return search_cycles_; }
+  std::uint64_t searchIdleCycles() const { return search_idle_cycles_; }
+  /// The longest update of the search pattern (belief, look, any viewpoint choice), by the stats clock (ms).
+  double searchUpdateMaxMs() const { return rt::nsToSeconds(search_update_max_ns_) * 1e3; }
   std::uint64_t landings() const { return landings_; }
   /// Objects the trajectory pools added after start-up because all of theirs were lent (the only
   /// allocations of the task once warm; they stop once the pools are as large as the readers need).
@@ -156,7 +167,15 @@ class PlanningTask final : public rt::Task {
   supervisor::Mode last_mode_ = supervisor::Mode::kTakeOff;
   std::uint64_t degraded_brakes_ = 0;  ///< Brakes to rest on entering degraded (issue 21).
   void publish(Lent& lent, rt::TimeNs start_ns, rt::TimeNs source_capture_ns);
-  bool handleMode(supervisor::Mode mode, const PlanInputs& inputs);
+  bool handleMode(const supervisor::SupervisorState& state, const PlanInputs& inputs);
+  /// Relocating or searching after it: runs the search pattern; true when a search cycle has no viewpoint.
+  bool updateRelocationSearch(const supervisor::SupervisorState& state, PlanInputs& inputs);
+  std::optional<RelocationSearch> relocation_search_;
+  std::optional<estimation::TargetEstimate> last_live_target_;  ///< Where the search starts from.
+  std::optional<Viewpoint> viewpoint_;
+  std::uint64_t search_cycles_ = 0;
+  std::uint64_t search_idle_cycles_ = 0;
+  rt::TimeNs search_update_max_ns_ = 0;
   rt::TimingStats cycle_stats_;
 };
 

@@ -39,6 +39,7 @@
 #include "aerotrack/planning/corridor.hpp"
 #include "aerotrack/planning/kinodynamic_search.hpp"
 #include "aerotrack/planning/polynomial_trajectory.hpp"
+#include "aerotrack/planning/relocation_search.hpp"
 #include "aerotrack/planning/trajectory_check.hpp"
 #include "aerotrack/planning/trajectory_optimizer.hpp"
 #include "aerotrack/prediction/target_predictor.hpp"
@@ -76,6 +77,8 @@ struct TrackingPlannerParams {
   prediction::TargetPredictorParams prediction;
   TrajectoryCheckParams check;
   mapping::TrajectoryCheckerParams collision;
+  /// The search pattern after a relocation's predicted path (issue 21 item 3; the planning task runs it).
+  RelocationSearchParams relocation;
 };
 
 /// The `planning:` config section: the scalars above and the sub-sections goal, search, corridor,
@@ -120,6 +123,9 @@ struct PlanInputs {
   /// Relocation (the supervisor's relocate mode, the paper's target-relocating strategy): with no live
   /// estimate, fly along the last predicted path (continued at its end velocity) instead of failing.
   bool relocate = false;
+  /// The relocation's search (issue 21 item 3): with no live estimate, fly to this viewpoint (to rest) with the
+  /// relocation machinery, keeping the point it looks at in sight (the occlusion term), instead of the last path.
+  const Viewpoint* look = nullptr;
 };
 
 /// What a cycle did (counters for the statistics, and the trajectory written into `out`).
@@ -190,6 +196,9 @@ class TrackingPlanner {
     bool live = false;                                     ///< A live estimate (else relocation).
     double horizon_s = 0.0;       ///< Constant velocity runs on this far past the estimate at most.
     double sight_height_m = 0.0;  ///< The W z of every position (the torso's centre).
+    /// The final check keeps min_person_distance_m from it (false for a search's look point, where nobody is
+    /// known to be: the drone may fly close to it and look behind it).
+    bool keep_away = true;
     /// The person's position at t_ns (W, m) at the sight height. Past its end a prediction is continued at
     /// its end velocity (a Bezier extrapolated would diverge).
     Eigen::Vector3d positionAt(rt::TimeNs t_ns) const;
@@ -274,6 +283,7 @@ class TrackingPlanner {
   MinJerkSpline repair_spline_;
   Eigen::VectorXd one_duration_;
   std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
+  estimation::TargetEstimate look_estimate_;                     ///< A search's look point, as a still person.
 };
 
 }  // namespace aerotrack::planning

@@ -197,6 +197,9 @@ struct ScenarioSpec {
   std::string source;
   double end_margin_s = 5.0;  ///< Run this long after the person stops.
   double max_duration_s = 120.0;
+  /// Optional `supervisor:` section: the scenario's override of the config's supervisor.search_timeout_s (how
+  /// long the drone searches after a relocation; issue 21 item 3). Nothing: the config's.
+  std::optional<double> search_timeout_s;
   Eigen::Vector3d bounds_min_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d bounds_max_m = Eigen::Vector3d::Zero();
   std::vector<Box> boxes;
