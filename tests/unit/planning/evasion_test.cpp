@@ -10,23 +10,14 @@
 #include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/planning/tracking_planner.hpp"
 #include "aerotrack/rt/clock.hpp"
+#include "planner_test_util.hpp"
 #include "search_test_util.hpp"
 
 namespace aerotrack::planning {
 namespace {
 
-TrackingPlannerParams evasionParams() {
-  TrackingPlannerParams p;
-  p.search.max_velocity_mps = 2.0;
-  p.search.max_acceleration_mps2 = 2.5;
-  return p;
-}
-
-TrackingPlanner evasionPlanner(const TrackingPlannerParams& params = evasionParams()) {
-  auto planner = TrackingPlanner::create(params);
-  EXPECT_TRUE(planner.has_value()) << (planner ? "" : planner.error().message);
-  return std::move(planner).value();
-}
+using test::defaultParams;
+using test::makePlanner;
 
 mapping::LocalGrid groundWith(const std::vector<test::OccupiedBox>& extra) {
   std::vector<test::OccupiedBox> boxes = extra;
@@ -77,8 +68,8 @@ EvasionCase walkerThroughTheDrone(const std::vector<test::OccupiedBox>& extra = 
 }
 
 TEST(Evasion, APersonWalkingThroughTheDroneIsSteppedAwayFromNotStoppedFor) {
-  const TrackingPlannerParams params = evasionParams();
-  TrackingPlanner planner = evasionPlanner(params);
+  const TrackingPlannerParams params = defaultParams();
+  TrackingPlanner planner = makePlanner(params);
   const EvasionCase c = walkerThroughTheDrone();
   PolynomialTrajectory out;
   const PlanReport report = planner.plan(c.inputs(), out);
@@ -100,9 +91,9 @@ TEST(Evasion, APersonWalkingThroughTheDroneIsSteppedAwayFromNotStoppedFor) {
 }
 
 TEST(Evasion, AWallOnOneSideSendsItTheOtherWay) {
-  const TrackingPlannerParams params = evasionParams();
+  const TrackingPlannerParams params = defaultParams();
   for (const double wall_side : {1.0, -1.0}) {
-    TrackingPlanner planner = evasionPlanner(params);
+    TrackingPlanner planner = makePlanner(params);
     // A wall along x, 0.8-1.2 m to one side of the drone, longer than any sidestep.
     const EvasionCase c = walkerThroughTheDrone({{{-6.0, std::min(0.8 * wall_side, 1.2 * wall_side), 0.0},
                                                   {6.0, std::max(0.8 * wall_side, 1.2 * wall_side), 3.0}}});
@@ -119,9 +110,9 @@ TEST(Evasion, AWallOnOneSideSendsItTheOtherWay) {
 TEST(Evasion, APersonFarEnoughAwayLeavesAFailedCycleAFailure) {
   // The goal would be held 2.5 m away but every approach closer than 4 m is refused: the person, standing
   // 6 m away, never comes near a braking drone, so there is nothing to evade.
-  TrackingPlannerParams params = evasionParams();
+  TrackingPlannerParams params = defaultParams();
   params.min_person_distance_m = 4.0;
-  TrackingPlanner planner = evasionPlanner(params);
+  TrackingPlanner planner = makePlanner(params);
   EvasionCase c{groundWith({}), {}, walkerAt(6.0, 0.0, 0.0)};
   c.odometry.p_WB_m = Eigen::Vector3d(0, 0, 1.5);
   PolynomialTrajectory out;
@@ -140,7 +131,7 @@ TEST(Evasion, PlanningTaskFliesTheEvasionAndDoesNotCountItAsAFailure) {
   std::atomic<int> failures{7};
   PlanningChannels channels{odometry, target, grid, octree, trajectories};
   channels.failures_in_a_row = &failures;
-  PlanningTask task(evasionPlanner(), channels, clock);
+  PlanningTask task(makePlanner(), channels, clock);
   const EvasionCase c = walkerThroughTheDrone();
   grid.write(std::make_shared<const mapping::LocalGrid>(c.grid));
   odometry.write(c.odometry);

@@ -15,6 +15,7 @@
 #include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/rt/clock.hpp"
 #include "aerotrack/trajectory_server/trajectory_server.hpp"
+#include "planner_test_util.hpp"
 #include "search_test_util.hpp"
 
 namespace aerotrack::planning {
@@ -55,24 +56,10 @@ class TrackingPlannerStages {
 
 namespace {
 
+using test::defaultParams;
 using test::makeBoxGrid;
+using test::makePlanner;
 using test::OccupiedBox;
-
-TrackingPlannerParams defaultParams() {
-  TrackingPlannerParams p;
-  p.search.max_velocity_mps = 2.0;
-  p.search.max_acceleration_mps2 = 2.5;
-  p.optimizer.max_velocity_mps = 2.8;
-  p.optimizer.max_acceleration_mps2 = 3.5;
-  p.optimizer.corridor_margin_m = 0.05;
-  return p;
-}
-
-TrackingPlanner makePlanner(const TrackingPlannerParams& params = defaultParams()) {
-  auto planner = TrackingPlanner::create(params);
-  EXPECT_TRUE(planner.has_value()) << (planner ? "" : planner.error().message);
-  return std::move(planner).value();
-}
 
 hal::OdometrySample odometryAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns = 0) {
   hal::OdometrySample o;
