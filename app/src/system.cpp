@@ -291,7 +291,9 @@ rt::Status System::addTask(const rt::TaskSpec& spec, std::size_t index) {
 rt::Status System::attachTrigger(const std::string& channel, rt::Doorbell* doorbell) {
   // Each channel has one doorbell: one task may be triggered by it.
   for (const auto& [name, task] : triggered_by_)
-    if (name == channel) return rt::Error{"channel '" + channel + "' already triggers task '" + task + "'"};
+    if (name == channel)
+      return rt::Error{
+          std::string("channel '").append(channel).append("' already triggers task '").append(task).append("'")};
   Channels& c = channels_;
   if (channel == "odometry")
     c.odometry.attachDoorbell(doorbell);

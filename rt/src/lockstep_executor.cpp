@@ -16,8 +16,6 @@ namespace {
 
 // Event tasks that keep re-triggering each other at one instant would never let time advance.
 constexpr int kMaxEventRoundsPerInstant = 1000;
-// No timed release scheduled (an event task with nothing deferred), or never run.
-constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
 
 void hashMix(std::uint64_t& hash, std::uint64_t value) {
   for (int byte = 0; byte < 8; ++byte) {
@@ -164,7 +162,7 @@ void LockstepExecutor::release(std::size_t index, TimeNs now_ns) {
   if (!spec.triggered())
     next_release_ns_[index] += entry.period_ns;  // the fixed grid (now_ns was the release on it)
   else
-    next_release_ns_[index] = spec.periodic() ? now_ns + entry.period_ns : kNever;  // the fallback restarts
+    next_release_ns_[index] = spec.periodic() ? now_ns + entry.period_ns : kNeverNs;  // the fallback restarts
 }
 
 Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
@@ -178,7 +176,7 @@ Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
       // depends only on its own writers and releases, not on the other tasks in the table (a replay
       // leaves the simulator's out and must run the same).
       if (next_release_ns_[i] <= now_ns) continue;
-      const TimeNs earliest_ns = last_run_ns_[i] == kNever ? now_ns : last_run_ns_[i] + e.min_period_ns;
+      const TimeNs earliest_ns = last_run_ns_[i] == kNeverNs ? now_ns : last_run_ns_[i] + e.min_period_ns;
       if (earliest_ns > now_ns) {
         // Inside the rate cap: a timed release at its end (left pending, consumed by that release).
         next_release_ns_[i] = std::min(next_release_ns_[i], earliest_ns);
@@ -195,14 +193,14 @@ Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
 Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) {
   const std::vector<TaskSet::Entry>& entries = tasks_.entries();
   for (std::size_t i = next_release_ns_.size(); i < entries.size(); ++i) {  // new tasks start now
-    next_release_ns_.push_back(entries[i].binding.spec.periodic() ? clock_.now() : kNever);
-    last_run_ns_.push_back(kNever);
+    next_release_ns_.push_back(entries[i].binding.spec.periodic() ? clock_.now() : kNeverNs);
+    last_run_ns_.push_back(kNeverNs);
   }
   for (;;) {
     if (stop != nullptr && stop->load(std::memory_order_acquire)) break;
     std::size_t next = entries.size();
     for (std::size_t i = 0; i < entries.size(); ++i) {
-      if (next_release_ns_[i] == kNever) continue;
+      if (next_release_ns_[i] == kNeverNs) continue;
       if (next == entries.size() || next_release_ns_[i] < next_release_ns_[next] ||
           (next_release_ns_[i] == next_release_ns_[next] &&
            entries[i].binding.spec.priority > entries[next].binding.spec.priority))

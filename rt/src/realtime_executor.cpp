@@ -136,19 +136,18 @@ void RealtimeExecutor::runPeriodic(TaskSet::Entry& e, TimeNs first_release_ns) {
 void RealtimeExecutor::runTriggered(TaskSet::Entry& e, TimeNs first_release_ns) {
   started_.fetch_add(1, std::memory_order_acq_rel);
   started_.notify_all();
-  constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
   TimingStats& stats = *e.stats;
   Doorbell& doorbell = *e.binding.doorbell;
-  // The fallback release (kNever without a rate) and the previous run (kNever: none yet).
-  TimeNs fallback_ns = e.period_ns > 0 ? first_release_ns : kNever;
-  TimeNs last_run_ns = kNever;
+  // The fallback release (kNeverNs without a rate) and the previous run (kNeverNs: none yet).
+  TimeNs fallback_ns = e.period_ns > 0 ? first_release_ns : kNeverNs;
+  TimeNs last_run_ns = kNeverNs;
   while (!stop_.load(std::memory_order_acquire)) {
     const TimeNs now_ns = clock_.now();
     const bool rang = doorbell.pending();
     // A ring releases it now, the fallback at its time, and neither before the cap's end (a late
     // wake-up must not bring the fallback closer to it than the cap either).
     TimeNs release_ns = rang ? std::min(fallback_ns, now_ns) : fallback_ns;
-    if (last_run_ns != kNever) release_ns = std::max(release_ns, last_run_ns + e.min_period_ns);
+    if (last_run_ns != kNeverNs) release_ns = std::max(release_ns, last_run_ns + e.min_period_ns);
     if (now_ns < release_ns) {
       if (rang)  // inside the rate cap: sleep to its end (the ring stays pending)
         sleepUntil(release_ns, clock_, options_.stop_poll_ns, stop_);

@@ -151,12 +151,9 @@ void RelocationSearch::updateBelief(const mapping::LocalGrid& grid, rt::TimeNs n
         const int nx = x + dx;
         const int ny = y + dy;
         if (nx < 0 || ny < 0 || nx >= side_ || ny >= side_) continue;
-        const auto next = static_cast<std::size_t>(ny * side_ + nx);
+        const std::size_t next = cellAt(nx, ny);
         if (blocked_[next] != 0) continue;
-        if (dx != 0 && dy != 0 &&
-            (blocked_[static_cast<std::size_t>(y * side_ + nx)] != 0 ||
-             blocked_[static_cast<std::size_t>(ny * side_ + x)] != 0))
-          continue;
+        if (dx != 0 && dy != 0 && (blocked_[cellAt(nx, y)] != 0 || blocked_[cellAt(x, ny)] != 0)) continue;
         const double nd = d + (dx != 0 && dy != 0 ? diagonal_m : params_.cell_m);
         if (nd > reach_m_ || nd >= distance_m_[next]) continue;
         distance_m_[next] = nd;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace aerotrack::rt {
 
@@ -13,6 +14,8 @@ using DurationNs = std::int64_t;  ///< A span of time in nanoseconds (may be neg
 
 inline constexpr DurationNs kNsPerSecond = 1'000'000'000;
 inline constexpr DurationNs kNsPerMillisecond = 1'000'000;
+/// No time: a release never scheduled, a task never run (the executors' sentinel).
+inline constexpr TimeNs kNeverNs = std::numeric_limits<TimeNs>::max();
 
 /// Seconds to nanoseconds, rounded to the nearest nanosecond.
 inline DurationNs secondsToNs(double seconds) {

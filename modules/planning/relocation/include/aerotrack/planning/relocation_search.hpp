@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <utility>
@@ -118,6 +119,10 @@ class RelocationSearch {
   double sight_height_m_;
   double flight_altitude_m_;
   int side_ = 0;
+  /// The index of cell (x, y) in the row-major arrays (x, y in [0, side_)).
+  std::size_t cellAt(int x, int y) const {
+    return static_cast<std::size_t>(y) * static_cast<std::size_t>(side_) + static_cast<std::size_t>(x);
+  }
   bool active_ = false;
   Eigen::Vector3d p_last_W_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d v_last_W_mps_ = Eigen::Vector3d::Zero();
