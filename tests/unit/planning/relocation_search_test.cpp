@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -37,32 +38,16 @@ mapping::LocalGrid makeSeenGrid(const std::vector<OccupiedBox>& boxes, double cx
   params.recenter_distance_m = 0.0;
   octomap::OcTree tree = mapping::test::makeTree(params.resolution_m);
   const auto inside = [&boxes](const Eigen::Vector3d& c) {
-    for (const OccupiedBox& box : boxes) {
-      if ((c.array() >= box.min_W_m.array()).all() && (c.array() <= box.max_W_m.array()).all()) return true;
-    }
-    return false;
+    return std::any_of(boxes.begin(), boxes.end(), [&c](const OccupiedBox& box) { return test::inBox(box, c); });
   };
-  for (const OccupiedBox& box : boxes) {
-    const mapping::CellIndex lo = (box.min_W_m / params.resolution_m).array().floor().cast<int>();
-    const mapping::CellIndex hi = (box.max_W_m / params.resolution_m).array().ceil().cast<int>();
-    for (int z = lo.z(); z < hi.z(); ++z) {
-      for (int y = lo.y(); y < hi.y(); ++y) {
-        for (int x = lo.x(); x < hi.x(); ++x) {
-          const Eigen::Vector3d c = (Eigen::Vector3d(x, y, z).array() + 0.5) * params.resolution_m;
-          if (inside(c)) mapping::test::setCell(tree, mapping::CellIndex(x, y, z), true);
-        }
-      }
-    }
-  }
+  test::markBoxes(tree, boxes, params.resolution_m);
   const int z = static_cast<int>(std::floor(kAltitudeM / params.resolution_m));
   for (int y = static_cast<int>(10.0 * (cy - 14.0)); y < static_cast<int>(10.0 * (cy + 14.0)); ++y) {
     for (int x = static_cast<int>(10.0 * (cx - 14.0)); x < static_cast<int>(10.0 * (cx + 14.0)); ++x) {
       const Eigen::Vector3d c = (Eigen::Vector3d(x, y, z).array() + 0.5) * params.resolution_m;
-      bool seen = !inside(c);
-      for (const OccupiedBox& box : unseen) {
-        if ((c.array() >= box.min_W_m.array()).all() && (c.array() <= box.max_W_m.array()).all()) seen = false;
-      }
-      if (seen) mapping::test::setCell(tree, mapping::CellIndex(x, y, z), false);
+      const bool unseen_here =
+          std::any_of(unseen.begin(), unseen.end(), [&c](const OccupiedBox& box) { return test::inBox(box, c); });
+      if (!inside(c) && !unseen_here) mapping::test::setCell(tree, mapping::CellIndex(x, y, z), false);
     }
   }
   mapping::LocalGrid grid = mapping::test::makeGrid(params);
