@@ -122,24 +122,19 @@ TEST(Evasion, APersonFarEnoughAwayLeavesAFailedCycleAFailure) {
 }
 
 TEST(Evasion, PlanningTaskFliesTheEvasionAndDoesNotCountItAsAFailure) {
-  rt::LatestSlot<hal::OdometrySample> odometry;
-  rt::LatestSlot<estimation::TargetEstimate> target;
-  rt::SharedSlot<mapping::LocalGrid> grid;
-  rt::SharedSlot<octomap::OcTree> octree;
-  rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
-  rt::ManualClock clock{0};
+  test::TaskChannels rig;
   std::atomic<int> failures{7};
-  PlanningChannels channels{odometry, target, grid, octree, trajectories};
+  PlanningChannels channels = rig.channels();
   channels.failures_in_a_row = &failures;
-  PlanningTask task(makePlanner(), channels, clock);
+  PlanningTask task(makePlanner(), channels, rig.clock);
   const EvasionCase c = walkerThroughTheDrone();
-  grid.write(std::make_shared<const mapping::LocalGrid>(c.grid));
-  odometry.write(c.odometry);
-  target.write(c.walker);
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(c.grid));
+  rig.odometry.write(c.odometry);
+  rig.target.write(c.walker);
   task.step(0);
   EXPECT_EQ(task.count(PlanStatus::kEvading), 1U);
   ASSERT_TRUE(task.lastPublished().trajectory);
-  EXPECT_EQ(trajectories.version(), 1U);
+  EXPECT_EQ(rig.trajectories.version(), 1U);
   EXPECT_EQ(failures.load(), 0);  // evading is flying a plan: no streak towards degraded
   EXPECT_EQ(task.checkFailures(CheckVerdict::kTooCloseToPerson), task.checksRejected());
 }

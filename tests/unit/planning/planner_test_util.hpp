@@ -1,12 +1,14 @@
-// The tracking planner as its tests build it: the search's per-axis limits of the issue-8 tests (2 m/s,
-// 2.5 m/s^2) and a 5 cm corridor margin; every other parameter its default.
+// The tracking planner and its task as their tests build them: the search's per-axis limits of the issue-8 tests (2
+// m/s, 2.5 m/s^2) and a 5 cm corridor margin; every other parameter its default.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <utility>
 
+#include "aerotrack/planning/planning_task.hpp"
 #include "aerotrack/planning/tracking_planner.hpp"
+#include "aerotrack/rt/clock.hpp"
 
 namespace aerotrack::planning::test {
 
@@ -23,5 +25,19 @@ inline TrackingPlanner makePlanner(const TrackingPlannerParams& params = default
   EXPECT_TRUE(planner.has_value()) << (planner ? "" : planner.error().message);
   return std::move(planner).value();
 }
+
+/// The planning task's channels and stats clock, as a test owns them.
+struct TaskChannels {
+  rt::LatestSlot<hal::OdometrySample> odometry;
+  rt::LatestSlot<estimation::TargetEstimate> target;
+  rt::SharedSlot<mapping::LocalGrid> grid;
+  rt::SharedSlot<octomap::OcTree> octree;
+  rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
+  rt::ManualClock clock{0};
+
+  PlanningChannels channels(const rt::LatestSlot<supervisor::SupervisorState>* modes = nullptr) {
+    return PlanningChannels{odometry, target, grid, octree, trajectories, modes};
+  }
+};
 
 }  // namespace aerotrack::planning::test

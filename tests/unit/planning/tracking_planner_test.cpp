@@ -494,19 +494,12 @@ TEST(TrackingPlanner, WarmCycleAllocatesOnlyLbfgsTemporaries) {
 }
 
 // The task, on its channels.
-struct TaskRig {
-  rt::LatestSlot<hal::OdometrySample> odometry;
-  rt::LatestSlot<estimation::TargetEstimate> target;
-  rt::SharedSlot<mapping::LocalGrid> grid;
-  rt::SharedSlot<octomap::OcTree> octree;
-  rt::SharedSlot<trajectory_server::TimedTrajectory> trajectories;
-  rt::ManualClock clock{0};
+struct TaskRig : test::TaskChannels {
   std::unique_ptr<PlanningTask> task;
 
   explicit TaskRig(const TrackingPlannerParams& params = defaultParams(),
                    const rt::LatestSlot<supervisor::SupervisorState>* modes = nullptr) {
-    task = std::make_unique<PlanningTask>(makePlanner(params),
-                                          PlanningChannels{odometry, target, grid, octree, trajectories, modes}, clock);
+    task = std::make_unique<PlanningTask>(makePlanner(params), channels(modes), clock);
   }
   void step(double t_s) { task->step(rt::secondsToNs(t_s)); }
 
