@@ -1,7 +1,8 @@
 // The closed loop on the sim HAL in lockstep (issue 9): the planner flies from the estimated person, the
 // gimbal controller keeps them in frame, the supervisor watches. Tracking through sharp_turn at 1.5 m/s;
-// relocation after a forced 2 s occlusion; each failsafe under its injected fault (camera frames stop,
-// odometry freezes, depth stops) holds the drone without collision; a planner forced to fail degrades to a hover.
+// holding the tracking distance at 2.5 m/s; relocation after a forced 2 s occlusion; each failsafe under its injected
+// fault (camera frames stop, odometry freezes, depth stops) holds the drone without collision; a planner forced to fail
+// degrades to a hover.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -84,6 +85,29 @@ TEST(ClosedLoop, TracksThePersonThroughTheSharpTurnAt1_5Mps) {
     EXPECT_GT(f.summary["visible_ratio"].get<double>(), 0.9);
     EXPECT_EQ(f.mode, "track");
   }
+}
+
+TEST(ClosedLoop, AtARunnersPaceTheDroneHoldsTheTrackingDistanceWhereAGoalAtAFixedHorizonTrailed) {
+  // sharp_turn at 2.5 m/s, seed 1 (issue 21). Before: x_tp at the 1.5 s horizon, half of it in x_g and a time
+  // weight of 20 at every speed: each plan slowed towards a goal the person had long passed, the drone settled 1.5 m
+  // farther back than the tracking distance, fell more than 5 m behind at the corner and was not followed
+  // all the way (mean 4.0 m). Now x_tp is taken when the drone would get there.
+  const Flight now = fly(simYaml(), 1, 1000.0, 2.5);
+  EXPECT_TRUE(now.summary["followed_all_the_way"].get<bool>()) << now.summary["follow_failure_reason"];
+  EXPECT_LT(now.summary["distance_mean_m"].get<double>(), 3.3);  // measured 3.03 (the corner included)
+  EXPECT_EQ(now.summary["collisions"], 0);
+
+  std::string before = simYaml("    max_lead_s: 3.0 ", "    max_lead_s: 0.0 ");
+  for (const auto& [line, with] :
+       {std::pair<std::string, std::string>{"    predicted_weight: 0.85 ", "    predicted_weight: 0.5 "},
+        {"  max_time_weight_scale: 10.0 ", "  max_time_weight_scale: 1.0 "}}) {
+    const auto pos = before.find(line);
+    ASSERT_NE(pos, std::string::npos) << line;
+    before.replace(pos, line.size(), with);
+  }
+  const Flight trailed = fly(before, 1, 1000.0, 2.5);
+  EXPECT_FALSE(trailed.summary["followed_all_the_way"].get<bool>());
+  EXPECT_GT(trailed.summary["distance_mean_m"].get<double>(), 3.5);
 }
 
 TEST(ClosedLoop, RelocationReacquiresAfterAForcedTwoSecondOcclusion) {

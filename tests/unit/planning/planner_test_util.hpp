@@ -26,6 +26,19 @@ inline TrackingPlanner makePlanner(const TrackingPlannerParams& params = default
   return std::move(planner).value();
 }
 
+/// A live person estimate at p, with velocity v, stamped (and last accepted) at stamp_ns.
+inline estimation::TargetEstimate personAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns,
+                                           const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {
+  estimation::TargetEstimate e;
+  e.stamp_ns = stamp_ns;
+  e.initialised = true;
+  e.lost = false;
+  e.p_WT_m = p;
+  e.v_WT_mps = v;
+  e.last_accepted_ns = stamp_ns;
+  return e;
+}
+
 /// The planning task's channels and stats clock, as a test owns them.
 struct TaskChannels {
   rt::LatestSlot<hal::OdometrySample> odometry;

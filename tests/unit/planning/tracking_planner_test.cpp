@@ -17,42 +17,9 @@
 #include "aerotrack/trajectory_server/trajectory_server.hpp"
 #include "planner_test_util.hpp"
 #include "search_test_util.hpp"
+#include "tracking_planner_stages.hpp"
 
 namespace aerotrack::planning {
-
-// The test seam of TrackingPlanner (its friend): the stages of plan(), one at a time.
-class TrackingPlannerStages {
- public:
-  using PersonMotion = TrackingPlanner::PersonMotion;
-  explicit TrackingPlannerStages(TrackingPlanner& planner) : planner_(planner) {}
-  std::optional<PersonMotion> predictPerson(const PlanInputs& inputs) { return planner_.predictPerson(inputs); }
-  KinematicState selectGoal(const mapping::LocalGrid& grid, const PersonMotion& person, const StatePva& start,
-                            rt::TimeNs start_ns) const {
-    return planner_.selectGoal(grid, person, start, start_ns);
-  }
-  SearchStatus searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start, rt::TimeNs start_ns,
-                                  const KinematicState& goal, const PersonMotion& person) {
-    return planner_.searchTrackingPath(grid, start, start_ns, goal, person);
-  }
-  rt::Status buildCorridor(const mapping::LocalGrid& grid, const StatePva& start) {
-    return planner_.buildCorridor(grid, start);
-  }
-  rt::Expected<OptimizerResult> optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
-                                                   PolynomialTrajectory& out) {
-    return planner_.optimizeTrajectory(grid, start, out);
-  }
-  CheckResult checkPlannedTrajectory(const PolynomialTrajectory& trajectory, const mapping::LocalGrid& grid,
-                                     const PersonMotion& person, rt::TimeNs start_ns) const {
-    return planner_.checkPlannedTrajectory(trajectory, grid, nullptr, person, start_ns);
-  }
-  CheckResult repairPlannedTrajectory(CheckResult check, const StatePva& start, PolynomialTrajectory& out,
-                                      const mapping::LocalGrid& grid, const PersonMotion& person, double& stretch) {
-    return planner_.repairPlannedTrajectory(check, start, out, grid, nullptr, person, 0, stretch);
-  }
-
- private:
-  TrackingPlanner& planner_;
-};
 
 namespace {
 
@@ -60,24 +27,13 @@ using test::defaultParams;
 using test::makeBoxGrid;
 using test::makePlanner;
 using test::OccupiedBox;
+using test::personAt;
 
 hal::OdometrySample odometryAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns = 0) {
   hal::OdometrySample o;
   o.stamp_ns = stamp_ns;
   o.p_WB_m = p;
   return o;
-}
-
-estimation::TargetEstimate personAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns,
-                                    const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {
-  estimation::TargetEstimate e;
-  e.stamp_ns = stamp_ns;
-  e.initialised = true;
-  e.lost = false;
-  e.p_WT_m = p;
-  e.v_WT_mps = v;
-  e.last_accepted_ns = stamp_ns;
-  return e;
 }
 
 // A two-piece spline through (0,0,1.5) -> (2,1,1.5) -> (4,0,1.5), moving at the start.

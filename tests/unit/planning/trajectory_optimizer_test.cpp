@@ -135,6 +135,42 @@ TEST(TrajectoryOptimizer, StaysInsideRandomCorridorsWithinLimits) {
   }
 }
 
+TEST(TrajectoryOptimizer, AProblemsTimeWeightScaleIsRhoTTimesItAndShortensTheTrajectory) {
+  std::mt19937 rng(77);
+  const RandomCorridor c = randomCorridor(4, rng, 1.5);
+  TrajectoryOptimizerParams params;
+  params.max_velocity_mps = 6.0;  // limits far off: the time is set by rho_t against the jerk
+  params.max_acceleration_mps2 = 6.0;
+  params.max_jerk_mps3 = 60.0;
+  auto opt = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(opt.has_value());
+  ASSERT_TRUE(opt->setProblem(c.problem()).has_value());
+  const Eigen::VectorXd x = opt->initialVariables();
+  Eigen::VectorXd grad;
+  const double time_cost = opt->evaluate(x, grad, kTime);
+
+  TrajectoryProblem scaled = c.problem();
+  scaled.time_weight_scale = 10.0;
+  ASSERT_TRUE(opt->setProblem(scaled).has_value());
+  EXPECT_NEAR(opt->evaluate(x, grad, kTime), 10.0 * time_cost, 1e-9 * time_cost);
+  expectGradientMatches(*opt, x, kTime, "rho_t scaled");
+
+  PolynomialTrajectory plain;
+  PolynomialTrajectory fast;
+  ASSERT_TRUE(opt->optimize(c.problem(), plain).has_value());
+  ASSERT_TRUE(opt->optimize(scaled, fast).has_value());
+  // The min-jerk piece's duration goes as rho_t^(-1/6): 10 x rho_t, about 0.68 x the time.
+  EXPECT_LT(fast.durationS(), 0.8 * plain.durationS());
+  EXPECT_GT(fast.durationS(), 0.5 * plain.durationS());
+
+  PolynomialTrajectory traj;
+  for (const double bad : {0.0, -1.0, std::nan("")}) {
+    TrajectoryProblem refused = c.problem();
+    refused.time_weight_scale = bad;
+    EXPECT_FALSE(opt->optimize(refused, traj).has_value()) << bad;
+  }
+}
+
 TEST(TrajectoryOptimizer, RefusesBadProblems) {
   std::mt19937 rng(5);
   RandomCorridor c = randomCorridor(3, rng);

@@ -155,6 +155,9 @@ void TrackingPlanner::onePieceToRest(const StatePva& start, const Eigen::Vector3
 
 namespace {
 
+// The predicted path is checked for obstacles at this many points up to the goal's lead (every 0.1 s at 3 s).
+constexpr int kGoalLeadSteps = 30;
+
 // Below this speed (m/s) and acceleration (m/s^2) a trajectory's end is at rest: no brake is appended.
 constexpr double kAtRest = 1e-3;
 
@@ -219,6 +222,7 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
     return fail(status);
   };
 
+  time_weight_scale_ = timeWeightScale(person->velocityAt(start_ns).head<2>().norm());
   KinematicState goal = selectGoal(grid, *person, start, start_ns);  // 2. Sect. V-B
   // A relocation's search (issue 21 item 3): to the viewpoint, to rest.
   if (inputs.look != nullptr && !person->live) {
@@ -227,6 +231,7 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   }
   report.search_status = searchTrackingPath(grid, start, start_ns, goal, *person);  // 3. Sect. V-B
   report.search_expansions = path_.expansions;
+  if (person->live && path_.status == SearchStatus::kReachedGoal) arrival_s_ = path_.duration_s;
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
     return fail_or_evade(PlanStatus::kSearchFailed);
   if (path_.duration_s <= params_.min_piece_duration_s) {
@@ -382,7 +387,15 @@ KinematicState TrackingPlanner::selectGoal(const mapping::LocalGrid& grid, const
   KinematicState person_now;
   person_now.p_W_m = person.positionAt(start_ns);
   person_now.v_W_mps = person.velocityAt(start_ns);
-  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(params_.prediction.horizon_s);
+  // x_tp at the lead, or at the last sample before the predicted path enters an obstacle.
+  const double lead_s = goalLeadS();
+  double predicted_s = 0.0;
+  for (int k = 1; k <= kGoalLeadSteps; ++k) {
+    const double t_s = lead_s * k / kGoalLeadSteps;
+    if (grid.isOccupied(person.positionAt(start_ns + rt::secondsToNs(t_s)))) break;
+    predicted_s = t_s;
+  }
+  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(predicted_s);
   KinematicState person_predicted;
   person_predicted.p_W_m = person.positionAt(predicted_ns);
   person_predicted.v_W_mps = person.velocityAt(predicted_ns);
@@ -392,6 +405,16 @@ KinematicState TrackingPlanner::selectGoal(const mapping::LocalGrid& grid, const
   return search_.occlusionAware()
              ? makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal)
              : makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
+}
+
+double TrackingPlanner::timeWeightScale(double person_speed_mps) const {
+  const double ratio = person_speed_mps / params_.time_weight_reference_speed_mps;
+  return std::clamp(ratio * ratio, 1.0, params_.max_time_weight_scale);
+}
+
+double TrackingPlanner::goalLeadS() const {
+  if (!(params_.goal.max_lead_s > 0.0)) return params_.prediction.horizon_s;
+  return std::clamp(arrival_s_, 0.0, params_.goal.max_lead_s);
 }
 
 SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start,
@@ -459,7 +482,8 @@ rt::Expected<OptimizerResult> TrackingPlanner::optimizeTrajectory(const mapping:
     if (brake_free) break;
   }
   if (!brake_free) end.col(1).setZero();
-  const TrajectoryProblem problem{start, end, corridor_.boxes, corridor_.waypoints_W_m, durations_s_};
+  TrajectoryProblem problem{start, end, corridor_.boxes, corridor_.waypoints_W_m, durations_s_};
+  problem.time_weight_scale = time_weight_scale_;
   auto optimized = optimizer_.optimize(problem, out);
   if (!optimized) return optimized;
 

@@ -176,6 +176,8 @@ rt::Status TrajectoryOptimizer::setProblem(const TrajectoryProblem& problem) {
       static_cast<int>(problem.initial_waypoints_W_m.size()) != m - 1)
     return rt::Error{"trajectory optimizer: " + std::to_string(m) + " boxes need " + std::to_string(m - 1) +
                      " waypoints and " + std::to_string(m) + " durations"};
+  if (!(problem.time_weight_scale > 0.0) || !std::isfinite(problem.time_weight_scale))
+    return rt::Error{"trajectory optimizer: the time weight's scale must be finite and > 0"};
   if (!problem.start.allFinite() || !problem.end.allFinite())
     return rt::Error{"trajectory optimizer: non-finite boundary state"};
   for (const double t : problem.initial_durations_s) {
@@ -194,6 +196,7 @@ rt::Status TrajectoryOptimizer::setProblem(const TrajectoryProblem& problem) {
   pieces_ = m;
   start_ = problem.start;
   end_ = problem.end;
+  time_weight_ = params_.time_weight * problem.time_weight_scale;
   boxes_.assign(problem.boxes.begin(), problem.boxes.end());
   spline_.reset(start_, end_, static_cast<int>(m));
   const Eigen::Index n = 4 * m - 3;
@@ -227,8 +230,8 @@ double TrajectoryOptimizer::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& 
     spline_.addJerkEnergyGradient(grad_c_, grad_t_);
   }
   if ((terms & kTime) != 0U) {
-    cost += params_.time_weight * t_.sum();
-    grad_t_.array() += params_.time_weight;
+    cost += time_weight_ * t_.sum();
+    grad_t_.array() += time_weight_;
   }
   addSampleTerms(terms, cost);
   // grad_q_ collects the direct waypoint terms after the chain rule has written the mapped ones.

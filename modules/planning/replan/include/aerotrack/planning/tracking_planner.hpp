@@ -70,6 +70,14 @@ struct TrackingPlannerParams {
   /// vehicle's) limits, set by create(): one set of limits, the soft penalties' targets inside it by a
   /// stated margin (issue 21). The optimizer section's own limit fields are overwritten; in (0, 1].
   double optimizer_limit_fraction = 0.93;
+  /// The optimiser's time weight rho_t is scaled by (v / this)^2 for a person walking at v faster than this,
+  /// at most by max_time_weight_scale (1: never). Why (issue 21): a plan's natural duration under
+  /// J = jerk^2 + rho_t T, over the distance the person covers in it, is T^4 = 3600 v^2 / rho_t (a
+  /// rest-to-rest min-jerk piece); a fixed rho_t either dawdles behind a runner (rho_t 20: forest at 4 m/s,
+  /// farther than 5 m in 10 of 10 trials) or hunts after a walker's estimate noise (rho_t 200: a median
+  /// commanded acceleration of 1.2 m/s^2 at 1.5 m/s, and the body's tilt tripled the estimate's error).
+  double time_weight_reference_speed_mps = 1.5;  ///< > 0.
+  double max_time_weight_scale = 10.0;           ///< >= 1.
   TrackingGoalParams goal;
   KinodynamicSearchParams search;
   CorridorParams corridor;
@@ -150,6 +158,9 @@ class TrackingPlanner {
   static rt::Expected<TrackingPlanner> create(const TrackingPlannerParams& params);
 
   const TrackingPlannerParams& params() const { return params_; }
+  /// The factor on the optimiser's time weight for a person at this horizontal speed: (v / reference)^2,
+  /// in [1, max_time_weight_scale].
+  double timeWeightScale(double person_speed_mps) const;
   /// The baseline mode of the paper's comparison: no occlusion term in the search.
   void setOcclusionAware(bool aware) { search_.setOcclusionAware(aware); }
 
@@ -214,10 +225,15 @@ class TrackingPlanner {
   /// The result points into `inputs` and into this planner: valid for this cycle only.
   std::optional<PersonMotion> predictPerson(const PlanInputs& inputs);
   /// Stage 2, goal selection (Sect. V-B): x_g mixed from the person's state at the hand-over (start_ns)
-  /// and at the prediction horizon after it, held at the tracking distance and the flight altitude; in the
-  /// proposed (occlusion-aware) mode moved round the person to where they are in sight.
+  /// and x_tp, held at the tracking distance and the flight altitude; in the proposed (occlusion-aware)
+  /// mode moved round the person to where they are in sight. x_tp is taken at goalLeadS() after the
+  /// hand-over, or earlier where the predicted path first enters an obstacle (people walk round walls and
+  /// trees; a constant-velocity extrapolation does not).
   KinematicState selectGoal(const mapping::LocalGrid& grid, const PersonMotion& person, const StatePva& start,
                             rt::TimeNs start_ns) const;
+  /// How long after the hand-over x_tp is taken: the prediction horizon, or with goal.max_lead_s > 0 the
+  /// duration of the last complete path to a live person's goal (when the drone would get there), capped.
+  double goalLeadS() const;
   /// Stage 3, occlusion-aware kinodynamic search (Sect. V-B) from the start (its velocity clipped to the
   /// search's per-axis limit) to the goal, checking sight lines to the person's path; the path in path_.
   /// Returns the search's status.
@@ -284,6 +300,8 @@ class TrackingPlanner {
   Eigen::VectorXd one_duration_;
   std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
   estimation::TargetEstimate look_estimate_;                     ///< A search's look point, as a still person.
+  double time_weight_scale_ = 1.0;                               ///< This cycle's timeWeightScale(), for the optimiser.
+  double arrival_s_ = 0.0;  ///< The last complete search path's duration to a live person's goal (goalLeadS).
 };
 
 }  // namespace aerotrack::planning

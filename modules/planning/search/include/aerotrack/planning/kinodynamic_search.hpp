@@ -76,6 +76,12 @@ struct TrackingGoalParams {
   /// > 0 (a step larger than the turn tries the plain goal only).
   double visible_step_rad = 0.2618;      // 15 degrees
   double visible_max_turn_rad = 1.5708;  // 90 degrees either way
+  /// When x_tp is taken (read by TrackingPlanner::selectGoal): 0, at the prediction horizon after the
+  /// hand-over (the paper's reading); > 0, when the drone would get to the goal (the last complete search
+  /// path's duration), at most this long after the hand-over. Why (issue 21): a goal taken at a fixed
+  /// horizon shorter than the path to it trails the person, and the drone settled 1.5-2 m farther back
+  /// than the tracking distance at 2.5 m/s and more at a run.
+  double max_lead_s = 0.0;
 };
 
 /// The planner's `goal:` config section (every field above, all required; ranges in the .cpp).

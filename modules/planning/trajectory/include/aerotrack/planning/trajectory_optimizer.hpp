@@ -92,6 +92,9 @@ struct TrajectoryProblem {
   std::span<const CorridorBox> boxes;
   std::span<const Eigen::Vector3d> initial_waypoints_W_m;
   std::span<const double> initial_durations_s;
+  /// The time weight of this problem is params.time_weight times this (the planner raises it for a fast
+  /// person, issue 21); > 0.
+  double time_weight_scale = 1.0;
 };
 
 enum class OptimizerStatus : std::uint8_t {
@@ -163,6 +166,7 @@ class TrajectoryOptimizer {
   Eigen::VectorXd best_x_;   // best finite point seen during optimize()
   Eigen::VectorXd scratch_grad_;
   double best_cost_ = 0.0;
+  double time_weight_ = 0.0;
   int evaluations_ = 0;
 };
 
