@@ -83,11 +83,16 @@ SearchFlight flyCornerHide(std::optional<double> scenario_search_timeout_s) {
 
 TEST(ClosedLoopSearch, TheSearchFindsAPersonHiddenRoundACornerWhereTheHoverDoesNot) {
   const SearchFlight hover = flyCornerHide(0.0);  // the scenario says: no search, hold "person not found" at once
-  ASSERT_FALSE(hover.summary["supervisor"]["relocations"].empty()) << hover.summary["supervisor"].dump(2);
-  EXPECT_EQ(hover.summary["supervisor"]["relocations"][0]["outcome"], "not found")
-      << hover.summary["supervisor"].dump(2);
-  EXPECT_TRUE(hover.summary["supervisor"]["relocations"][0]["search_s"].is_null());
-  EXPECT_EQ(hover.mode, "hold");
+  // Every relocation ends in a hold, "not found". (Where the drone ends depends on how well it kept up: since
+  // issue 21's goal lead it holds close enough to see the person come out of the forced occlusion, and tracks
+  // again; the relocation itself found nobody.)
+  const nlohmann::json& hovered = hover.summary["supervisor"]["relocations"];
+  ASSERT_FALSE(hovered.empty()) << hover.summary["supervisor"].dump(2);
+  for (const nlohmann::json& r : hovered) {
+    EXPECT_EQ(r["outcome"], "not found") << hover.summary["supervisor"].dump(2);
+    EXPECT_TRUE(r["search_s"].is_null());
+  }
+  EXPECT_GT(hover.summary["supervisor"]["seconds_in"]["hold"].get<double>(), 0.0);
 
   const SearchFlight search = flyCornerHide(std::nullopt);
   const nlohmann::json& relocations = search.summary["supervisor"]["relocations"];

@@ -414,7 +414,7 @@ double TrackingPlanner::timeWeightScale(double person_speed_mps) const {
 
 double TrackingPlanner::goalLeadS() const {
   if (!(params_.goal.max_lead_s > 0.0)) return params_.prediction.horizon_s;
-  return std::clamp(arrival_s_, 0.0, params_.goal.max_lead_s);
+  return std::clamp(arrival_s_, std::min(params_.goal.min_lead_s, params_.goal.max_lead_s), params_.goal.max_lead_s);
 }
 
 SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start,

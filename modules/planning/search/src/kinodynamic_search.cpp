@@ -104,6 +104,7 @@ const rt::FieldTable<TrackingGoalParams>& trackingGoalFields() {
       rt::number("visible_step_rad", &P::visible_step_rad, Range::closed(0.01, 3.2)),
       rt::number("visible_max_turn_rad", &P::visible_max_turn_rad, Range::closed(0.0, 3.2)),
       rt::number("max_lead_s", &P::max_lead_s, Range::closed(0.0, 10.0)),
+      rt::number("min_lead_s", &P::min_lead_s, Range::closed(0.0, 10.0)),
   });
   return kTable;
 }

@@ -82,6 +82,11 @@ struct TrackingGoalParams {
   /// horizon shorter than the path to it trails the person, and the drone settled 1.5-2 m farther back
   /// than the tracking distance at 2.5 m/s and more at a run.
   double max_lead_s = 0.0;
+  /// With max_lead_s > 0, x_tp is taken at least this long after the hand-over (at most max_lead_s). Why: a
+  /// drone at its goal has a short last path, and a lead that short left it waiting at a corner while the
+  /// person walked out of sight round it (sharp_turn at 0.85 and 1.5 m/s, seed 8, both modes); the paper's
+  /// mix at the prediction horizon (0.5 x 1.5 s) looked 0.75 s ahead.
+  double min_lead_s = 0.0;
 };
 
 /// The planner's `goal:` config section (every field above, all required; ranges in the .cpp).
