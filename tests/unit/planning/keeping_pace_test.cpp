@@ -58,14 +58,6 @@ TEST(GoalLead, IsThePredictionHorizonWhenOffAndTheLastArrivalCappedWhenOn) {
   EXPECT_EQ(stages.goalLeadS(), 2.0);
   stages.setArrivalS(7.0);
   EXPECT_EQ(stages.goalLeadS(), 3.0);
-
-  TrackingPlannerParams params = leadParams(1.0);
-  params.goal.min_lead_s = 0.9;  // a drone at its goal still looks this far ahead
-  TrackingPlanner floored = makePlanner(params);
-  TrackingPlannerStages floor_stages(floored);
-  EXPECT_EQ(floor_stages.goalLeadS(), 0.9);
-  floor_stages.setArrivalS(2.0);
-  EXPECT_EQ(floor_stages.goalLeadS(), 2.0);
 }
 
 TEST(GoalLead, ACompletePathToAPersonSetsTheLeadToItsDuration) {

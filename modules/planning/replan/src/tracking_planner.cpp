@@ -387,24 +387,29 @@ KinematicState TrackingPlanner::selectGoal(const mapping::LocalGrid& grid, const
   KinematicState person_now;
   person_now.p_W_m = person.positionAt(start_ns);
   person_now.v_W_mps = person.velocityAt(start_ns);
-  // x_tp at the lead, or at the last sample before the predicted path enters an obstacle.
-  const double lead_s = goalLeadS();
-  double predicted_s = 0.0;
-  for (int k = 1; k <= kGoalLeadSteps; ++k) {
-    const double t_s = lead_s * k / kGoalLeadSteps;
-    if (grid.isOccupied(person.positionAt(start_ns + rt::secondsToNs(t_s)))) break;
-    predicted_s = t_s;
-  }
-  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(predicted_s);
+  // The predicted path up to `limit_s` after the hand-over, or to its last sample before it enters an obstacle.
+  const auto free_until_s = [&](double limit_s) {
+    double free_s = 0.0;
+    for (int k = 1; k <= kGoalLeadSteps; ++k) {
+      const double t_s = limit_s * k / kGoalLeadSteps;
+      if (grid.isOccupied(person.positionAt(start_ns + rt::secondsToNs(t_s)))) break;
+      free_s = t_s;
+    }
+    return free_s;
+  };
+  const rt::TimeNs predicted_ns = start_ns + rt::secondsToNs(free_until_s(goalLeadS()));  // x_tp
   KinematicState person_predicted;
   person_predicted.p_W_m = person.positionAt(predicted_ns);
   person_predicted.v_W_mps = person.velocityAt(predicted_ns);
   // The goal is held at the flight altitude (makeTrackingGoal keeps the height of the point it is given).
   const Eigen::Vector3d p_drone_at_altitude(start(0, 0), start(1, 0), params_.flight_altitude_m);
-  // Proposed mode: a goal that sees the person (the baseline, Fast-Tracker 1.0, has no visibility terms).
-  return search_.occlusionAware()
-             ? makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal)
-             : makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
+  // Proposed mode: a goal that sees the person, now and at the prediction horizon (the baseline, Fast-Tracker
+  // 1.0, has no visibility terms).
+  if (!search_.occlusionAware())
+    return makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
+  const Eigen::Vector3d p_ahead_W_m =
+      person.positionAt(start_ns + rt::secondsToNs(free_until_s(params_.prediction.horizon_s)));
+  return makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal, &p_ahead_W_m);
 }
 
 double TrackingPlanner::timeWeightScale(double person_speed_mps) const {
@@ -414,7 +419,7 @@ double TrackingPlanner::timeWeightScale(double person_speed_mps) const {
 
 double TrackingPlanner::goalLeadS() const {
   if (!(params_.goal.max_lead_s > 0.0)) return params_.prediction.horizon_s;
-  return std::clamp(arrival_s_, std::min(params_.goal.min_lead_s, params_.goal.max_lead_s), params_.goal.max_lead_s);
+  return std::clamp(arrival_s_, 0.0, params_.goal.max_lead_s);
 }
 
 SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid, const StatePva& start,

@@ -104,7 +104,6 @@ const rt::FieldTable<TrackingGoalParams>& trackingGoalFields() {
       rt::number("visible_step_rad", &P::visible_step_rad, Range::closed(0.01, 3.2)),
       rt::number("visible_max_turn_rad", &P::visible_max_turn_rad, Range::closed(0.0, 3.2)),
       rt::number("max_lead_s", &P::max_lead_s, Range::closed(0.0, 10.0)),
-      rt::number("min_lead_s", &P::min_lead_s, Range::closed(0.0, 10.0)),
   });
   return kTable;
 }
@@ -131,24 +130,34 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
 
 KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
-                                       const TrackingGoalParams& params) {
+                                       const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m) {
   KinematicState goal = makeTrackingGoal(person_now, person_predicted, p_drone_W_m, params);
   const double w = std::clamp(params.predicted_weight, 0.0, 1.0);
   const Eigen::Vector3d p_person = (1.0 - w) * person_now.p_W_m + w * person_predicted.p_W_m;
-  const auto usable = [&](const Eigen::Vector3d& p) { return !grid.isOccupied(p) && grid.lineOfSight(p, p_person); };
-  if (usable(goal.p_W_m)) return goal;
+  // Three passes, strictest first: known free and seeing the person now and ahead; not blocked (unknown
+  // space is planned through) and seeing both; not blocked and seeing the person now (before issue 21).
+  // Why known free first: the interior of a building the camera saw only the face of is unknown, and a
+  // goal turned into it was unreachable (sharp_turn seed 8: 300-expansion partial searches while the
+  // person walked out of sight).
   const Eigen::Vector2d offset = goal.p_W_m.head<2>() - p_person.head<2>();
   const int steps = params.visible_step_rad > 0.0
                         ? static_cast<int>(std::floor(params.visible_max_turn_rad / params.visible_step_rad + 1e-9))
                         : 0;
-  for (int k = 1; k <= steps; ++k) {
-    for (const int sign : {1, -1}) {
-      const double angle = sign * k * params.visible_step_rad;
-      Eigen::Vector3d candidate = goal.p_W_m;
-      candidate.head<2>() = p_person.head<2>() + Eigen::Rotation2Dd(angle) * offset;
-      if (usable(candidate)) {
-        goal.p_W_m = candidate;
-        return goal;
+  for (int pass = 0; pass < 3; ++pass) {
+    const auto usable = [&](const Eigen::Vector3d& p) {
+      const bool standable = pass == 0 ? grid.isFree(p) : !grid.isOccupied(p);
+      return standable && grid.lineOfSight(p, p_person) &&
+             (pass == 2 || p_ahead_W_m == nullptr || grid.lineOfSight(p, *p_ahead_W_m));
+    };
+    if (usable(goal.p_W_m)) return goal;
+    for (int k = 1; k <= steps; ++k) {
+      for (const int sign : {1, -1}) {
+        Eigen::Vector3d candidate = goal.p_W_m;
+        candidate.head<2>() = p_person.head<2>() + Eigen::Rotation2Dd(sign * k * params.visible_step_rad) * offset;
+        if (usable(candidate)) {
+          goal.p_W_m = candidate;
+          return goal;
+        }
       }
     }
   }

@@ -82,11 +82,6 @@ struct TrackingGoalParams {
   /// horizon shorter than the path to it trails the person, and the drone settled 1.5-2 m farther back
   /// than the tracking distance at 2.5 m/s and more at a run.
   double max_lead_s = 0.0;
-  /// With max_lead_s > 0, x_tp is taken at least this long after the hand-over (at most max_lead_s). Why: a
-  /// drone at its goal has a short last path, and a lead that short left it waiting at a corner while the
-  /// person walked out of sight round it (sharp_turn at 0.85 and 1.5 m/s, seed 8, both modes); the paper's
-  /// mix at the prediction horizon (0.5 x 1.5 s) looked 0.75 s ahead.
-  double min_lead_s = 0.0;
 };
 
 /// The planner's `goal:` config section (every field above, all required; ranges in the .cpp).
@@ -107,9 +102,13 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
 /// Why: the plain goal lies on the line from the person to the drone, so once the person has turned a
 /// corner it sits in the corner's shadow, and a drone that reaches it sees nothing (the relocation of
 /// issue 9 stopped there). The velocity is the plain goal's. Allocation-free; O(candidates x cells).
+/// `p_ahead_W_m` (optional): a point of the person's predicted path that a usable goal must see as well (the
+/// planner passes the prediction at its horizon: the paper checks occlusion against x_tp). Why: with x_tp
+/// taken close to now, a drone near a corner kept a goal that saw the person at the corner and not where
+/// they were walking, backed off along the line to them, and lost them round it (issue 21).
 KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
-                                       const TrackingGoalParams& params);
+                                       const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m = nullptr);
 
 /// The person's (predicted) position in W at an absolute time t_s (the clock of start_time_s below).
 using PersonPositionFn = std::function<Eigen::Vector3d(double t_s)>;
