@@ -26,9 +26,8 @@ inline bool inBox(const OccupiedBox& box, const Eigen::Vector3d& c) {
   return (c.array() >= box.min_W_m.array()).all() && (c.array() <= box.max_W_m.array()).all();
 }
 
-/// Marks occupied (or free), in `tree`, every cell of edge resolution_m whose centre lies in one of the boxes.
-inline void markBoxes(octomap::OcTree& tree, const std::vector<OccupiedBox>& boxes, double resolution_m,
-                      bool occupied = true) {
+/// Marks occupied, in `tree`, every cell of edge resolution_m whose centre lies in one of the boxes.
+inline void markBoxes(octomap::OcTree& tree, const std::vector<OccupiedBox>& boxes, double resolution_m) {
   for (const OccupiedBox& box : boxes) {
     const mapping::CellIndex lo = (box.min_W_m / resolution_m).array().floor().cast<int>();
     const mapping::CellIndex hi = (box.max_W_m / resolution_m).array().ceil().cast<int>();
@@ -36,7 +35,7 @@ inline void markBoxes(octomap::OcTree& tree, const std::vector<OccupiedBox>& box
       for (int y = lo.y(); y < hi.y(); ++y) {
         for (int x = lo.x(); x < hi.x(); ++x) {
           const Eigen::Vector3d c = (Eigen::Vector3d(x, y, z).array() + 0.5) * resolution_m;
-          if (inBox(box, c)) mapping::test::setCell(tree, mapping::CellIndex(x, y, z), occupied);
+          if (inBox(box, c)) mapping::test::setCell(tree, mapping::CellIndex(x, y, z), true);
         }
       }
     }
@@ -44,18 +43,15 @@ inline void markBoxes(octomap::OcTree& tree, const std::vector<OccupiedBox>& box
 }
 
 /// A grid whose window (size_m, centred on center_W_m) has the cells whose centres lie in the boxes
-/// occupied, those in `free_boxes` (and not in `boxes`) known free, and every other cell unknown (planned
-/// through as free: unknown_is_occupied = false).
+/// occupied, and every other cell unknown (planned through as free: unknown_is_occupied = false).
 inline mapping::LocalGrid makeBoxGrid(const Eigen::Vector3d& size_m, const Eigen::Vector3d& center_W_m,
-                                      const std::vector<OccupiedBox>& boxes, double inflation_radius_m = 0.25,
-                                      const std::vector<OccupiedBox>& free_boxes = {}) {
+                                      const std::vector<OccupiedBox>& boxes, double inflation_radius_m = 0.25) {
   mapping::LocalGridParams params;
   params.resolution_m = 0.1;
   params.size_m = size_m;
   params.inflation_radius_m = inflation_radius_m;
   params.recenter_distance_m = 0.0;
   octomap::OcTree tree = mapping::test::makeTree(params.resolution_m);
-  markBoxes(tree, free_boxes, params.resolution_m, false);
   markBoxes(tree, boxes, params.resolution_m);
   mapping::LocalGrid grid = mapping::test::makeGrid(params);
   EXPECT_TRUE(grid.recenter(center_W_m, tree).has_value());

@@ -134,20 +134,15 @@ KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const Kin
   KinematicState goal = makeTrackingGoal(person_now, person_predicted, p_drone_W_m, params);
   const double w = std::clamp(params.predicted_weight, 0.0, 1.0);
   const Eigen::Vector3d p_person = (1.0 - w) * person_now.p_W_m + w * person_predicted.p_W_m;
-  // Three passes, strictest first: known free and seeing the person now and ahead; not blocked (unknown
-  // space is planned through) and seeing both; not blocked and seeing the person now (before issue 21).
-  // Why known free first: the interior of a building the camera saw only the face of is unknown, and a
-  // goal turned into it was unreachable (sharp_turn seed 8: 300-expansion partial searches while the
-  // person walked out of sight).
+  // Two passes: seeing the person now and at the horizon ahead; else seeing them now (before issue 21).
   const Eigen::Vector2d offset = goal.p_W_m.head<2>() - p_person.head<2>();
   const int steps = params.visible_step_rad > 0.0
                         ? static_cast<int>(std::floor(params.visible_max_turn_rad / params.visible_step_rad + 1e-9))
                         : 0;
-  for (int pass = 0; pass < 3; ++pass) {
+  for (int pass = 0; pass < 2; ++pass) {
     const auto usable = [&](const Eigen::Vector3d& p) {
-      const bool standable = pass == 0 ? grid.isFree(p) : !grid.isOccupied(p);
-      return standable && grid.lineOfSight(p, p_person) &&
-             (pass == 2 || p_ahead_W_m == nullptr || grid.lineOfSight(p, *p_ahead_W_m));
+      return !grid.isOccupied(p) && grid.lineOfSight(p, p_person) &&
+             (pass == 1 || p_ahead_W_m == nullptr || grid.lineOfSight(p, *p_ahead_W_m));
     };
     if (usable(goal.p_W_m)) return goal;
     for (int k = 1; k <= steps; ++k) {

@@ -102,10 +102,11 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
 /// Why: the plain goal lies on the line from the person to the drone, so once the person has turned a
 /// corner it sits in the corner's shadow, and a drone that reaches it sees nothing (the relocation of
 /// issue 9 stopped there). The velocity is the plain goal's. Allocation-free; O(candidates x cells).
-/// `p_ahead_W_m` (optional): a point of the person's predicted path that a usable goal must see as well (the
-/// planner passes the prediction at its horizon: the paper checks occlusion against x_tp). Why: with x_tp
-/// taken close to now, a drone near a corner kept a goal that saw the person at the corner and not where
-/// they were walking, backed off along the line to them, and lost them round it (issue 21).
+/// `p_ahead_W_m` (optional): a point of the person's predicted path that the goal should see as well (the
+/// planner passes the prediction at its horizon: the paper checks occlusion against x_tp); candidates that
+/// see both come first, then those that see the person now. Why: with x_tp taken close to now, a drone
+/// near a corner kept a goal that saw the person at the corner and not where they were walking, backed off
+/// along the line to them, and lost them round it (issue 21, sharp_turn seed 8 at 0.85 m/s).
 KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
                                        const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m = nullptr);
