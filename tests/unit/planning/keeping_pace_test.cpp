@@ -36,14 +36,9 @@ mapping::LocalGrid leadWorld(bool wall) {
   return makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5), boxes);
 }
 
-// A person at (7, 0) walking along +x at 2 m/s: constant velocity (no Bezier fit), up to the horizon.
+// A person walking at constant velocity (no Bezier fit), extrapolated up to the prediction horizon.
 TrackingPlannerStages::PersonMotion walker(const TrackingPlanner& planner, const estimation::TargetEstimate& person) {
-  TrackingPlannerStages::PersonMotion m;
-  m.estimate = &person;
-  m.live = true;
-  m.horizon_s = planner.params().prediction.horizon_s;
-  m.sight_height_m = planner.params().person_sight_height_m;
-  return m;
+  return TrackingPlannerStages::liveMotion(planner, person);
 }
 
 TEST(GoalLead, IsThePredictionHorizonWhenOffAndTheLastArrivalCappedWhenOn) {

@@ -10,6 +10,15 @@ class TrackingPlannerStages {
  public:
   using PersonMotion = TrackingPlanner::PersonMotion;
   explicit TrackingPlannerStages(TrackingPlanner& planner) : planner_(planner) {}
+  /// A live person as the planner sees one: their estimate extrapolated at constant velocity (no Bezier fit).
+  static PersonMotion liveMotion(const TrackingPlanner& planner, const estimation::TargetEstimate& person) {
+    PersonMotion m;
+    m.estimate = &person;
+    m.live = true;
+    m.horizon_s = planner.params().prediction.horizon_s;
+    m.sight_height_m = planner.params().person_sight_height_m;
+    return m;
+  }
   std::optional<PersonMotion> predictPerson(const PlanInputs& inputs) { return planner_.predictPerson(inputs); }
   KinematicState selectGoal(const mapping::LocalGrid& grid, const PersonMotion& person, const StatePva& start,
                             rt::TimeNs start_ns) const {

@@ -289,12 +289,7 @@ struct PillarWorld {
                                          {{-10, -10, -0.2}, {10, 10, 0.0}}});  // ground
   estimation::TargetEstimate person = personAt(Eigen::Vector3d(7.0, 0.0, -0.3), 0);
   TrackingPlannerStages::PersonMotion motion(const TrackingPlanner& planner) const {
-    TrackingPlannerStages::PersonMotion m;
-    m.estimate = &person;
-    m.live = true;
-    m.horizon_s = planner.params().prediction.horizon_s;
-    m.sight_height_m = planner.params().person_sight_height_m;
-    return m;
+    return TrackingPlannerStages::liveMotion(planner, person);
   }
 };
 
