@@ -99,7 +99,7 @@ TEST(ClosedLoop, AtARunnersPaceTheDroneHoldsTheTrackingDistanceWhereAGoalAtAFixe
 
   std::string before = simYaml("    max_lead_s: 3.0 ", "    max_lead_s: 0.0 ");
   for (const auto& [line, with] :
-       {std::pair<std::string, std::string>{"    predicted_weight: 0.85 ", "    predicted_weight: 0.5 "},
+       {std::pair<std::string, std::string>{"    predicted_weight: 0.7 ", "    predicted_weight: 0.5 "},
         {"  max_time_weight_scale: 10.0 ", "  max_time_weight_scale: 1.0 "}}) {
     const auto pos = before.find(line);
     ASSERT_NE(pos, std::string::npos) << line;
