@@ -15,6 +15,7 @@ using test::defaultParams;
 using test::makeBoxGrid;
 using test::makePlanner;
 using test::personAt;
+using test::restAt;
 
 TrackingPlannerParams leadParams(double predicted_weight) {
   TrackingPlannerParams params = defaultParams();
@@ -23,22 +24,11 @@ TrackingPlannerParams leadParams(double predicted_weight) {
   return params;
 }
 
-StatePva restingAt(const Eigen::Vector3d& p_W_m) {
-  StatePva s = StatePva::Zero();
-  s.col(0) = p_W_m;
-  return s;
-}
-
 // Open ground; with a wall across the person's way when asked.
 mapping::LocalGrid leadWorld(bool wall) {
   std::vector<test::OccupiedBox> boxes = {{{-10, -10, -0.2}, {10, 10, 0.0}}};
   if (wall) boxes.push_back({{8.5, -3.0, 0.0}, {9.0, 3.0, 3.0}});
   return makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(3, 0, 1.5), boxes);
-}
-
-// A person walking at constant velocity (no Bezier fit), extrapolated up to the prediction horizon.
-TrackingPlannerStages::PersonMotion walker(const TrackingPlanner& planner, const estimation::TargetEstimate& person) {
-  return TrackingPlannerStages::liveMotion(planner, person);
 }
 
 TEST(GoalLead, IsThePredictionHorizonWhenOffAndTheLastArrivalCappedWhenOn) {
@@ -79,12 +69,12 @@ TEST(GoalLead, TheGoalIsWhereThePersonWillBeWhenTheDroneGetsThere) {
   const estimation::TargetEstimate person =
       personAt(Eigen::Vector3d(7.0, 0.0, -0.3), 0, Eigen::Vector3d(2.0, 0.0, 0.0));
   const mapping::LocalGrid grid = leadWorld(false);
-  const StatePva start = restingAt(Eigen::Vector3d(0, 0, 1.5));
+  const StatePva start = restAt(Eigen::Vector3d(0, 0, 1.5));
   for (const double w : {1.0, 0.5}) {
     TrackingPlanner planner = makePlanner(leadParams(w));
     TrackingPlannerStages stages(planner);
     stages.setArrivalS(1.0);
-    const KinematicState goal = stages.selectGoal(grid, walker(planner, person), start, 0);
+    const KinematicState goal = stages.selectGoal(grid, TrackingPlannerStages::liveMotion(planner, person), start, 0);
     // x_tp: 2 m further on after the 1 s lead; x_g: the mix with the current 7 m, held 2.5 m behind.
     EXPECT_NEAR(goal.p_W_m.x(), 7.0 + w * 2.0 - 2.5, 1e-9) << w;
     EXPECT_NEAR(goal.p_W_m.y(), 0.0, 1e-9);
@@ -95,12 +85,12 @@ TEST(GoalLead, TheGoalIsWhereThePersonWillBeWhenTheDroneGetsThere) {
 TEST(GoalLead, ThePredictedPathStopsWhereItFirstEntersAnObstacle) {
   const estimation::TargetEstimate person =
       personAt(Eigen::Vector3d(7.0, 0.0, -0.3), 0, Eigen::Vector3d(2.0, 0.0, 0.0));
-  const StatePva start = restingAt(Eigen::Vector3d(0, 0, 1.5));
+  const StatePva start = restAt(Eigen::Vector3d(0, 0, 1.5));
   TrackingPlanner planner = makePlanner(leadParams(1.0));
   TrackingPlannerStages stages(planner);
   stages.setArrivalS(1.0);  // unchecked, x_tp would be at x = 9: inside the wall (8.5-9.0)
   const mapping::LocalGrid walled = leadWorld(true);
-  const KinematicState goal = stages.selectGoal(walled, walker(planner, person), start, 0);
+  const KinematicState goal = stages.selectGoal(walled, TrackingPlannerStages::liveMotion(planner, person), start, 0);
   // The last sample (every 1/30 s, 6.7 cm) before the wall's inflated face at 8.25 m (+- a 0.1 m cell).
   const double x_tp = goal.p_W_m.x() + planner.params().goal.tracking_distance_m;
   EXPECT_LT(x_tp, 8.35);

@@ -26,6 +26,13 @@ inline TrackingPlanner makePlanner(const TrackingPlannerParams& params = default
   return std::move(planner).value();
 }
 
+/// A start state at rest at p.
+inline StatePva restAt(const Eigen::Vector3d& p_W_m) {
+  StatePva s = StatePva::Zero();
+  s.col(0) = p_W_m;
+  return s;
+}
+
 /// A live person estimate at p, with velocity v, stamped (and last accepted) at stamp_ns.
 inline estimation::TargetEstimate personAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns,
                                            const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {

@@ -28,6 +28,7 @@ using test::makeBoxGrid;
 using test::makePlanner;
 using test::OccupiedBox;
 using test::personAt;
+using test::restAt;
 
 hal::OdometrySample odometryAt(const Eigen::Vector3d& p, rt::TimeNs stamp_ns = 0) {
   hal::OdometrySample o;
@@ -201,12 +202,6 @@ TEST(TrackingPlanner, OnTheGroundItTakesOffFirst) {
 }
 
 // The stages of plan(), each on a crafted input.
-
-StatePva restAt(const Eigen::Vector3d& p) {
-  StatePva s = StatePva::Zero();
-  s.col(0) = p;
-  return s;
-}
 
 TEST(TrackingPlannerStages, PredictionIsNothingWithoutALiveEstimateOrAPathToRelocateAlong) {
   TrackingPlanner planner = makePlanner();
