@@ -98,6 +98,42 @@ TEST(GoalLead, ThePredictedPathStopsWhereItFirstEntersAnObstacle) {
   EXPECT_FALSE(walled.isOccupied(Eigen::Vector3d(x_tp, 0.0, planner.params().person_sight_height_m)));
 }
 
+TEST(GoalLead, APersonBeyondTheGridsWindowIsSearchedForAtItsEdgeAndKeepsTheLastLead) {
+  // The drone 14 m behind a runner (the window reaches 10 m from its centre): the goal (11.5 m on) lies
+  // beyond it. The search goes to the window's edge, in a few expansions, not the whole budget.
+  TrackingPlanner planner = makePlanner(leadParams(1.0));
+  TrackingPlannerStages stages(planner);
+  stages.setArrivalS(1.2);
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(0, 0, 1.5), {});
+  const estimation::TargetEstimate person =
+      personAt(Eigen::Vector3d(14.0, 0.0, -0.3), 0, Eigen::Vector3d(4.0, 0.0, 0.0));
+  const TrackingPlannerStages::PersonMotion motion = TrackingPlannerStages::liveMotion(planner, person);
+  StatePva start = restAt(Eigen::Vector3d(0, 0, 1.5));
+  start(0, 1) = 3.0;
+  const KinematicState goal = stages.selectGoal(grid, motion, start, 0);
+  ASSERT_FALSE(grid.inWindow(goal.p_W_m));
+  ASSERT_EQ(stages.searchTrackingPath(grid, start, 0, goal, motion), SearchStatus::kReachedGoal);
+  const SearchPath& path = planner.searchPath();
+  EXPECT_LT(path.expansions, 30);
+  const Eigen::Vector3d end = path.stateAt(path.duration_s).p_W_m;
+  const double margin_m = planner.params().search.primitive_duration_s * planner.params().search.max_velocity_mps;
+  const double tolerance_m = planner.params().search.goal_tolerance_m;
+  EXPECT_NEAR(end.x(), grid.windowMaxM().x() - margin_m, tolerance_m);
+  EXPECT_NEAR(end.y(), 0.0, tolerance_m);
+  // A path to the window's edge is not the drone's arrival at the person: the lead stays.
+  hal::OdometrySample odometry;
+  odometry.p_WB_m = Eigen::Vector3d(0, 0, 1.5);
+  odometry.v_WB_mps = Eigen::Vector3d(3.0, 0, 0);
+  PlanInputs inputs;
+  inputs.odometry = &odometry;
+  inputs.target = &person;
+  inputs.grid = &grid;
+  PolynomialTrajectory out(24);
+  ASSERT_EQ(planner.plan(inputs, out).status, PlanStatus::kPlanned);
+  EXPECT_EQ(planner.searchPath().status, SearchStatus::kReachedGoal);
+  EXPECT_DOUBLE_EQ(stages.goalLeadS(), 1.2);
+}
+
 TEST(TimeWeight, ScalesWithTheSquareOfThePersonsSpeedAboveAWalkUpToItsCap) {
   TrackingPlannerParams params = defaultParams();
   params.time_weight_reference_speed_mps = 1.5;

@@ -231,7 +231,8 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   }
   report.search_status = searchTrackingPath(grid, start, start_ns, goal, *person);  // 3. Sect. V-B
   report.search_expansions = path_.expansions;
-  if (person->live && path_.status == SearchStatus::kReachedGoal) arrival_s_ = path_.duration_s;
+  if (person->live && path_.status == SearchStatus::kReachedGoal && !search_goal_clipped_)
+    arrival_s_ = path_.duration_s;
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
     return fail_or_evade(PlanStatus::kSearchFailed);
   if (path_.duration_s <= params_.min_piece_duration_s) {
@@ -433,7 +434,12 @@ SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid,
   const double start_time_s = rt::nsToSeconds(start_ns);
   // One reference captured: small enough for std::function to keep inline (no allocation).
   const PersonPositionFn person_fn = [&person](double t_s) { return person.positionAt(rt::secondsToNs(t_s)); };
-  return search_.search(grid, search_start, goal, start_time_s, person_fn, path_);
+  // A goal beyond the grid's window is searched for at the window's edge (clipGoalToWindow), with room for a
+  // primitive at full speed inside it; its path is not a complete one (arrival_s_ stays).
+  KinematicState search_goal = goal;
+  const double margin_m = params_.search.primitive_duration_s * params_.search.max_velocity_mps;
+  search_goal_clipped_ = clipGoalToWindow(grid, search_start.p_W_m, margin_m, search_goal);
+  return search_.search(grid, search_start, search_goal, start_time_s, person_fn, path_);
 }
 
 int TrackingPlanner::chordCount() const {

@@ -159,6 +159,43 @@ KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const Kin
   return goal;
 }
 
+bool clipGoalToWindow(const mapping::LocalGrid& grid, const Eigen::Vector3d& from_W_m, double margin_m,
+                      KinematicState& goal) {
+  // The margin is horizontal: the goal's height is the flight altitude, and the window's height (5 m) is
+  // no room for a margin of a primitive's length. At least half a cell inside each face, and never an
+  // empty box (a margin wider than half the window).
+  const Eigen::Vector3d lo_raw = grid.windowMinM();
+  const Eigen::Vector3d hi_raw = grid.windowMaxM();
+  const Eigen::Vector3d centre = 0.5 * (lo_raw + hi_raw);
+  const Eigen::Vector3d margin(std::max(margin_m, 0.0), std::max(margin_m, 0.0), 0.0);
+  const Eigen::Vector3d inset = margin.cwiseMax(0.5 * grid.params().resolution_m).cwiseMin(0.5 * (hi_raw - lo_raw));
+  const Eigen::Vector3d lo = (lo_raw + inset).cwiseMin(centre);
+  const Eigen::Vector3d hi = (hi_raw - inset).cwiseMax(centre);
+  const auto inside = [&](const Eigen::Vector3d& p) { return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all(); };
+  if (!goal.p_W_m.allFinite() || !from_W_m.allFinite() || inside(goal.p_W_m)) return false;
+  if (!inside(from_W_m)) {
+    goal.p_W_m = goal.p_W_m.cwiseMax(lo).cwiseMin(hi);
+    return true;
+  }
+  // Largest s in [0, 1] with from + s (goal - from) inside [lo, hi] (slab clipping, per axis).
+  const Eigen::Vector3d d = goal.p_W_m - from_W_m;
+  double s_max = 1.0;
+  for (int i = 0; i < 3; ++i) {
+    if (d[i] > 0.0) s_max = std::min(s_max, (hi[i] - from_W_m[i]) / d[i]);
+    if (d[i] < 0.0) s_max = std::min(s_max, (lo[i] - from_W_m[i]) / d[i]);
+  }
+  s_max = std::clamp(s_max, 0.0, 1.0);
+  // Back towards from_W_m a cell at a time while the point is blocked (the search could not end there).
+  const double length_m = s_max * d.norm();
+  const double step_m = grid.params().resolution_m;
+  const int steps = static_cast<int>(std::ceil(length_m / step_m));
+  Eigen::Vector3d p = from_W_m + s_max * d;
+  for (int k = 1; k <= steps && grid.isOccupied(p); ++k)
+    p = from_W_m + (s_max * std::max(0.0, 1.0 - k * step_m / length_m)) * d;
+  goal.p_W_m = p;
+  return true;
+}
+
 KinematicState SearchPath::stateAt(double t_s) const {
   KinematicState state;
   if (segments.empty()) return state;
@@ -332,7 +369,7 @@ void KinodynamicSearch::writePath(int end_node, const PathSegment* shot, double 
 }
 
 SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const KinematicState& start,
-                                       const KinematicState& goal, double start_time_s,
+                                       const KinematicState& goal_in, double start_time_s,
                                        const PersonPositionFn& person_W_m, SearchPath& path) {
   path.segments.clear();
   path.cost = 0.0;
@@ -344,13 +381,18 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
     path.status = status;
     return status;
   };
-  if (!finite(start.p_W_m) || !finite(start.v_W_mps) || !finite(goal.p_W_m) || !finite(goal.v_W_mps) ||
+  if (!finite(start.p_W_m) || !finite(start.v_W_mps) || !finite(goal_in.p_W_m) || !finite(goal_in.v_W_mps) ||
       !std::isfinite(start_time_s)) {
     return finish(SearchStatus::kInvalidInput);
   }
   if (!pointFree(grid, start.p_W_m) || !withinLimits(start.v_W_mps, params_.max_velocity_mps)) {
     return finish(SearchStatus::kStartBlocked);
   }
+  // A goal velocity beyond the per-axis limit could never be matched (one-shot or tolerance): scaled into it,
+  // direction kept (a runner at 5 m/s along an axis made every search partial, issue 21).
+  const double goal_v_inf = goal_in.v_W_mps.cwiseAbs().maxCoeff();
+  KinematicState goal = goal_in;
+  if (goal_v_inf > params_.max_velocity_mps) goal.v_W_mps *= params_.max_velocity_mps / goal_v_inf;
   const bool check_occlusion = params_.occlusion_aware && params_.occlusion_penalty > 0.0 && person_W_m;
   const auto occluded = [&](const Eigen::Vector3d& p, double t) {
     return check_occlusion && !grid.lineOfSight(p, person_W_m(start_time_s + t));

@@ -302,6 +302,7 @@ class TrackingPlanner {
   estimation::TargetEstimate look_estimate_;                     ///< A search's look point, as a still person.
   double time_weight_scale_ = 1.0;                               ///< This cycle's timeWeightScale(), for the optimiser.
   double arrival_s_ = 0.0;  ///< The last complete search path's duration to a live person's goal (goalLeadS).
+  bool search_goal_clipped_ = false;  ///< This cycle's goal lay beyond the grid's window (clipGoalToWindow).
 };
 
 }  // namespace aerotrack::planning

@@ -48,8 +48,8 @@ struct KinodynamicSearchParams {
   double goal_tolerance_m = 0.2;             ///< A node this close to the goal position ...
   double goal_velocity_tolerance_mps = 0.5;  ///< ... and velocity counts as reached.
   double one_shot_distance_m = 3.0;          ///< Try the analytic one-shot from nodes this close to the goal.
-  int max_expansions = 300;                  ///< Budget: nodes expanded before the best partial path is returned (about
-                                             ///< 15-25 us each in the forest benchmark: p99 under 8 ms).
+  int max_expansions = 200;                  ///< Budget: nodes expanded before the best partial path is returned (about
+                                             ///< 15-25 us each in the forest: the cycle's p99 under 5 ms, issue 21).
   int max_nodes = 10000;  ///< Node pool (allocated once, ~130 B a node); >= max_expansions * inputs suffices;
                           ///< the search also stops (partial) when it is full.
 };
@@ -111,6 +111,17 @@ KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const Kin
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
                                        const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m = nullptr);
 
+/// A goal the search can reach: the search only expands states inside the grid's window (nothing is known
+/// beyond it), so a goal outside the window, or within `margin_m` of its faces, is moved along the straight
+/// line from `from_W_m` to the last point at least `margin_m` inside, then back along that line, a cell at a
+/// time, to the first unblocked point. The velocity is kept. Returns whether the goal moved.
+/// Why: a drone more than ~8 m behind a runner (the window is 20 m wide and recentres every 2 m) searched
+/// for a goal it could never reach, spent the whole expansion budget every cycle, and those cycles were the
+/// planning tail (issue 21 item 6: forest at 5 m/s, 273 of 426 searches partial). A `from_W_m` outside the
+/// shrunk window clamps the goal into it per axis instead.
+bool clipGoalToWindow(const mapping::LocalGrid& grid, const Eigen::Vector3d& from_W_m, double margin_m,
+                      KinematicState& goal);
+
 /// The person's (predicted) position in W at an absolute time t_s (the clock of start_time_s below).
 using PersonPositionFn = std::function<Eigen::Vector3d(double t_s)>;
 
@@ -166,7 +177,9 @@ class KinodynamicSearch {
   /// line-of-sight check (not called in the baseline mode; may be empty then). Writes `path` (its vectors
   /// keep their capacity, so a reused path allocates nothing once warm) and returns path.status. No clock is
   /// read: the budget is max_expansions. Cost O(expansions * primitives * (chord cells + OBVP) + expanded
-  /// nodes * line of sight).
+  /// nodes * line of sight). A goal velocity over the per-axis limit is searched for scaled into it
+  /// (direction kept): no path could end with it. A goal outside the window is unreachable (see
+  /// clipGoalToWindow).
   SearchStatus search(const mapping::LocalGrid& grid, const KinematicState& start, const KinematicState& goal,
                       double start_time_s, const PersonPositionFn& person_W_m, SearchPath& path);
 
