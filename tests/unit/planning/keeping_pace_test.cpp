@@ -134,6 +134,26 @@ TEST(GoalLead, APersonBeyondTheGridsWindowIsSearchedForAtItsEdgeAndKeepsTheLastL
   EXPECT_DOUBLE_EQ(stages.goalLeadS(), 1.2);
 }
 
+TEST(CameraView, TheOptimiserIsGivenTheLivePersonsTorsoAlongTheirPredictionAndNoOneElse) {
+  TrackingPlanner planner = makePlanner(leadParams(1.0));
+  TrackingPlannerStages stages(planner);
+  const estimation::TargetEstimate person =
+      personAt(Eigen::Vector3d(7.0, 0.0, -0.3), 0, Eigen::Vector3d(2.0, 0.0, 0.0));
+  const TrackingPlannerStages::PersonMotion motion = TrackingPlannerStages::liveMotion(planner, person);
+  stages.samplePersonTorso(motion, rt::secondsToNs(0.5));
+  const std::vector<Eigen::Vector3d>& torso = stages.personTorso();
+  ASSERT_GE(torso.size(), 21U);  // at least a second, every 50 ms
+  for (std::size_t k = 0; k < torso.size(); ++k) {
+    const double t_s = 0.5 + 0.05 * static_cast<double>(k);  // from the hand-over, at constant velocity
+    EXPECT_NEAR(torso[k].x(), 7.0 + 2.0 * t_s, 1e-9) << k;
+    EXPECT_NEAR(torso[k].z(), planner.params().person_sight_height_m, 1e-12);
+  }
+  TrackingPlannerStages::PersonMotion look = motion;
+  look.live = false;  // a relocation's viewpoint, not a person
+  stages.samplePersonTorso(look, 0);
+  EXPECT_TRUE(stages.personTorso().empty());
+}
+
 TEST(TimeWeight, ScalesWithTheSquareOfThePersonsSpeedAboveAWalkUpToItsCap) {
   TrackingPlannerParams params = defaultParams();
   params.time_weight_reference_speed_mps = 1.5;

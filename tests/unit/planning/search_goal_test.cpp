@@ -45,8 +45,8 @@ TEST(ClipGoalToWindow, AGoalInsideTheShrunkWindowIsLeftAlone) {
 TEST(ClipGoalToWindow, AGoalBeyondTheWindowMovesAlongTheLineFromTheDroneToTheMarginHorizontally) {
   const mapping::LocalGrid grid = emptyWindow();
   const Eigen::Vector3d from(1.0, 2.0, 1.5);
-  for (const Eigen::Vector3d& target : {Eigen::Vector3d(25.0, 5.0, 1.5), Eigen::Vector3d(-14.0, -30.0, 1.5),
-                                        Eigen::Vector3d(12.0, 12.0, 1.5)}) {
+  for (const Eigen::Vector3d& target :
+       {Eigen::Vector3d(25.0, 5.0, 1.5), Eigen::Vector3d(-14.0, -30.0, 1.5), Eigen::Vector3d(12.0, 12.0, 1.5)}) {
     KinematicState goal = stateAt(target, Eigen::Vector3d(4.5, 1.0, 0.0));
     ASSERT_TRUE(clipGoalToWindow(grid, from, 1.2, goal)) << target.transpose();
     EXPECT_LT(offLine(goal.p_W_m, from, target), 1e-9) << "direction kept";
@@ -62,9 +62,8 @@ TEST(ClipGoalToWindow, AGoalBeyondTheWindowMovesAlongTheLineFromTheDroneToTheMar
 TEST(ClipGoalToWindow, AClippedPointInAnObstacleStepsBackToTheFirstFreePointOnTheLine) {
   // A wall across x in [8, 9] (inflated by 0.25 m), where the line from the centre to (20, 0) leaves the
   // shrunk window at x = 8.8.
-  const mapping::LocalGrid grid =
-      makeBoxGrid(Eigen::Vector3d(20.0, 20.0, 5.0), Eigen::Vector3d(0.0, 0.0, 1.5),
-                  {{Eigen::Vector3d(8.0, -10.0, -1.0), Eigen::Vector3d(9.0, 10.0, 4.0)}});
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(20.0, 20.0, 5.0), Eigen::Vector3d(0.0, 0.0, 1.5),
+                                              {{Eigen::Vector3d(8.0, -10.0, -1.0), Eigen::Vector3d(9.0, 10.0, 4.0)}});
   KinematicState goal = stateAt(Eigen::Vector3d(20.0, 0.0, 1.5));
   ASSERT_TRUE(clipGoalToWindow(grid, Eigen::Vector3d(0.0, 0.0, 1.5), 1.2, goal));
   EXPECT_FALSE(grid.isOccupied(goal.p_W_m));

@@ -40,6 +40,11 @@ class TrackingPlannerStages {
     return planner_.checkPlannedTrajectory(trajectory, grid, nullptr, person, start_ns);
   }
   double goalLeadS() const { return planner_.goalLeadS(); }
+  /// The person's torso samples the last optimisation was given (the camera-view term).
+  const std::vector<Eigen::Vector3d>& personTorso() const { return planner_.person_torso_W_m_; }
+  void samplePersonTorso(const PersonMotion& person, rt::TimeNs start_ns) {
+    planner_.samplePersonTorso(person, start_ns);
+  }
   /// As if the last complete path to a live person's goal had lasted this long.
   void setArrivalS(double arrival_s) { planner_.arrival_s_ = arrival_s; }
   CheckResult repairPlannedTrajectory(CheckResult check, const StatePva& start, PolynomialTrajectory& out,

@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "aerotrack/planning/camera_view.hpp"
 #include "random_corridor.hpp"
 
 namespace aerotrack::planning {
@@ -76,6 +77,86 @@ TEST(TrajectoryOptimizer, EveryTermsGradientMatchesCentralDifferences) {
   expectGradientMatches(*speed_opt, x, kAllTerms, "all with a margin per speed");
   Eigen::VectorXd grad;
   EXPECT_GT(speed_opt->evaluate(x, grad, kCorridorSamples), opt->evaluate(x, grad, kCorridorSamples));
+}
+
+// The camera-view term (issue 21): its gradient, with the person moving, so that the sample times' dependence on
+// every earlier duration counts too.
+TEST(TrajectoryOptimizer, TheCameraViewTermsGradientMatchesCentralDifferences) {
+  std::mt19937 rng(21);
+  const RandomCorridor c = randomCorridor(5, rng, 4.0);
+  TrajectoryOptimizerParams params;
+  params.camera_view_weight = 1e3;
+  params.camera_half_vfov_rad = 0.3;  // narrow: active along much of the path
+  params.camera_view_margin_rad = 0.0;
+  auto opt = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(opt.has_value());
+  std::vector<Eigen::Vector3d> person;
+  for (int k = 0; k < 60; ++k) person.push_back(c.start.col(0) + Eigen::Vector3d(1.0 + 1.3 * 0.1 * k, 0.8, -0.5));
+  TrajectoryProblem problem = c.problem();
+  problem.person_torso_W_m = person;
+  problem.person_sample_dt_s = 0.1;
+  problem.person_torso_half_m = 0.25;
+  ASSERT_TRUE(opt->setProblem(problem).has_value());
+  Eigen::VectorXd x = opt->initialVariables();
+  std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) += jitter(rng);
+  expectGradientMatches(*opt, x, kCameraViewSamples, "rho_cv");
+  expectGradientMatches(*opt, x, kAllTerms, "all with rho_cv");
+  // No person samples: no term.
+  ASSERT_TRUE(opt->setProblem(c.problem()).has_value());
+  Eigen::VectorXd grad;
+  EXPECT_EQ(opt->evaluate(x, grad, kCameraViewSamples), 0.0);
+}
+
+// Braking to a stop 1.2 m short of a person: without the term the nose-up pitch of the brake takes the hips out
+// of the bottom of the image; with it the optimiser brakes earlier and gentler, and keeps them in view.
+TEST(TrajectoryOptimizer, TheCameraViewTermKeepsAClosePersonInViewWhileBraking) {
+  TrajectoryOptimizerParams params;
+  params.max_velocity_mps = 6.0;
+  params.max_acceleration_mps2 = 6.0;
+  params.max_jerk_mps3 = 60.0;
+  params.time_weight = 200.0;  // a runner's: brakes hard
+  CorridorBox box;
+  box.lo_W_m = Eigen::Vector3d(-1.0, -2.0, 0.5);
+  box.hi_W_m = Eigen::Vector3d(6.0, 2.0, 3.0);
+  const std::vector<CorridorBox> boxes = {box, box};
+  const std::vector<Eigen::Vector3d> waypoints = {{2.0, 0.0, 1.5}};
+  const std::vector<double> durations = {0.8, 0.8};
+  StatePva start = StatePva::Zero();
+  start.col(0) = Eigen::Vector3d(0.0, 0.0, 1.5);
+  start.col(1) = Eigen::Vector3d(4.0, 0.0, 0.0);
+  StatePva end = StatePva::Zero();
+  end.col(0) = Eigen::Vector3d(4.3, 0.0, 1.5);
+  const std::vector<Eigen::Vector3d> person(40, Eigen::Vector3d(5.5, 0.0, 1.1));  // standing, torso centre
+  TrajectoryProblem problem{start, end, boxes, waypoints, durations};
+  problem.person_torso_W_m = person;
+  problem.person_sample_dt_s = 0.1;
+  problem.person_torso_half_m = 0.25;
+  const double limit_rad = params.camera_half_vfov_rad;
+  // The largest angle of the hips below the optical axis along the trajectory.
+  const auto worst_hips_rad = [&](const PolynomialTrajectory& traj) {
+    double worst = -1e9;
+    for (double t = 0.0; t <= traj.durationS(); t += 0.01) {
+      const auto s = traj.sample(t);
+      const Eigen::Vector3d b3 = (s.a_W_mps2 + Eigen::Vector3d(0.0, 0.0, kGravityMps2)).normalized();
+      const Eigen::Vector3d d = (Eigen::Vector3d(5.5, 0.0, 0.85) - s.p_W_m).normalized();
+      worst = std::max(worst, -std::asin(b3.dot(d)));
+    }
+    return worst;
+  };
+  PolynomialTrajectory plain(8);
+  PolynomialTrajectory viewed(8);
+  auto off = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(off.has_value());
+  ASSERT_TRUE(off->optimize(problem, plain).has_value());
+  params.camera_view_weight = 1e5;  // the weight measured in the envelope (docs/benchmarks.md; ships at 0)
+  auto on = TrajectoryOptimizer::create(params);
+  ASSERT_TRUE(on.has_value());
+  ASSERT_TRUE(on->optimize(problem, viewed).has_value());
+  EXPECT_GT(worst_hips_rad(plain), limit_rad) << "the test must start outside the view";
+  // A soft penalty: the hips may enter the margin (0.05 rad) but stay in the image (0.80 rad without the term).
+  EXPECT_LT(worst_hips_rad(viewed), limit_rad);
+  EXPECT_GT(viewed.durationS(), plain.durationS()) << "by braking earlier";
 }
 
 TEST(TrajectoryOptimizer, SoftplusRoundTrips) {

@@ -17,6 +17,7 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::number("stop_check_horizon_s", &P::stop_check_horizon_s, Range::closed(0.0, 60.0)),
           rt::number("flight_altitude_m", &P::flight_altitude_m, Range::closed(0.1, 100.0)),
           rt::number("person_sight_height_m", &P::person_sight_height_m, Range::closed(0.1, 5.0)),
+          rt::number("person_torso_half_m", &P::person_torso_half_m, Range::closed(0.0, 1.0)),
           rt::number("takeoff_below_m", &P::takeoff_below_m, Range::closed(0.0, 100.0)),
           rt::number("min_person_distance_m", &P::min_person_distance_m, Range::closed(0.0, 50.0)),
           rt::number("optimizer_limit_fraction", &P::optimizer_limit_fraction, Range::openClosed(0.0, 1.0)),

@@ -7,6 +7,13 @@
 #include <limits>
 
 namespace aerotrack::planning {
+namespace {
+
+// The person's torso for the camera-view term: every 50 ms (a runner moves 0.3 m) for up to 8 s.
+constexpr double kPersonSampleStepS = 0.05;
+constexpr std::size_t kPersonSamples = 161;
+
+}  // namespace
 
 std::string_view toString(PlanStatus status) {
   switch (status) {
@@ -81,6 +88,7 @@ TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, Kinodynami
   corridor_.waypoints_W_m.reserve(boxes);
   corridor_.waypoint_path_index.reserve(boxes);
   durations_s_.reserve(boxes);
+  person_torso_W_m_.reserve(kPersonSamples);
   stop_spline_.reset(StatePva::Zero(), StatePva::Zero(), 1);
   one_duration_.resize(1);
 }
@@ -243,6 +251,7 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   if (!buildCorridor(grid, start)) return fail_or_evade(PlanStatus::kCorridorFailed);  // 4. Sect. V-C
   report.corridor_boxes = static_cast<int>(corridor_.boxes.size());
 
+  samplePersonTorso(*person, start_ns);
   const auto optimized = optimizeTrajectory(grid, start, out);  // 5. Sect. V-C
   if (!optimized) return fail_or_evade(PlanStatus::kOptimizerFailed);
   report.optimizer_status = optimized->status;
@@ -455,6 +464,18 @@ rt::Status TrackingPlanner::buildCorridor(const mapping::LocalGrid& grid, const 
   return corridor_builder_.build(grid, polyline_, corridor_);
 }
 
+void TrackingPlanner::samplePersonTorso(const PersonMotion& person, rt::TimeNs start_ns) {
+  person_torso_W_m_.clear();
+  if (!person.live) return;
+  // Past the path's duration twice over (the optimiser may slow down), at least a second: held beyond.
+  const double horizon_s = std::clamp(2.0 * path_.duration_s, 1.0, kPersonSampleStepS * (kPersonSamples - 1));
+  const auto samples = static_cast<std::size_t>(std::ceil(horizon_s / kPersonSampleStepS)) + 1;
+  for (std::size_t k = 0; k < samples && k < kPersonSamples; ++k) {
+    const double t_s = kPersonSampleStepS * static_cast<double>(k);
+    person_torso_W_m_.push_back(person.positionAt(start_ns + rt::secondsToNs(t_s)));  // z: the sight height
+  }
+}
+
 rt::Expected<OptimizerResult> TrackingPlanner::optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
                                                                   PolynomialTrajectory& out) {
   // Initial guess: the waypoints the corridor chose, timed as the search path passes them.
@@ -495,6 +516,9 @@ rt::Expected<OptimizerResult> TrackingPlanner::optimizeTrajectory(const mapping:
   if (!brake_free) end.col(1).setZero();
   TrajectoryProblem problem{start, end, corridor_.boxes, corridor_.waypoints_W_m, durations_s_};
   problem.time_weight_scale = time_weight_scale_;
+  problem.person_torso_W_m = person_torso_W_m_;
+  problem.person_sample_dt_s = kPersonSampleStepS;
+  problem.person_torso_half_m = params_.person_torso_half_m;
   auto optimized = optimizer_.optimize(problem, out);
   if (!optimized) return optimized;
 

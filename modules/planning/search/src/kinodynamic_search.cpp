@@ -171,7 +171,9 @@ bool clipGoalToWindow(const mapping::LocalGrid& grid, const Eigen::Vector3d& fro
   const Eigen::Vector3d inset = margin.cwiseMax(0.5 * grid.params().resolution_m).cwiseMin(0.5 * (hi_raw - lo_raw));
   const Eigen::Vector3d lo = (lo_raw + inset).cwiseMin(centre);
   const Eigen::Vector3d hi = (hi_raw - inset).cwiseMax(centre);
-  const auto inside = [&](const Eigen::Vector3d& p) { return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all(); };
+  const auto inside = [&](const Eigen::Vector3d& p) {
+    return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+  };
   if (!goal.p_W_m.allFinite() || !from_W_m.allFinite() || inside(goal.p_W_m)) return false;
   if (!inside(from_W_m)) {
     goal.p_W_m = goal.p_W_m.cwiseMax(lo).cwiseMin(hi);

@@ -3,6 +3,8 @@
 
 #include <LBFGS.h>
 
+#include "aerotrack/planning/camera_view.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -103,6 +105,9 @@ const rt::FieldTable<TrajectoryOptimizerParams>& trajectoryOptimizerFields() {
       rt::number("sample_velocity_weight", &P::sample_velocity_weight, Range::closed(0.0, 1e9)),
       rt::number("sample_acceleration_weight", &P::sample_acceleration_weight, Range::closed(0.0, 1e9)),
       rt::number("sample_jerk_weight", &P::sample_jerk_weight, Range::closed(0.0, 1e9)),
+      rt::number("camera_view_weight", &P::camera_view_weight, Range::closed(0.0, 1e12)),
+      rt::number("camera_half_vfov_rad", &P::camera_half_vfov_rad, Range::open(0.0, 1.5707)),
+      rt::number("camera_view_margin_rad", &P::camera_view_margin_rad, Range::closed(0.0, 1.0)),
       rt::integer("samples_per_piece", &P::samples_per_piece, 1, 256),
       rt::integer("max_iterations", &P::max_iterations, 1, 100'000),
       rt::number("relative_cost_tolerance", &P::relative_cost_tolerance, Range::closed(1e-12, 1.0)),
@@ -155,6 +160,7 @@ TrajectoryOptimizer::TrajectoryOptimizer(const TrajectoryOptimizerParams& params
   grad_q_.resize(3, m - 1);
   grad_t_.resize(m);
   grad_c_.resize(Eigen::Index{6} * m, 3);
+  later_time_grad_.resize(m);
 }
 
 TrajectoryOptimizer::TrajectoryOptimizer(TrajectoryOptimizer&&) noexcept = default;
@@ -166,6 +172,8 @@ rt::Expected<TrajectoryOptimizer> TrajectoryOptimizer::create(const TrajectoryOp
   // The limits are not config keys (the planner derives them from the check's, issue 21): checked here.
   if (!(params.max_velocity_mps > 0.0) || !(params.max_acceleration_mps2 > 0.0) || !(params.max_jerk_mps3 > 0.0))
     return rt::Error{"trajectory optimizer: the velocity, acceleration and jerk limits must be > 0"};
+  if (params.camera_view_weight > 0.0 && !(params.camera_view_margin_rad < params.camera_half_vfov_rad))
+    return rt::Error{"trajectory optimizer: camera_view_margin_rad must be below camera_half_vfov_rad"};
   return TrajectoryOptimizer(params);
 }
 
@@ -180,6 +188,15 @@ rt::Status TrajectoryOptimizer::setProblem(const TrajectoryProblem& problem) {
     return rt::Error{"trajectory optimizer: the time weight's scale must be finite and > 0"};
   if (!problem.start.allFinite() || !problem.end.allFinite())
     return rt::Error{"trajectory optimizer: non-finite boundary state"};
+  if (!problem.person_torso_W_m.empty()) {
+    if (!(problem.person_sample_dt_s > 0.0) || !std::isfinite(problem.person_sample_dt_s) ||
+        !(problem.person_torso_half_m >= 0.0) || !std::isfinite(problem.person_torso_half_m))
+      return rt::Error{
+          "trajectory optimizer: the person's samples need a finite step > 0 and a torso half length >= 0"};
+    for (const Eigen::Vector3d& p : problem.person_torso_W_m) {
+      if (!p.allFinite()) return rt::Error{"trajectory optimizer: a non-finite person sample"};
+    }
+  }
   for (const double t : problem.initial_durations_s) {
     if (!std::isfinite(t) || t <= 0.0) return rt::Error{"trajectory optimizer: a duration is not positive"};
   }
@@ -198,6 +215,9 @@ rt::Status TrajectoryOptimizer::setProblem(const TrajectoryProblem& problem) {
   end_ = problem.end;
   time_weight_ = params_.time_weight * problem.time_weight_scale;
   boxes_.assign(problem.boxes.begin(), problem.boxes.end());
+  person_torso_W_m_ = problem.person_torso_W_m;
+  person_sample_dt_s_ = problem.person_sample_dt_s;
+  person_torso_half_m_ = problem.person_torso_half_m;
   spline_.reset(start_, end_, static_cast<int>(m));
   const Eigen::Index n = 4 * m - 3;
   x0_.resize(n);
@@ -210,6 +230,7 @@ rt::Status TrajectoryOptimizer::setProblem(const TrajectoryProblem& problem) {
   grad_q_.resize(3, m - 1);
   grad_t_.resize(m);
   grad_c_.resize(6 * m, 3);
+  later_time_grad_.resize(m);
   return rt::ok();
 }
 
@@ -360,7 +381,12 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
   const bool velocity = (terms & kVelocitySamples) != 0U && params_.sample_velocity_weight > 0.0;
   const bool acceleration = (terms & kAccelerationSamples) != 0U && params_.sample_acceleration_weight > 0.0;
   const bool jerk = (terms & kJerkSamples) != 0U && params_.sample_jerk_weight > 0.0;
-  if (!corridor && !velocity && !acceleration && !jerk) return;
+  const bool view =
+      (terms & kCameraViewSamples) != 0U && params_.camera_view_weight > 0.0 && !person_torso_W_m_.empty();
+  if (!corridor && !velocity && !acceleration && !jerk && !view) return;
+  const double view_sin_limit = std::sin(params_.camera_half_vfov_rad - params_.camera_view_margin_rad);
+  later_time_grad_.head(pieces_).setZero();
+  double piece_start_s = 0.0;  // the camera-view term's person is at absolute time piece_start_s + t
   const int k_samples = params_.samples_per_piece;
   const double v_limit2 = params_.max_velocity_mps * params_.max_velocity_mps;
   const double a_limit2 = params_.max_acceleration_mps2 * params_.max_acceleration_mps2;
@@ -424,6 +450,21 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
         gj = addNormPenalty(jr, params_.max_jerk_mps3, params_.sample_jerk_weight, cost);
         active = true;
       }
+      double person_time_grad = 0.0;  // d cost / d (the sample's absolute time), through the person's motion
+      if (view) {
+        Eigen::Vector3d person_W_m;
+        Eigen::Vector3d person_v_W_mps;
+        personAt(piece_start_s + t, person_W_m, person_v_W_mps);
+        CameraViewGradient g;
+        if (addCameraViewTerm(p, a, person_W_m, person_torso_half_m_, view_sin_limit, params_.camera_view_weight, cost,
+                              g)) {
+          gp += g.p;
+          ga += g.a;
+          person_time_grad = g.person.dot(person_v_W_mps);
+          later_time_grad_(i) += person_time_grad;  // the sample's time also moves with every earlier T_k
+          active = true;
+        }
+      }
       if (!active) continue;
       const double t2 = t * t;
       const double t3 = t2 * t;
@@ -439,9 +480,31 @@ void TrajectoryOptimizer::addSampleTerms(std::uint32_t terms, double& cost) {
         rows += Eigen::Matrix<double, 6, 1>{0.0, 0.0, 0.0, 6.0, 24.0 * t, 60.0 * t2} * gj.transpose();
       // The sample sits at t = fraction * T_i, so it moves with T_i: d/dT_i = fraction * (g . derivative).
       const Eigen::Vector3d snap = j4 + (2.0 * t) * j5;
-      grad_t_(i) += fraction * (gp.dot(v) + gv.dot(a) + ga.dot(jr) + gj.dot(snap));
+      grad_t_(i) += fraction * (gp.dot(v) + gv.dot(a) + ga.dot(jr) + gj.dot(snap) + person_time_grad);
     }
+    piece_start_s += t_(i);
   }
+  // A sample of piece i sits at absolute time sum_{k<i} T_k + fraction T_i: d/dT_k (k < i) sums the later
+  // pieces' person terms.
+  double later = 0.0;
+  for (Eigen::Index i = pieces_ - 1; i >= 1; --i) {
+    later += later_time_grad_(i);
+    grad_t_(i - 1) += later;
+  }
+}
+
+void TrajectoryOptimizer::personAt(double s_s, Eigen::Vector3d& p_W_m, Eigen::Vector3d& v_W_mps) const {
+  const std::size_t n = person_torso_W_m_.size();
+  const double k_f = std::max(0.0, s_s / person_sample_dt_s_);
+  if (n == 1 || k_f >= static_cast<double>(n - 1)) {  // held beyond the last sample
+    p_W_m = person_torso_W_m_[n - 1];
+    v_W_mps.setZero();
+    return;
+  }
+  const auto k = static_cast<std::size_t>(k_f);
+  const double frac = k_f - static_cast<double>(k);
+  p_W_m = (1.0 - frac) * person_torso_W_m_[k] + frac * person_torso_W_m_[k + 1];
+  v_W_mps = (person_torso_W_m_[k + 1] - person_torso_W_m_[k]) / person_sample_dt_s_;
 }
 
 rt::Expected<OptimizerResult> TrajectoryOptimizer::optimize(const TrajectoryProblem& problem,

@@ -63,6 +63,9 @@ struct TrackingPlannerParams {
   /// estimate's own z is the localization regression's ground-plane constant (the paper's assumption 1),
   /// about 0.3 m below the ground: sight lines to it crossed the ground and every node was occluded.
   double person_sight_height_m = 1.1;  ///< > 0.
+  /// Half the person's shoulders-to-hips length: the optimiser keeps both ends of the torso (about the sight
+  /// height) in the camera's vertical field of view (optimizer.camera_view_weight, camera_view.hpp); >= 0.
+  double person_torso_half_m = 0.25;
   /// Never fly into the person: a trajectory that comes horizontally closer to their predicted path than
   /// this (or than it starts, if it starts closer) is refused by the final check; >= 0.
   double min_person_distance_m = 1.0;
@@ -246,6 +249,7 @@ class TrackingPlanner {
   /// of path_ (initial guess: the corridor's waypoints, timed as the path passes them), then a brake to
   /// rest appended (appendStop). The path's end velocity (a partial search's too) is kept if the drone can
   /// brake from it in free space, else lowered until it can (in steps of a fifth), else the end is at rest.
+  /// The camera-view term sees the person's torso as samplePersonTorso last left it (none: no term).
   rt::Expected<OptimizerResult> optimizeTrajectory(const mapping::LocalGrid& grid, const StatePva& start,
                                                    PolynomialTrajectory& out);
   /// Stage 6, final check (issue 8 item 3): limits, inflated grid and FCL against the octree (when there is
@@ -290,6 +294,10 @@ class TrackingPlanner {
   std::vector<Eigen::Vector3d> polyline_;
   Corridor corridor_;
   std::vector<double> durations_s_;
+  /// The live person's torso centre every kPersonSampleStepS from the hand-over, for the optimiser's
+  /// camera-view term (empty when no live person: a relocation's search).
+  std::vector<Eigen::Vector3d> person_torso_W_m_;
+  void samplePersonTorso(const PersonMotion& person, rt::TimeNs start_ns);
   /// One minimum-jerk piece from `start` to rest at end_W_m in duration_s (the stop, take-off and land moves).
   void onePieceToRest(const StatePva& start, const Eigen::Vector3d& end_W_m, double duration_s,
                       PolynomialTrajectory& out);
@@ -301,7 +309,7 @@ class TrackingPlanner {
   std::optional<prediction::TargetPrediction> last_prediction_;  ///< For relocation.
   estimation::TargetEstimate look_estimate_;                     ///< A search's look point, as a still person.
   double time_weight_scale_ = 1.0;                               ///< This cycle's timeWeightScale(), for the optimiser.
-  double arrival_s_ = 0.0;  ///< The last complete search path's duration to a live person's goal (goalLeadS).
+  double arrival_s_ = 0.0;            ///< The last complete search path's duration to a live person's goal (goalLeadS).
   bool search_goal_clipped_ = false;  ///< This cycle's goal lay beyond the grid's window (clipGoalToWindow).
 };
 

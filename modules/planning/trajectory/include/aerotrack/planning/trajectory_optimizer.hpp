@@ -11,7 +11,9 @@
 // piece i runs from q_{i-1} to q_i in T_i). The paper's terms constrain only the waypoints, so what
 // lies between them is also penalised (J_C, issue 8): at K + 1 samples of every piece,
 //   rho_c l(how far p leaves its box, per face) + rho_vs l(|v|^2 - v_m^2) + rho_as l(|a|^2 - a_m^2)
-//   + rho_js l(|j|^2 - j_m^2).
+//   + rho_js l(|j|^2 - j_m^2),
+// and, given the person's predicted torso (issue 21), rho_cv times the camera-view penalty of each sample
+// (camera_view.hpp: the body's tilt must keep the torso in the 1-DOF gimbal camera's vertical field of view).
 // Durations stay positive through T = softplus(tau) = ln(1 + e^tau), a smooth change of variable; the
 // vector L-BFGS sees is x = [q (column-major); tau]. Gradients of every term are analytic: with respect
 // to the coefficients and the explicit T, then through the coefficient map by its adjoint (O(M)).
@@ -53,12 +55,18 @@ struct TrajectoryOptimizerParams {
   double sample_velocity_weight = 1e3;      ///< rho_vs; >= 0.
   double sample_acceleration_weight = 1e3;  ///< rho_as; >= 0.
   double sample_jerk_weight = 1.0;          ///< rho_js; >= 0.
-  int samples_per_piece = 12;               ///< K; >= 1.
-  int max_iterations = 80;                  ///< L-BFGS iterations; >= 1.
-  double relative_cost_tolerance = 1e-4;    ///< Stop when the cost changed less than this over 3 iterations; > 0.
-  double gradient_tolerance = 1e-5;         ///< Stop when |grad| <= this * max(1, |x|); > 0.
-  int memory = 8;                           ///< L-BFGS history; >= 1.
-  int max_pieces = 32;                      ///< Scratch sized for this many pieces (more allocates); >= 1.
+  /// The person in the gimbal camera's vertical field of view (camera_view.hpp, issue 21): rho_cv on every
+  /// sample whose body tilt would put the person's torso (TrajectoryProblem::person_torso_W_m) outside
+  /// +-(camera_half_vfov_rad - camera_view_margin_rad) of the optical axis; 0: off.
+  double camera_view_weight = 0.0;
+  double camera_half_vfov_rad = 0.6178;   ///< atan(240 / 337.2): 640 x 480 px at 87 deg horizontal; in (0, pi/2).
+  double camera_view_margin_rad = 0.05;   ///< Kept inside the edge (the torso's keypoints, the tracking error); >= 0.
+  int samples_per_piece = 12;             ///< K; >= 1.
+  int max_iterations = 80;                ///< L-BFGS iterations; >= 1.
+  double relative_cost_tolerance = 1e-4;  ///< Stop when the cost changed less than this over 3 iterations; > 0.
+  double gradient_tolerance = 1e-5;       ///< Stop when |grad| <= this * max(1, |x|); > 0.
+  int memory = 8;                         ///< L-BFGS history; >= 1.
+  int max_pieces = 32;                    ///< Scratch sized for this many pieces (more allocates); >= 1.
 };
 
 /// The `optimizer:` config section: every field above but the three limits by its name, all required (the
@@ -81,7 +89,8 @@ enum CostTerm : std::uint32_t {
   kVelocitySamples = 1U << 6U,       ///< rho_vs
   kAccelerationSamples = 1U << 7U,   ///< rho_as
   kJerkSamples = 1U << 8U,           ///< rho_js
-  kAllTerms = (1U << 9U) - 1U,
+  kCameraViewSamples = 1U << 9U,     ///< rho_cv
+  kAllTerms = (1U << 10U) - 1U,
 };
 
 /// One problem: fixed boundary states, the corridor (M boxes) and the initial waypoints (M - 1, each
@@ -95,6 +104,12 @@ struct TrajectoryProblem {
   /// The time weight of this problem is params.time_weight times this (the planner raises it for a fast
   /// person, issue 21); > 0.
   double time_weight_scale = 1.0;
+  /// The person's torso centre (W), sampled every person_sample_dt_s from the trajectory's start, for the
+  /// camera-view term (held at the last sample beyond it; linear between samples). Empty: no term. The
+  /// data must outlive optimize() (and, for tests, every evaluate() after setProblem()).
+  std::span<const Eigen::Vector3d> person_torso_W_m = {};
+  double person_sample_dt_s = 0.0;   ///< > 0 when person_torso_W_m is not empty.
+  double person_torso_half_m = 0.0;  ///< Half the shoulders-to-hips length; >= 0.
 };
 
 enum class OptimizerStatus : std::uint8_t {
@@ -149,6 +164,8 @@ class TrajectoryOptimizer {
   bool addSpeedMarginTerm(Eigen::Index piece, const Eigen::Vector3d& p, const Eigen::Vector3d& v, double& cost,
                           Eigen::Vector3d& gp, Eigen::Vector3d& gv) const;
   void addSampleTerms(std::uint32_t terms, double& cost);
+  /// The person's torso centre at time s_s after the start, and its velocity (linear interpolation).
+  void personAt(double s_s, Eigen::Vector3d& p_W_m, Eigen::Vector3d& v_W_mps) const;
 
   TrajectoryOptimizerParams params_;
   std::unique_ptr<Solver> solver_;
@@ -157,6 +174,10 @@ class TrajectoryOptimizer {
   StatePva start_ = StatePva::Zero();
   StatePva end_ = StatePva::Zero();
   std::vector<CorridorBox> boxes_;
+  std::span<const Eigen::Vector3d> person_torso_W_m_;  // the problem's (camera-view term)
+  double person_sample_dt_s_ = 0.0;
+  double person_torso_half_m_ = 0.0;
+  Eigen::VectorXd later_time_grad_;  // per piece: d cost / d (the piece's start time), through the person
   Eigen::VectorXd x0_;
   Eigen::Matrix3Xd q_;       // waypoints of the current x
   Eigen::VectorXd t_;        // durations of the current x
