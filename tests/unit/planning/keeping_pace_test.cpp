@@ -24,6 +24,20 @@ TrackingPlannerParams leadParams(double predicted_weight) {
   return params;
 }
 
+// One plan() from odometry at p_WB_m moving at v_WB_mps, towards `person` in `grid`; its status.
+PlanStatus planOnce(TrackingPlanner& planner, const mapping::LocalGrid& grid, const estimation::TargetEstimate& person,
+                    const Eigen::Vector3d& p_WB_m, const Eigen::Vector3d& v_WB_mps = Eigen::Vector3d::Zero()) {
+  hal::OdometrySample odometry;
+  odometry.p_WB_m = p_WB_m;
+  odometry.v_WB_mps = v_WB_mps;
+  PlanInputs inputs;
+  inputs.odometry = &odometry;
+  inputs.target = &person;
+  inputs.grid = &grid;
+  PolynomialTrajectory out(24);
+  return planner.plan(inputs, out).status;
+}
+
 // Open ground; with a wall across the person's way when asked.
 mapping::LocalGrid leadWorld(bool wall) {
   std::vector<test::OccupiedBox> boxes = {{{-10, -10, -0.2}, {10, 10, 0.0}}};
@@ -51,15 +65,8 @@ TEST(GoalLead, ACompletePathToAPersonSetsTheLeadToItsDuration) {
   params.search.max_nodes = 100000;
   TrackingPlanner planner = makePlanner(params);
   const mapping::LocalGrid grid = leadWorld(false);
-  hal::OdometrySample odometry;
-  odometry.p_WB_m = Eigen::Vector3d(0, 0, 1.5);
   const estimation::TargetEstimate person = personAt(Eigen::Vector3d(7.0, 0.0, -0.3), 0);
-  PlanInputs inputs;
-  inputs.odometry = &odometry;
-  inputs.target = &person;
-  inputs.grid = &grid;
-  PolynomialTrajectory out(24);
-  ASSERT_EQ(planner.plan(inputs, out).status, PlanStatus::kPlanned);
+  ASSERT_EQ(planOnce(planner, grid, person, Eigen::Vector3d(0, 0, 1.5)), PlanStatus::kPlanned);
   ASSERT_EQ(planner.searchPath().status, SearchStatus::kReachedGoal);
   EXPECT_GT(planner.searchPath().duration_s, 0.5);  // 4.5 m from rest
   EXPECT_DOUBLE_EQ(TrackingPlannerStages(planner).goalLeadS(), std::min(planner.searchPath().duration_s, 3.0));
@@ -121,15 +128,8 @@ TEST(GoalLead, APersonBeyondTheGridsWindowIsSearchedForAtItsEdgeAndKeepsTheLastL
   EXPECT_NEAR(end.x(), grid.windowMaxM().x() - margin_m, tolerance_m);
   EXPECT_NEAR(end.y(), 0.0, tolerance_m);
   // A path to the window's edge is not the drone's arrival at the person: the lead stays.
-  hal::OdometrySample odometry;
-  odometry.p_WB_m = Eigen::Vector3d(0, 0, 1.5);
-  odometry.v_WB_mps = Eigen::Vector3d(3.0, 0, 0);
-  PlanInputs inputs;
-  inputs.odometry = &odometry;
-  inputs.target = &person;
-  inputs.grid = &grid;
-  PolynomialTrajectory out(24);
-  ASSERT_EQ(planner.plan(inputs, out).status, PlanStatus::kPlanned);
+  ASSERT_EQ(planOnce(planner, grid, person, Eigen::Vector3d(0, 0, 1.5), Eigen::Vector3d(3.0, 0, 0)),
+            PlanStatus::kPlanned);
   EXPECT_EQ(planner.searchPath().status, SearchStatus::kReachedGoal);
   EXPECT_DOUBLE_EQ(stages.goalLeadS(), 1.2);
 }
