@@ -251,7 +251,8 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   if (!buildCorridor(grid, start)) return fail_or_evade(PlanStatus::kCorridorFailed);  // 4. Sect. V-C
   report.corridor_boxes = static_cast<int>(corridor_.boxes.size());
 
-  samplePersonTorso(*person, start_ns);
+  person_torso_W_m_.clear();  // only the camera-view term reads the samples: none when it is off
+  if (params_.optimizer.camera_view_weight > 0.0) samplePersonTorso(*person, start_ns);
   const auto optimized = optimizeTrajectory(grid, start, out);  // 5. Sect. V-C
   if (!optimized) return fail_or_evade(PlanStatus::kOptimizerFailed);
   report.optimizer_status = optimized->status;
