@@ -705,6 +705,9 @@ TEST(RealtimeExecutor, GivenAddAfterStartThenRefused) {
   ASSERT_TRUE(ex.start());
   EXPECT_FALSE(ex.add({periodic("b", 10), &t, nullptr}));
   EXPECT_FALSE(ex.start());
+  // `t` is declared after the executor and so dies first: stop the thread that steps it now.
+  ex.requestStop();
+  ex.join();
 }
 
 }  // namespace
