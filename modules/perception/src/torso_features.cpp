@@ -1,6 +1,7 @@
 // Torso length, horizontal position and reliability: see torso_features.hpp.
 #include "aerotrack/perception/torso_features.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace aerotrack::perception {
@@ -46,24 +47,46 @@ TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints
   f.u_px = 0.5 * (neck_u + hip_u);
   f.v_px = 0.5 * (neck_v + hip_v);
 
+  // The vertical margin scales with the body as measured: a waist cut shortens the torso, but the guessed
+  // hips then lie within a fraction of even the shortened torso of the edge (the header's numbers). A cut
+  // at the chest puts shoulders and hips all just inside the edge, and the torso between them comes out a
+  // few pixels long; the shoulders' and hips' widths, which a cut does not shorten, keep the margin then.
+  const double span_px =
+      std::max(std::hypot(ls.u_px - rs.u_px, ls.v_px - rs.v_px), std::hypot(lh.u_px - rh.u_px, lh.v_px - rh.v_px));
+  const double margin_u_px = params.border_margin_px;
+  const double margin_v_px =
+      std::max(params.border_margin_px, params.edge_margin_torso_fraction * std::max(f.torso_px, span_px));
+  const auto low_score = [&](CocoKeypoint k) { return keypoints[index(k)].score < params.min_joint_score; };
+  const auto on_border = [&](CocoKeypoint k) {
+    const hal::Keypoint2D& p = keypoints[index(k)];
+    return p.u_px < margin_u_px || p.v_px < margin_v_px || p.u_px > width_px - margin_u_px ||
+           p.v_px > height_px - margin_v_px;
+  };
+  const auto whole = [&](CocoKeypoint a, CocoKeypoint b) {
+    return !low_score(a) && !low_score(b) && !on_border(a) && !on_border(b);
+  };
+  if (whole(CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder)) {
+    f.bearing_ok = true;
+    f.bearing_u_px = neck_u;
+  } else if (whole(CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip)) {
+    f.bearing_ok = true;
+    f.bearing_u_px = hip_u;
+  }
+
   constexpr std::array<CocoKeypoint, 4> kTorso = {CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder,
                                                   CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip};
   for (CocoKeypoint k : kTorso)
-    if (keypoints[index(k)].score < params.min_joint_score) {
+    if (low_score(k)) {
       f.reason = TorsoReason::kLowScore;
       f.culprit = k;
       return f;
     }
-  for (CocoKeypoint k : kTorso) {
-    const hal::Keypoint2D& p = keypoints[index(k)];
-    const bool on_border = p.u_px < params.border_margin_px || p.v_px < params.border_margin_px ||
-                           p.u_px > width_px - params.border_margin_px || p.v_px > height_px - params.border_margin_px;
-    if (on_border) {
+  for (CocoKeypoint k : kTorso)
+    if (on_border(k)) {
       f.reason = TorsoReason::kOnBorder;
       f.culprit = k;
       return f;
     }
-  }
   if (!(f.torso_px >= params.min_torso_px)) {
     f.reason = TorsoReason::kTooShort;
     return f;

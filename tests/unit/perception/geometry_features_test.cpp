@@ -122,5 +122,69 @@ TEST(TorsoFeatures, GivenHipsCutOffByTheBottomEdge_WhenMeasured_ThenItIsUnreliab
   EXPECT_EQ(keypointName(f.culprit), "left_hip");
 }
 
+// Issue 22, item 4: a waist cut leaves the guessed hips a fraction of a torso inside the bottom edge.
+TEST(TorsoFeatures, GivenHipsWithinHalfATorsoOfTheBottomEdge_WhenMeasured_ThenUnreliableButTheShouldersGiveABearing) {
+  const Keypoints k = standingPerson(300.0, 480.0 - 0.45 * 80.0, 80.0, 0.9);
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_FALSE(f.reliable);
+  EXPECT_EQ(f.reason, TorsoReason::kOnBorder);
+  EXPECT_TRUE(f.bearing_ok);
+  EXPECT_DOUBLE_EQ(f.bearing_u_px, 300.0);  // the shoulders' midpoint
+}
+
+TEST(TorsoFeatures, GivenHipsJustOverHalfATorsoAboveTheBottomEdge_WhenMeasured_ThenReliable) {
+  const Keypoints k = standingPerson(300.0, 480.0 - 0.55 * 80.0, 80.0, 0.9);
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_TRUE(f.reliable) << toString(f.reason);
+  EXPECT_TRUE(f.bearing_ok);
+}
+
+TEST(TorsoFeatures, GivenShouldersWithinHalfATorsoOfTheTopEdge_WhenMeasured_ThenTheHipsGiveTheBearing) {
+  const Keypoints k = standingPerson(250.0, 80.0 + 0.3 * 80.0, 80.0, 0.9);  // shoulders 24 px below the top
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_FALSE(f.reliable);
+  EXPECT_EQ(f.reason, TorsoReason::kOnBorder);
+  EXPECT_TRUE(f.bearing_ok);
+  EXPECT_DOUBLE_EQ(f.bearing_u_px, 250.0);  // the hips' midpoint
+}
+
+TEST(TorsoFeatures, GivenACutAtTheChest_WhenShouldersAndHipsAreAllGuessedNearTheBottom_ThenTheWidthsKeepTheMargin) {
+  // The whole torso below the frame: shoulders 20 px and hips 12 px above the bottom edge, a few pixels
+  // apart (a "torso" of 8 px), the shoulders 60 px wide as seen.
+  Keypoints k = standingPerson(300.0, 468.0, 150.0, 0.4);
+  k[index(CocoKeypoint::kLeftShoulder)] = {330.0, 460.0, 0.4};
+  k[index(CocoKeypoint::kRightShoulder)] = {270.0, 460.0, 0.4};
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_NEAR(f.torso_px, 8.0, 1e-9);
+  EXPECT_FALSE(f.reliable);
+  EXPECT_EQ(f.reason, TorsoReason::kOnBorder);
+  EXPECT_FALSE(f.bearing_ok);
+}
+
+TEST(TorsoFeatures, GivenAShoulderTenPixelsFromTheSideEdge_WhenMeasured_ThenTheSideKeepsThePixelMargin) {
+  // Sideways, a cut shows as joints on the border (clamped); a whole torso near the side is fine.
+  const Keypoints k = standingPerson(10.0 + 0.2 * 80.0, 250.0, 80.0, 0.9);
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_TRUE(f.reliable) << toString(f.reason);
+}
+
+TEST(TorsoFeatures, GivenBothPairsWeak_WhenMeasured_ThenThereIsNoBearing) {
+  Keypoints k = standingPerson(300.0, 250.0, 80.0, 0.9);
+  k[index(CocoKeypoint::kLeftShoulder)].score = 0.1;
+  k[index(CocoKeypoint::kRightHip)].score = 0.1;
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_FALSE(f.reliable);
+  EXPECT_FALSE(f.bearing_ok);
+}
+
+TEST(TorsoFeatures, GivenTheFractionZero_WhenHipsAreTwentyPixelsAboveTheEdge_ThenThePixelMarginAloneDecides) {
+  const Keypoints k = standingPerson(300.0, 460.0, 80.0, 0.9);
+  TorsoFeatureParams params;
+  params.edge_margin_torso_fraction = 0.0;
+  EXPECT_TRUE(torsoFeatures(k, 640, 480, params).reliable);
+  params.edge_margin_torso_fraction = 0.5;
+  EXPECT_FALSE(torsoFeatures(k, 640, 480, params).reliable);
+}
+
 }  // namespace
 }  // namespace aerotrack::perception

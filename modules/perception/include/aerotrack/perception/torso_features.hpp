@@ -4,6 +4,11 @@
 // reliability flag and, when unreliable, the reason: a joint with a low score, or a joint on the
 // image border -- MoveNet clamps joints of a person cut off by the frame to the border, and such a
 // torso is too short, which the regression would read as a person too far away (issue 5, item 4).
+// A person cut off at the waist is subtler: the network guesses the hips a few pixels inside the
+// bottom edge with scores of 0.35-0.5 (messi5.jpg cut at rows 152-212: hips 7-15 px above the edge,
+// torso 32-83 px against 116 uncut), so near the top and bottom edges the margin grows with the torso
+// (issue 22, item 4). When the torso is unreliable but one joint pair (shoulders, else hips) is
+// whole, its midpoint still gives the person's bearing (the estimator's fallback).
 #pragma once
 
 #include <array>
@@ -16,7 +21,10 @@ namespace aerotrack::perception {
 struct TorsoFeatureParams {
   double min_joint_score = 0.3;   ///< Each of the four torso joints needs at least this score.
   double border_margin_px = 4.0;  ///< A torso joint closer than this to the image edge is "on the border".
-  double min_torso_px = 1.0;      ///< A shorter torso (degenerate) is unreliable.
+  /// ... or closer than this many torso lengths (or shoulder or hip widths, if larger) to the top or
+  /// bottom edge, where a cut-off body's guessed joints land (0: the pixel margin alone).
+  double edge_margin_torso_fraction = 0.5;
+  double min_torso_px = 1.0;  ///< A shorter torso (degenerate) is unreliable.
 };
 
 enum class TorsoReason : std::uint8_t { kOk, kLowScore, kOnBorder, kTooShort };
@@ -31,6 +39,10 @@ struct TorsoFeatures {
   bool reliable = false;
   TorsoReason reason = TorsoReason::kLowScore;
   hal::CocoKeypoint culprit = hal::CocoKeypoint::kLeftShoulder;  ///< The joint behind an unreliable verdict.
+  /// A whole joint pair (both scores and positions pass, shoulders first, else hips) whose midpoint
+  /// gives the person's bearing; set whether or not the torso is reliable.
+  bool bearing_ok = false;
+  double bearing_u_px = 0.0;  ///< That pair's horizontal midpoint, pixels.
 };
 
 /// Features of one detection in an image of width_px x height_px. Pure, allocation-free.
