@@ -66,6 +66,13 @@ rt::Status validate(const KeypointCameraParams& p) {
   if (!std::isfinite(p.bbox_margin_fraction) || p.bbox_margin_fraction < 0.0) {
     return rt::Error{"KeypointCameraParams.bbox_margin_fraction must be >= 0"};
   }
+  if (!(p.cut_guess_reach_torso >= 0.0 && p.cut_guess_reach_torso <= 10.0))
+    return rt::Error{"KeypointCameraParams.cut_guess_reach_torso must be in [0, 10]"};
+  if (!(p.cut_guess_min_inset_torso >= 0.0 && p.cut_guess_min_inset_torso <= p.cut_guess_max_inset_torso &&
+        p.cut_guess_max_inset_torso <= 1.0))
+    return rt::Error{"KeypointCameraParams: need 0 <= cut_guess_min_inset_torso <= cut_guess_max_inset_torso <= 1"};
+  if (!(p.cut_guess_min_score > 0.0 && p.cut_guess_min_score <= p.cut_guess_max_score && p.cut_guess_max_score <= 1.0))
+    return rt::Error{"KeypointCameraParams: need 0 < cut_guess_min_score <= cut_guess_max_score <= 1"};
   return rt::ok();
 }
 
@@ -113,13 +120,25 @@ std::optional<PersonDetection> observe(const std::array<Eigen::Vector3d, kNumKey
     const double score_draw = uniform01(rng);
     if (!uv[i]) continue;
     const Eigen::Vector2d& q = *uv[i];
-    if (!(q.x() >= 0.0 && q.x() < w && q.y() >= 0.0 && q.y() < h)) continue;
+    const double outside_px = std::max({-q.x(), q.x() - w, -q.y(), q.y() - h});
+    const bool cut = outside_px > 0.0;
+    if (cut && !(outside_px <= params.cut_guess_reach_torso * torso_px)) continue;
     if (miss_draw <= params.keypoint_miss_probability) continue;
     if (line_of_sight && !line_of_sight(centre_W_m, keypoints_W_m[i])) continue;
     Keypoint2D& out = det.keypoints[i];
-    out.u_px = std::clamp(q.x() + sigma_px * r * std::cos(phi), 0.0, w);
-    out.v_px = std::clamp(q.y() + sigma_px * r * std::sin(phi), 0.0, h);
-    out.score = params.min_score + (params.max_score - params.min_score) * (score_draw - 0x1.0p-53);
+    if (cut) {  // guessed inside the nearest edge; the same draws as a seen keypoint (phi for the inset)
+      const double inset_px =
+          torso_px * (params.cut_guess_min_inset_torso +
+                      (params.cut_guess_max_inset_torso - params.cut_guess_min_inset_torso) * phi / kTwoPi);
+      out.u_px = std::clamp(q.x(), std::min(inset_px, 0.5 * w), std::max(w - inset_px, 0.5 * w));
+      out.v_px = std::clamp(q.y(), std::min(inset_px, 0.5 * h), std::max(h - inset_px, 0.5 * h));
+      out.score = params.cut_guess_min_score +
+                  (params.cut_guess_max_score - params.cut_guess_min_score) * (score_draw - 0x1.0p-53);
+    } else {
+      out.u_px = std::clamp(q.x() + sigma_px * r * std::cos(phi), 0.0, w);
+      out.v_px = std::clamp(q.y() + sigma_px * r * std::sin(phi), 0.0, h);
+      out.score = params.min_score + (params.max_score - params.min_score) * (score_draw - 0x1.0p-53);
+    }
     ++visible;
     score_sum += out.score;
     u_min = std::min(u_min, out.u_px);

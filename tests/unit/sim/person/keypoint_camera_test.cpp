@@ -3,6 +3,7 @@
 // configured torso fraction, and determinism for a given seed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -132,10 +133,11 @@ TEST(KeypointCamera, GivenNoiselessCameraFacingPersonWhenObservingThenReportsExa
   EXPECT_NEAR(det->bbox_h_px, 1.16 * extent_v, 1e-6);
 }
 
-TEST(KeypointCamera, GivenHeadAboveTheImageWhenObservingThenHeadKeypointsHaveScoreZero) {
+TEST(KeypointCamera, GivenHeadAboveTheImageAndNoGuessesWhenObservingThenHeadKeypointsHaveScoreZero) {
   const Keypoints kps = standingFacingMinusX();
   const Eigen::Isometry3d T_WC = lookAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
-  const KeypointCameraParams p = noiseless();
+  KeypointCameraParams p = noiseless();
+  p.cut_guess_reach_torso = 0.0;
   std::mt19937_64 rng(2);
   const auto det = observe(kps, T_WC, p, {}, rng);
   ASSERT_TRUE(det.has_value());
@@ -157,6 +159,45 @@ TEST(KeypointCamera, GivenHeadAboveTheImageWhenObservingThenHeadKeypointsHaveSco
   EXPECT_EQ(det->keypoints[index(K::kNose)].score, 0.0);
   EXPECT_GT(det->keypoints[index(K::kLeftAnkle)].score, 0.0);
   EXPECT_GE(det->bbox_v_px, 0.0);
+}
+
+// Issue 22: MoveNet guesses the joints of a body the frame cuts off, a little inside the edge with a
+// middling score; the simulated detector does the same for joints within reach of the edge.
+TEST(KeypointCamera, GivenHeadAboveTheImageWhenObservingThenNearJointsAreGuessedInsideTheEdgeAndFarOnesDropped) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
+  KeypointCameraParams p = noiseless();
+  p.cut_guess_reach_torso = 0.5;  // the shoulders (0.37 torso out) within it, the head (0.81-0.98) beyond
+  const std::size_t ls = index(K::kLeftShoulder), rs = index(K::kRightShoulder);
+  const std::size_t lh = index(K::kLeftHip), rh = index(K::kRightHip);
+  const auto uv = [&](std::size_t i) { return *trueUv(kps, i, T_WC, p.intrinsics); };
+  const double torso_px = (0.5 * (uv(ls) + uv(rs)) - 0.5 * (uv(lh) + uv(rh))).norm();
+  int guessed = 0, dropped = 0;
+  for (unsigned seed = 0; seed < 20; ++seed) {
+    std::mt19937_64 rng(seed);
+    const auto det = observe(kps, T_WC, p, {}, rng);
+    ASSERT_TRUE(det.has_value());
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+      const Eigen::Vector2d q = uv(i);
+      const double outside_px = std::max({-q.x(), q.x() - 640.0, -q.y(), q.y() - 480.0});
+      if (outside_px <= 0.0) continue;
+      const Keypoint2D& k = det->keypoints[i];
+      if (outside_px > p.cut_guess_reach_torso * torso_px) {
+        ++dropped;
+        EXPECT_EQ(k.score, 0.0) << i;
+        continue;
+      }
+      ++guessed;
+      EXPECT_GE(k.score, p.cut_guess_min_score) << i;
+      EXPECT_LE(k.score, p.cut_guess_max_score) << i;
+      ASSERT_LT(q.y(), 0.0) << "the head is cut off at the top";
+      EXPECT_GE(k.v_px, p.cut_guess_min_inset_torso * torso_px - 1e-9) << i;
+      EXPECT_LE(k.v_px, p.cut_guess_max_inset_torso * torso_px + 1e-9) << i;
+      EXPECT_NEAR(k.u_px, q.x(), 1e-9) << i;  // inside horizontally: kept
+    }
+  }
+  EXPECT_GT(guessed, 0);
+  EXPECT_GT(dropped, 0);
 }
 
 TEST(KeypointCamera, GivenLegsOccludedWhenObservingThenOnlyLegKeypointsHaveScoreZero) {

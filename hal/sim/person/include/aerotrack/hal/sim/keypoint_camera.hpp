@@ -4,7 +4,11 @@
 // centre (a line-of-sight query supplied by the obstacle world) or randomly missed gets score 0;
 // visible ones get isotropic Gaussian pixel noise whose standard deviation is a fixed fraction of the
 // projected torso (neck-to-mid-hip) length -- 0.028, measured for MoveNet on real video -- and a
-// uniform random score. Randomness comes only from the caller's generator: each call draws exactly
+// uniform random score. A keypoint just outside the image is not dropped but guessed, as MoveNet
+// guesses a body the frame cuts off: a little inside the nearest edge with a middling score
+// (messi5.jpg cut at the waist: hips 2-19 px inside the edge at a 116 px torso, scores 0.31-0.47;
+// issue 22), so the torso-reliability rule meets the network's failure, not an empty joint.
+// Randomness comes only from the caller's generator: each call draws exactly
 // four 53-bit uniforms per keypoint from the raw engine output (Box-Muller for the noise), so the
 // result is identical for the same seed on every platform and standard library.
 #pragma once
@@ -39,6 +43,13 @@ struct KeypointCameraParams {
   /// The box around the reported keypoints grows by this fraction of its larger side on every side
   /// (the head top and feet extend beyond the nose and ankles), then is clipped to the image.
   double bbox_margin_fraction = 0.08;
+  /// A keypoint outside the image by at most this many torso lengths is guessed inside it (0: dropped,
+  /// as before issue 22) ...
+  double cut_guess_reach_torso = 1.0;
+  double cut_guess_min_inset_torso = 0.02;  ///< ... this far inside the nearest edge (uniform between the
+  double cut_guess_max_inset_torso = 0.16;  ///< two, in torso lengths) ...
+  double cut_guess_min_score = 0.30;        ///< ... with a score uniform in
+  double cut_guess_max_score = 0.47;        ///< [cut_guess_min_score, cut_guess_max_score].
 };
 
 /// Checks the parameters: positive image size and focal lengths, zero distortion, noise >= 0,
