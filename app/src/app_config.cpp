@@ -56,6 +56,9 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
   if (root.has("perception")) c.perception = perception::parseDetectorParams(root.child("perception"));
   if (root.has("estimation")) c.estimation = parseEstimation(root.child("estimation"), c.source);
+  // One torso-reliability rule for the detector's output and the estimator's input (keypoint mode, which
+  // has no detector, keeps the rule's defaults).
+  if (c.perception && c.estimation) c.estimation->task.torso = c.perception->torso;
   if (root.has("gimbal_control"))
     c.gimbal_control = gimbal_control::parseGimbalControlParams(root.child("gimbal_control"));
   if (root.has("supervisor")) {
@@ -178,6 +181,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "min_multipose_score" << YAML::Value << p.min_multipose_score;
     out << YAML::Key << "torso_min_joint_score" << YAML::Value << p.torso.min_joint_score;
     out << YAML::Key << "torso_border_margin_px" << YAML::Value << p.torso.border_margin_px;
+    out << YAML::Key << "torso_edge_margin_fraction" << YAML::Value << p.torso.edge_margin_torso_fraction;
     out << YAML::Key << "tracker" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "gate_torso_multiples" << YAML::Value << p.tracker.gate_torso_multiples;
     out << YAML::Key << "max_torso_ratio" << YAML::Value << p.tracker.max_torso_ratio;
@@ -202,6 +206,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "measurement_std_per_m" << YAML::Value << e.task.measurement_std_per_m;
     out << YAML::Key << "min_measurement_std_m" << YAML::Value << e.task.min_measurement_std_m;
     out << YAML::Key << "max_wait_s" << YAML::Value << rt::nsToSeconds(e.task.max_wait_ns);
+    out << YAML::Key << "unreliable_torso" << YAML::Value << (e.task.bearing_fallback ? "bearing" : "skip");
     out << YAML::Key << "estimator" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "accel_psd_xy_m2ps3" << YAML::Value << k.accel_psd_xy_m2ps3;
     out << YAML::Key << "accel_psd_z_m2ps3" << YAML::Value << k.accel_psd_z_m2ps3;

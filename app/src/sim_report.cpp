@@ -35,11 +35,8 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
 nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check) {
   if (task == nullptr) return nullptr;
   const estimation::TargetTaskStats& s = task->stats();
-  nlohmann::json out = {{"detections", s.detections},
-                        {"unreliable", s.unreliable},
-                        {"no_pose", s.no_pose},
-                        {"accepted", s.accepted},
-                        {"rejected", s.rejected}};
+  nlohmann::json out = {{"detections", s.detections}, {"unreliable", s.unreliable}, {"bearings", s.bearings},
+                        {"no_pose", s.no_pose},       {"accepted", s.accepted},     {"rejected", s.rejected}};
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

@@ -68,6 +68,8 @@ const char* toString(MeasurementVerdict verdict) {
       return "rejected_too_old";
     case MeasurementVerdict::kRejectedInvalid:
       return "rejected_invalid";
+    case MeasurementVerdict::kRejectedNoTrack:
+      return "rejected_no_track";
   }
   return "unknown";
 }
@@ -126,7 +128,9 @@ void TargetEstimator::predict(State& state, rt::TimeNs t_ns) const {
 
 MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& m) const {
   const rt::DurationNs lost_after_ns = rt::secondsToNs(params_.lost_after_s);
-  if (!state.initialised || m.stamp_ns - state.last_accepted_ns > lost_after_ns) {
+  const bool lost = !state.initialised || m.stamp_ns - state.last_accepted_ns > lost_after_ns;
+  if (lost && m.bearingOnly()) return MeasurementVerdict::kRejectedNoTrack;
+  if (lost) {
     start(state, m);
     return MeasurementVerdict::kStarted;
   }
@@ -134,14 +138,19 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
   predict(predicted, m.stamp_ns);
   const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params_.measurement_std_xy_m;
   const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params_.measurement_std_z_m;
-  const Eigen::Vector3d r_diag(std_xy * std_xy, std_xy * std_xy, std_z * std_z);
+  // R: std_xy across the line of sight and, for a bearing, range_std_m along it (R = s^2 I + (r^2 - s^2) b b^T).
+  Matrix3d R = Eigen::Vector3d(std_xy * std_xy, std_xy * std_xy, std_z * std_z).asDiagonal();
+  if (m.bearingOnly()) {
+    const Eigen::Vector2d& b = m.bearing_W;
+    R.topLeftCorner<2, 2>() += (m.range_std_m * m.range_std_m - std_xy * std_xy) * b * b.transpose();
+  }
   const Eigen::Vector3d innovation = m.p_WT_m - predicted.x.head<3>();
-  Matrix3d S = predicted.P.topLeftCorner<3, 3>();
-  S.diagonal() += r_diag;
+  const Matrix3d S = predicted.P.topLeftCorner<3, 3>() + R;
   const Eigen::LLT<Matrix3d> llt(S);
   const double mahalanobis_sq = innovation.dot(llt.solve(innovation));
   if (llt.info() != Eigen::Success || !(mahalanobis_sq <= params_.gate_chi2)) {
-    if (++state.consecutive_rejections >= params_.reinit_after_rejections) {
+    // A run of rejected bearings cannot restart the filter: they carry no distance to start from.
+    if (++state.consecutive_rejections >= params_.reinit_after_rejections && !m.bearingOnly()) {
       start(state, m);
       return MeasurementVerdict::kStarted;
     }
@@ -153,16 +162,19 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
   predicted.x += K * innovation;
   Matrix6d I_KH = Matrix6d::Identity();
   I_KH.leftCols<3>() -= K;
-  predicted.P = I_KH * predicted.P * I_KH.transpose() + K * r_diag.asDiagonal() * K.transpose();
-  predicted.last_accepted_ns = m.stamp_ns;
+  predicted.P = I_KH * predicted.P * I_KH.transpose() + K * R * K.transpose();
+  // A bearing does not keep the track alive: without a distance for lost_after_s the range is a guess.
+  if (!m.bearingOnly()) predicted.last_accepted_ns = m.stamp_ns;
   predicted.consecutive_rejections = 0;
   state = predicted;
   return MeasurementVerdict::kAccepted;
 }
 
 MeasurementVerdict TargetEstimator::add(const TargetMeasurement& m) {
+  const bool bad_bearing = m.bearingOnly() && (!m.bearing_W.allFinite() || std::abs(m.bearing_W.norm() - 1.0) > 1e-6 ||
+                                               !std::isfinite(m.range_std_m) || !(m.range_std_m > 0.0));
   if (!m.p_WT_m.allFinite() || !std::isfinite(m.std_xy_m) || !std::isfinite(m.std_z_m) || m.std_xy_m < 0.0 ||
-      m.std_z_m < 0.0) {
+      m.std_z_m < 0.0 || bad_bearing) {
     ++rejected_;
     return MeasurementVerdict::kRejectedInvalid;
   }
@@ -194,7 +206,7 @@ MeasurementVerdict TargetEstimator::add(const TargetMeasurement& m) {
     buffer_[i].after = state;
   }
   const MeasurementVerdict verdict = buffer_[index].verdict;
-  if (verdict == MeasurementVerdict::kRejectedGate) {
+  if (verdict == MeasurementVerdict::kRejectedGate || verdict == MeasurementVerdict::kRejectedNoTrack) {
     ++rejected_;
   } else {
     ++accepted_;

@@ -10,6 +10,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.measurement_std_per_m = node.getDouble("measurement_std_per_m", 0.0, 1.0);
   params.min_measurement_std_m = node.getDouble("min_measurement_std_m", 0.001, 10.0);
   params.max_wait_ns = rt::secondsToNs(node.getDouble("max_wait_s", 0.0, 2.0));
+  params.bearing_fallback = node.getEnum("unreliable_torso", {"bearing", "skip"}) == "bearing";
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
 }
 
@@ -48,6 +49,11 @@ void TargetTask::process(const hal::DetectionFrame& frame) {
       perception::torsoFeatures(person.keypoints, frame.intrinsics.width_px, frame.intrinsics.height_px, params_.torso);
   if (!torso.reliable) {
     ++stats_.unreliable;
+    if (!params_.bearing_fallback) return;
+    if (const auto bearing = bearingMeasurement(frame, torso)) {
+      const MeasurementVerdict verdict = estimator_.add(*bearing);
+      if (verdict == MeasurementVerdict::kAccepted) ++stats_.bearings;
+    }
     return;
   }
   const Eigen::Vector3d p_C_m = localization::predict(params_.localization, torso.torso_px, torso.u_px);
@@ -67,6 +73,44 @@ void TargetTask::process(const hal::DetectionFrame& frame) {
     ++stats_.accepted;
   else
     ++stats_.rejected;
+}
+
+std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::DetectionFrame& frame,
+                                                                const perception::TorsoFeatures& torso) const {
+  if (!torso.bearing_ok) return std::nullopt;
+  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
+  if (!prior.initialised || prior.lost) return std::nullopt;
+  // The level camera frame at the capture time: its origin and forward axis in W.
+  const auto origin_W = cameraToWorldAt(frame.stamp_ns, Eigen::Vector3d::Zero(), poses_, gimbal_history_,
+                                        params_.extrinsics, CameraFrame::kLevel);
+  const auto ahead_W = cameraToWorldAt(frame.stamp_ns, Eigen::Vector3d::UnitX(), poses_, gimbal_history_,
+                                       params_.extrinsics, CameraFrame::kLevel);
+  if (!origin_W || !ahead_W) return std::nullopt;
+  const Eigen::Vector2d forward_W = (*ahead_W - *origin_W).head<2>();
+  const Eigen::Vector2d prior_W = (prior.p_WT_m - *origin_W).head<2>();
+  const double x_m = prior_W.dot(forward_W);
+  // Nearer than this the person is under the camera, where u says little of the bearing.
+  constexpr double kMinDistanceM = 0.5;
+  if (!(x_m > kMinDistanceM)) return std::nullopt;
+  // The line of sight the regression gives u at the prior's forward distance, and on it the point at the
+  // prior's range: the innovation then lies across the line (to first order the EKF update of a measured
+  // bearing), so the range the filter carries is kept, not pulled.
+  Eigen::Vector3d p_C_m = localization::predictAtDistance(params_.localization, x_m, torso.bearing_u_px);
+  p_C_m.head<2>() *= prior_W.norm() / p_C_m.head<2>().norm();
+  const auto p_WT_m =
+      cameraToWorldAt(frame.stamp_ns, p_C_m, poses_, gimbal_history_, params_.extrinsics, CameraFrame::kLevel);
+  if (!p_WT_m) return std::nullopt;
+  const Eigen::Vector2d line_W = (*p_WT_m - *origin_W).head<2>();
+  if (!(line_W.norm() > 0.0)) return std::nullopt;
+  TargetMeasurement m;
+  m.stamp_ns = frame.stamp_ns;
+  m.p_WT_m = *p_WT_m;
+  m.std_xy_m = std::max(params_.min_measurement_std_m, params_.measurement_std_per_m * p_C_m.head<2>().norm());
+  m.bearing_W = line_W.normalized();
+  // No distance information: along the line of sight the noise dwarfs any error the filter carries.
+  constexpr double kNoRangeStdM = 100.0;
+  m.range_std_m = kNoRangeStdM;
+  return m;
 }
 
 void TargetTask::step(rt::TimeNs now_ns) {

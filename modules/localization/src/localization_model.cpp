@@ -392,15 +392,18 @@ rt::Expected<LocalizationParams> fit(LocalizationModel model, std::span<const Lo
 
 Eigen::Vector3d predict(const LocalizationParams& params, double torso_px, double u_px) {
   if (!(torso_px > 0.0)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-  double x_m = 0.0;
+  const double x_m =
+      params.model == LocalizationModel::kPaper ? paperX(params.paper, torso_px) : pinholeX(params.pinhole, torso_px);
+  return predictAtDistance(params, x_m, u_px);
+}
+
+Eigen::Vector3d predictAtDistance(const LocalizationParams& params, double x_m, double u_px) {
   double y_m = 0.0;
   if (params.model == LocalizationModel::kPaper) {
     const PaperModelParams& p = params.paper;
-    x_m = paperX(p, torso_px);
     y_m = (p.l3 * std::exp(p.k3_per_px * u_px) + p.l4 * std::exp(p.k4_per_px * u_px)) * (x_m + p.b_m);
   } else {
     const PinholeModelParams& p = params.pinhole;
-    x_m = pinholeX(p, torso_px);
     y_m = -x_m * (u_px - p.cx_px) / p.fx_px * (1.0 + p.y_scale_correction) + p.y_offset_m;
   }
   return {x_m, y_m, params.z_m};

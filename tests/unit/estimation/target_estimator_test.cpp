@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -265,6 +266,85 @@ TEST(TargetEstimator, GivenInvalidMeasurementsThenRefused) {
             MeasurementVerdict::kRejectedInvalid);
   EXPECT_EQ(estimator->add({0, Eigen::Vector3d::Zero(), -1.0, 0.0}), MeasurementVerdict::kRejectedInvalid);
   EXPECT_FALSE(estimator->estimate(0).initialised);
+}
+
+// Bearing-only measurements (issue 22, item 4). The reference: the textbook Kalman update with the
+// measurement noise built in the line of sight's own frame and rotated into W (R = Q diag Q^T).
+TEST(TargetEstimator, GivenABearingThenTheUpdateIsTheKalmanUpdateWithNoiseLongAlongTheLineOfSight) {
+  auto estimator = TargetEstimator::create({});
+  ASSERT_TRUE(estimator);
+  std::mt19937_64 rng(21);
+  for (int k = 0; k <= 30; ++k) estimator->add(measure(straight, k, rng));
+  const rt::TimeNs t_ns = stampOf(31);
+  const TargetEstimate before = estimator->estimate(t_ns);
+  TargetMeasurement m;
+  m.stamp_ns = t_ns;
+  const double angle_rad = 0.7;
+  m.bearing_W = Eigen::Vector2d(std::cos(angle_rad), std::sin(angle_rad));
+  m.range_std_m = 3.0;
+  m.std_xy_m = 0.1;
+  m.std_z_m = 0.2;
+  m.p_WT_m = before.p_WT_m + Eigen::Vector3d(0.3 * -std::sin(angle_rad), 0.3 * std::cos(angle_rad), 0.05);
+  ASSERT_EQ(estimator->add(m), MeasurementVerdict::kAccepted);
+  const TargetEstimate after = estimator->estimate(t_ns);
+
+  Eigen::Matrix3d Q = Eigen::Matrix3d::Identity();
+  Q.topLeftCorner<2, 2>() << std::cos(angle_rad), -std::sin(angle_rad), std::sin(angle_rad), std::cos(angle_rad);
+  const Eigen::Matrix3d R = Q * Eigen::Vector3d(9.0, 0.01, 0.04).asDiagonal() * Q.transpose();
+  Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
+  H.leftCols<3>().setIdentity();
+  const Matrix6d& P = before.covariance;
+  const Eigen::Matrix<double, 6, 3> K = P * H.transpose() * (H * P * H.transpose() + R).inverse();
+  Eigen::Matrix<double, 6, 1> x;
+  x << before.p_WT_m, before.v_WT_mps;
+  x += K * (m.p_WT_m - before.p_WT_m);
+  const Matrix6d P_ref = (Matrix6d::Identity() - K * H) * P;
+  EXPECT_LT((after.p_WT_m - x.head<3>()).norm(), 1e-9);
+  EXPECT_LT((after.v_WT_mps - x.tail<3>()).norm(), 1e-9);
+  EXPECT_LT((after.covariance - P_ref).norm(), 1e-9);
+  // A bearing does not count as a distance: the track's last distance stays the last full measurement.
+  EXPECT_EQ(after.last_accepted_ns, before.last_accepted_ns);
+}
+
+TEST(TargetEstimator, GivenOnlyBearingsThenNoTrackStartsAndALiveOneIsLostOnTime) {
+  TargetEstimatorParams params;
+  params.lost_after_s = 1.0;
+  auto estimator = TargetEstimator::create(params);
+  ASSERT_TRUE(estimator);
+  TargetMeasurement bearing{0, Eigen::Vector3d(3.0, 0.0, 0.9), 0.0, 0.0};
+  bearing.bearing_W = Eigen::Vector2d::UnitX();
+  bearing.range_std_m = 100.0;
+  EXPECT_EQ(estimator->add(bearing), MeasurementVerdict::kRejectedNoTrack);
+  EXPECT_FALSE(estimator->estimate(0).initialised);
+  EXPECT_EQ(estimator->rejectedCount(), 1U);
+  // A live track, then bearings only: accepted while it lives, lost after lost_after_s all the same.
+  for (int k = 1; k <= 30; ++k) estimator->add({stampOf(k), Eigen::Vector3d(3.0, 0.0, 0.9), 0.0, 0.0});
+  for (int k = 31; k <= 60; ++k) {
+    bearing.stamp_ns = stampOf(k);
+    EXPECT_EQ(estimator->add(bearing), MeasurementVerdict::kAccepted) << k;
+  }
+  EXPECT_FALSE(estimator->estimate(stampOf(60)).lost);
+  bearing.stamp_ns = stampOf(62);
+  EXPECT_EQ(estimator->add(bearing), MeasurementVerdict::kRejectedNoTrack);
+  EXPECT_TRUE(estimator->estimate(stampOf(62)).lost);
+}
+
+TEST(TargetEstimator, GivenABadBearingThenRefused) {
+  auto estimator = TargetEstimator::create({});
+  ASSERT_TRUE(estimator);
+  estimator->add({0, Eigen::Vector3d(3.0, 0.0, 0.9), 0.0, 0.0});
+  TargetMeasurement m{1, Eigen::Vector3d(3.0, 0.0, 0.9), 0.0, 0.0};
+  m.range_std_m = 10.0;
+  m.bearing_W = Eigen::Vector2d(2.0, 0.0);  // not a unit vector
+  EXPECT_EQ(estimator->add(m), MeasurementVerdict::kRejectedInvalid);
+  m.bearing_W = Eigen::Vector2d(std::nan(""), 0.0);
+  EXPECT_EQ(estimator->add(m), MeasurementVerdict::kRejectedInvalid);
+  m.bearing_W = Eigen::Vector2d::UnitY();
+  m.range_std_m = 0.0;  // a bearing needs its noise along the line
+  EXPECT_EQ(estimator->add(m), MeasurementVerdict::kRejectedInvalid);
+  m.range_std_m = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(estimator->add(m), MeasurementVerdict::kRejectedInvalid);
+  EXPECT_STREQ(toString(MeasurementVerdict::kRejectedNoTrack), "rejected_no_track");
 }
 
 TEST(TargetEstimatorParams, GivenAConfigSectionThenEveryKeyIsRequiredAndChecked) {

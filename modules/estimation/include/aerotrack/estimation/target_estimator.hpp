@@ -65,6 +65,13 @@ struct TargetMeasurement {
   Eigen::Vector3d p_WT_m = Eigen::Vector3d::Zero();  ///< Position in W, metres.
   double std_xy_m = 0.0;                             ///< Noise per horizontal axis, metres; 0: the params' default.
   double std_z_m = 0.0;                              ///< Noise vertically, metres; 0: the params' default.
+  /// A bearing-only measurement (a torso too cut off for a distance, issue 22): p_WT_m lies on the line
+  /// of sight at an assumed range, and along this horizontal unit direction (the line of sight) the
+  /// noise is range_std_m instead of std_xy_m. Zero: an ordinary measurement. A bearing neither starts
+  /// the filter nor keeps it from being lost (it carries no distance).
+  Eigen::Vector2d bearing_W = Eigen::Vector2d::Zero();
+  double range_std_m = 0.0;
+  bool bearingOnly() const { return !(bearing_W.x() == 0.0 && bearing_W.y() == 0.0); }  // NaN: a (bad) bearing
 };
 
 enum class MeasurementVerdict : std::uint8_t {
@@ -72,7 +79,8 @@ enum class MeasurementVerdict : std::uint8_t {
   kStarted,          ///< (Re)started the filter: first measurement, after `lost`, or after repeated rejections.
   kRejectedGate,     ///< Outside the Mahalanobis gate.
   kRejectedTooOld,   ///< Older than the replay window (or than the state folded out of it).
-  kRejectedInvalid,  ///< Non-finite position or negative noise.
+  kRejectedInvalid,  ///< Non-finite position or negative noise, or a bearing that is not a unit vector.
+  kRejectedNoTrack,  ///< A bearing-only measurement with no live track to give it a distance.
 };
 const char* toString(MeasurementVerdict verdict);
 

@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
@@ -33,6 +34,9 @@ struct TargetTaskParams {
   perception::TorsoFeatureParams torso;
   double measurement_std_per_m = 0.025;  ///< Horizontal noise per metre of distance...
   double min_measurement_std_m = 0.05;   ///< ...but at least this.
+  /// A torso unreliable for a distance whose shoulders (or hips) are whole: a bearing-only measurement
+  /// at the estimate's distance (issue 22, item 4; docs/modules/localization-estimation.md), or skipped.
+  bool bearing_fallback = true;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
 };
 
@@ -43,6 +47,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
 struct TargetTaskStats {
   std::uint64_t detections = 0;  ///< Frames with the followed person.
   std::uint64_t unreliable = 0;  ///< ... whose torso was not reliable.
+  std::uint64_t bearings = 0;    ///< ... of which the estimator used a bearing (bearing_fallback).
   std::uint64_t no_pose = 0;     ///< ... whose capture time the histories did not cover.
   std::uint64_t accepted = 0;    ///< Measurements the estimator used (or started from).
   std::uint64_t rejected = 0;    ///< Measurements the estimator refused.
@@ -64,6 +69,10 @@ class TargetTask final : public rt::Task {
              rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
              rt::LatestSlot<TargetEstimate>& out);
   void process(const hal::DetectionFrame& frame);
+  /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
+  /// behind or beside the camera).
+  std::optional<TargetMeasurement> bearingMeasurement(const hal::DetectionFrame& frame,
+                                                      const perception::TorsoFeatures& torso) const;
 
   TargetTaskParams params_;
   hal::OdometryHistory poses_;

@@ -104,6 +104,11 @@ rt::Expected<LocalizationParams> fit(LocalizationModel model, std::span<const Lo
 /// centre is at u_px. Pure, allocation-free, reentrant. A non-positive torso gives NaN.
 Eigen::Vector3d predict(const LocalizationParams& params, double torso_px, double u_px);
 
+/// The same model's p_C for a person at forward distance x_m (known from elsewhere) seen at u_px: the
+/// bearing half of the regression, for a torso too cut off for a distance (issue 22). predict(L, u)
+/// equals predictAtDistance(predict(L, u).x(), u).
+Eigen::Vector3d predictAtDistance(const LocalizationParams& params, double x_m, double u_px);
+
 /// The parameter file's keys (localization_io.hpp): model, z_m, fit_samples, fit_mean_error_m and the
 /// model's section (`paper:` or `pinhole:`, the other one is an unknown key), all required. The one list
 /// of keys and ranges that reading, validate() and writing share (rt/field_table.hpp): every value
