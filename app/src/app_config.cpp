@@ -182,6 +182,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "torso_min_joint_score" << YAML::Value << p.torso.min_joint_score;
     out << YAML::Key << "torso_border_margin_px" << YAML::Value << p.torso.border_margin_px;
     out << YAML::Key << "torso_edge_margin_fraction" << YAML::Value << p.torso.edge_margin_torso_fraction;
+    out << YAML::Key << "torso_edge_guess_max_score" << YAML::Value << p.torso.edge_guess_max_score;
     out << YAML::Key << "tracker" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "gate_torso_multiples" << YAML::Value << p.tracker.gate_torso_multiples;
     out << YAML::Key << "max_torso_ratio" << YAML::Value << p.tracker.max_torso_ratio;

@@ -75,6 +75,9 @@ TEST(DetectorOnPhotos, GivenMessiCutOffAtTheWaist_WhenLightningRuns_ThenTheTorso
   const double neck_u_px =
       0.5 * (wk[index(CocoKeypoint::kLeftShoulder)].u_px + wk[index(CocoKeypoint::kRightShoulder)].u_px);
   const double hip_v_px = 0.5 * (wk[index(CocoKeypoint::kLeftHip)].v_px + wk[index(CocoKeypoint::kRightHip)].v_px);
+  std::printf("[ figures  ] whole: shoulders scored %.2f/%.2f, hips %.2f/%.2f\n",
+              wk[index(CocoKeypoint::kLeftShoulder)].score, wk[index(CocoKeypoint::kRightShoulder)].score,
+              wk[index(CocoKeypoint::kLeftHip)].score, wk[index(CocoKeypoint::kRightHip)].score);
   // Cuts from just above the hips to about two thirds of the way up the torso.
   for (const int cut_rows :
        {static_cast<int>(hip_v_px) - 10, static_cast<int>(hip_v_px) - 40, static_cast<int>(hip_v_px) - 70}) {

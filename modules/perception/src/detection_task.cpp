@@ -15,6 +15,7 @@ DetectorParams parseDetectorParams(const rt::ConfigNode& node) {
   p.torso.min_joint_score = node.getDouble("torso_min_joint_score", 0.0, 1.0);
   p.torso.border_margin_px = node.getDouble("torso_border_margin_px", 0.0, 100.0);
   p.torso.edge_margin_torso_fraction = node.getDouble("torso_edge_margin_fraction", 0.0, 2.0);
+  p.torso.edge_guess_max_score = node.getDouble("torso_edge_guess_max_score", 0.0, 1.0);
   const rt::ConfigNode tracker = node.child("tracker");
   p.tracker.gate_torso_multiples = tracker.getDouble("gate_torso_multiples", 0.1, 20.0);
   p.tracker.max_torso_ratio = tracker.getDouble("max_torso_ratio", 1.01, 10.0);

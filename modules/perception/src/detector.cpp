@@ -59,6 +59,8 @@ rt::Status validate(const DetectorParams& p) {
   if (!(p.torso.border_margin_px >= 0.0)) return rt::Error{"torso.border_margin_px: must be >= 0"};
   if (!(p.torso.edge_margin_torso_fraction >= 0.0 && p.torso.edge_margin_torso_fraction <= 2.0))
     return rt::Error{"torso.edge_margin_torso_fraction: must be in [0, 2]"};
+  if (!(p.torso.edge_guess_max_score >= 0.0 && p.torso.edge_guess_max_score <= 1.0))
+    return rt::Error{"torso.edge_guess_max_score: must be in [0, 1]"};
   if (auto s = validate(p.tracker); !s) return rt::Error{"tracker." + s.error().message};
   return rt::ok();
 }

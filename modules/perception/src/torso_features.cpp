@@ -59,8 +59,9 @@ TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints
   const auto low_score = [&](CocoKeypoint k) { return keypoints[index(k)].score < params.min_joint_score; };
   const auto on_border = [&](CocoKeypoint k) {
     const hal::Keypoint2D& p = keypoints[index(k)];
-    return p.u_px < margin_u_px || p.v_px < margin_v_px || p.u_px > width_px - margin_u_px ||
-           p.v_px > height_px - margin_v_px;
+    const double margin_px = p.score < params.edge_guess_max_score ? margin_v_px : params.border_margin_px;
+    return p.u_px < margin_u_px || p.v_px < margin_px || p.u_px > width_px - margin_u_px ||
+           p.v_px > height_px - margin_px;
   };
   const auto whole = [&](CocoKeypoint a, CocoKeypoint b) {
     return !low_score(a) && !low_score(b) && !on_border(a) && !on_border(b);

@@ -122,9 +122,17 @@ TEST(TorsoFeatures, GivenHipsCutOffByTheBottomEdge_WhenMeasured_ThenItIsUnreliab
   EXPECT_EQ(keypointName(f.culprit), "left_hip");
 }
 
+/// The hips (or shoulders) of `k` given a guess's score, as MoveNet scores the joints of a cut-off body.
+Keypoints guessed(Keypoints k, CocoKeypoint a, CocoKeypoint b) {
+  k[index(a)].score = 0.4;
+  k[index(b)].score = 0.4;
+  return k;
+}
+
 // Issue 22, item 4: a waist cut leaves the guessed hips a fraction of a torso inside the bottom edge.
 TEST(TorsoFeatures, GivenHipsWithinHalfATorsoOfTheBottomEdge_WhenMeasured_ThenUnreliableButTheShouldersGiveABearing) {
-  const Keypoints k = standingPerson(300.0, 480.0 - 0.45 * 80.0, 80.0, 0.9);
+  const Keypoints k =
+      guessed(standingPerson(300.0, 480.0 - 0.45 * 80.0, 80.0, 0.9), CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip);
   const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
   EXPECT_FALSE(f.reliable);
   EXPECT_EQ(f.reason, TorsoReason::kOnBorder);
@@ -133,14 +141,17 @@ TEST(TorsoFeatures, GivenHipsWithinHalfATorsoOfTheBottomEdge_WhenMeasured_ThenUn
 }
 
 TEST(TorsoFeatures, GivenHipsJustOverHalfATorsoAboveTheBottomEdge_WhenMeasured_ThenReliable) {
-  const Keypoints k = standingPerson(300.0, 480.0 - 0.55 * 80.0, 80.0, 0.9);
+  const Keypoints k =
+      guessed(standingPerson(300.0, 480.0 - 0.55 * 80.0, 80.0, 0.9), CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip);
   const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
   EXPECT_TRUE(f.reliable) << toString(f.reason);
   EXPECT_TRUE(f.bearing_ok);
 }
 
 TEST(TorsoFeatures, GivenShouldersWithinHalfATorsoOfTheTopEdge_WhenMeasured_ThenTheHipsGiveTheBearing) {
-  const Keypoints k = standingPerson(250.0, 80.0 + 0.3 * 80.0, 80.0, 0.9);  // shoulders 24 px below the top
+  // Shoulders 24 px below the top.
+  const Keypoints k = guessed(standingPerson(250.0, 80.0 + 0.3 * 80.0, 80.0, 0.9), CocoKeypoint::kLeftShoulder,
+                              CocoKeypoint::kRightShoulder);
   const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
   EXPECT_FALSE(f.reliable);
   EXPECT_EQ(f.reason, TorsoReason::kOnBorder);
@@ -177,8 +188,15 @@ TEST(TorsoFeatures, GivenBothPairsWeak_WhenMeasured_ThenThereIsNoBearing) {
   EXPECT_FALSE(f.bearing_ok);
 }
 
+TEST(TorsoFeatures, GivenConfidentShouldersNearTheTop_WhenMeasured_ThenTheyAreTakenWhereTheNetworkPutsThem) {
+  // A person standing close to a camera on the ground: shoulders 24 px below the top, scored 0.9.
+  const Keypoints k = standingPerson(250.0, 80.0 + 0.3 * 80.0, 80.0, 0.9);
+  const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  EXPECT_TRUE(f.reliable) << toString(f.reason);
+}
+
 TEST(TorsoFeatures, GivenTheFractionZero_WhenHipsAreTwentyPixelsAboveTheEdge_ThenThePixelMarginAloneDecides) {
-  const Keypoints k = standingPerson(300.0, 460.0, 80.0, 0.9);
+  const Keypoints k = guessed(standingPerson(300.0, 460.0, 80.0, 0.9), CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip);
   TorsoFeatureParams params;
   params.edge_margin_torso_fraction = 0.0;
   EXPECT_TRUE(torsoFeatures(k, 640, 480, params).reliable);

@@ -7,7 +7,8 @@
 // A person cut off at the waist is subtler: the network guesses the hips a few pixels inside the
 // bottom edge with scores of 0.35-0.5 (messi5.jpg cut at rows 152-212: hips 7-15 px above the edge,
 // torso 32-83 px against 116 uncut), so near the top and bottom edges the margin grows with the torso
-// (issue 22, item 4). When the torso is unreliable but one joint pair (shoulders, else hips) is
+// (issue 22, item 4) -- for joints scored as guesses; a confident joint near the edge is a real one. When
+// the torso is unreliable but one joint pair (shoulders, else hips) is
 // whole, its midpoint still gives the person's bearing (the estimator's fallback).
 #pragma once
 
@@ -21,9 +22,13 @@ namespace aerotrack::perception {
 struct TorsoFeatureParams {
   double min_joint_score = 0.3;   ///< Each of the four torso joints needs at least this score.
   double border_margin_px = 4.0;  ///< A torso joint closer than this to the image edge is "on the border".
-  /// ... or closer than this many torso lengths (or shoulder or hip widths, if larger) to the top or
-  /// bottom edge, where a cut-off body's guessed joints land (0: the pixel margin alone).
+  /// ... or, scored under edge_guess_max_score, closer than this many torso lengths (or shoulder or hip
+  /// widths, if larger) to the top or bottom edge, where a cut-off body's guessed joints land (0: the
+  /// pixel margin alone).
   double edge_margin_torso_fraction = 0.5;
+  /// A joint scored at least this is taken where the network puts it, however near the top or bottom: a
+  /// person standing close to a low camera has confident shoulders near the top. Guesses scored 0.31-0.47.
+  double edge_guess_max_score = 0.5;
   double min_torso_px = 1.0;  ///< A shorter torso (degenerate) is unreliable.
 };
 
