@@ -94,9 +94,10 @@ TEST(ClosedLoop, AtARunnersPaceTheDroneHoldsTheTrackingDistanceWhereAGoalAtAFixe
   // all the way (mean 4.0 m). Now x_tp is taken when the drone would get there.
   const Flight now = fly(simYaml(), 1, 1000.0, 2.5);
   EXPECT_TRUE(now.summary["followed_all_the_way"].get<bool>()) << now.summary["follow_failure_reason"];
-  // Measured 3.03 when written, 3.29 by issue 21's end, 3.32 since the camera guesses cut-off joints (issue 22);
-  // the corner included. The claim is the gap to the trailing goal below (over 3.5 m, not followed).
-  EXPECT_LT(now.summary["distance_mean_m"].get<double>(), 3.45);
+  // Measured 3.03 when written, 3.29 by issue 21's end, 3.32 since the camera guesses cut-off joints (issue 22),
+  // 3.08 since a plan starts the moment the person sets off and rho_t grows with the speed change (issue 21);
+  // the corner included. The claim is the gap to the trailing goal below.
+  EXPECT_LT(now.summary["distance_mean_m"].get<double>(), 3.25);
   EXPECT_EQ(now.summary["collisions"], 0);
 
   std::string before = simYaml("    max_lead_s: 3.0 ", "    max_lead_s: 0.0 ");
@@ -107,9 +108,10 @@ TEST(ClosedLoop, AtARunnersPaceTheDroneHoldsTheTrackingDistanceWhereAGoalAtAFixe
     ASSERT_NE(pos, std::string::npos) << line;
     before.replace(pos, line.size(), with);
   }
+  // Trailing: 3.74 m (not followed all the way until the plan from the hover, issue 21, rescued the corner).
   const Flight trailed = fly(before, 1, 1000.0, 2.5);
-  EXPECT_FALSE(trailed.summary["followed_all_the_way"].get<bool>());
   EXPECT_GT(trailed.summary["distance_mean_m"].get<double>(), 3.5);
+  EXPECT_GT(trailed.summary["distance_mean_m"].get<double>() - now.summary["distance_mean_m"].get<double>(), 0.4);
 }
 
 TEST(ClosedLoop, RelocationReacquiresAfterAForcedTwoSecondOcclusion) {

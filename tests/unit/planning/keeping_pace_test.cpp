@@ -174,5 +174,22 @@ TEST(TimeWeight, ScalesWithTheSquareOfThePersonsSpeedAboveAWalkUpToItsCap) {
   EXPECT_FALSE(TrackingPlanner::create(params).has_value());
 }
 
+TEST(TimeWeight, GivenAReferenceSpeedChangeThenTheLargerOfTheTwoScalesHolds) {
+  TrackingPlannerParams params = defaultParams();
+  params.time_weight_reference_speed_mps = 1.5;
+  params.max_time_weight_scale = 10.0;
+  EXPECT_EQ(makePlanner(params).timeWeightScale(0.5, 2.0), 1.0) << "off by default: the change is ignored";
+
+  params.time_weight_reference_speed_change_mps = 0.5;
+  const TrackingPlanner planner = makePlanner(params);
+  EXPECT_EQ(planner.timeWeightScale(0.0, 0.3), 1.0) << "a walker's noise keeps the walker's rho_t";
+  EXPECT_NEAR(planner.timeWeightScale(0.5, 1.0), 4.0, 1e-12) << "a runner setting off: the change rules";
+  EXPECT_NEAR(planner.timeWeightScale(3.0, 0.5), 4.0, 1e-12) << "a steady runner: the speed rules";
+  EXPECT_EQ(planner.timeWeightScale(0.0, 3.0), 10.0);  // 36 x, capped
+
+  params.time_weight_reference_speed_change_mps = -0.1;
+  EXPECT_FALSE(TrackingPlanner::create(params).has_value());
+}
+
 }  // namespace
 }  // namespace aerotrack::planning

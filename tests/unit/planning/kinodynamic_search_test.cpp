@@ -227,6 +227,30 @@ TEST(KinodynamicSearch, GivenASmallBudgetThenItReturnsTheBestPartialPathTowardsT
   EXPECT_EQ(checkPath(path, figure.grid).blocked_samples, 0);
 }
 
+TEST(KinodynamicSearch, GivenAStartWithinTheTolerancesOfAMovingGoalThenThePathMatchesTheGoalsState) {
+  // A drone hovering where the goal is while the person sets off at 3 m/s^2: 0.13 s later they are 0.03 m
+  // on at 0.4 m/s, inside the tolerances (0.2 m, 0.5 m/s). The start is not a lattice node, so the one-shot
+  // reaches the exact state instead of calling the drone arrived (issue 21: no plan for 0.58 s after a
+  // runner set off).
+  const OcclusionFigure figure;
+  KinodynamicSearchParams params;
+  params.max_acceleration_mps2 = 4.0;  // the configs' (the one-shot starts at sqrt(time_weight) = 3.16 m/s^2)
+  KinodynamicSearch search = makeSearch(params);
+  KinematicState goal = at(0.03, 0.0, 1.5);
+  goal.v_W_mps = Eigen::Vector3d(0.4, 0.0, 0.0);
+  SearchPath path;
+  ASSERT_EQ(search.search(figure.grid, figure.start, goal, 0.0, figure.person, path), SearchStatus::kReachedGoal);
+  EXPECT_GT(path.duration_s, 0.05) << "long enough to fly (the planner's min_piece_duration_s)";
+  const KinematicState end = path.stateAt(path.duration_s);
+  EXPECT_NEAR((end.p_W_m - goal.p_W_m).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((end.v_W_mps - goal.v_W_mps).norm(), 0.0, 1e-9);
+  EXPECT_EQ(checkPath(path, figure.grid).blocked_samples, 0);
+
+  // Already in the goal's state: nothing to fly.
+  ASSERT_EQ(search.search(figure.grid, goal, goal, 0.0, figure.person, path), SearchStatus::kReachedGoal);
+  EXPECT_LT(path.duration_s, 1e-6);
+}
+
 TEST(KinodynamicSearch, GivenABlockedOrInvalidStartThenItSaysSo) {
   const OcclusionFigure figure;
   KinodynamicSearch search = makeSearch(KinodynamicSearchParams{});

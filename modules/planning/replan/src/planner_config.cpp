@@ -23,6 +23,8 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::number("optimizer_limit_fraction", &P::optimizer_limit_fraction, Range::openClosed(0.0, 1.0)),
           rt::number("time_weight_reference_speed_mps", &P::time_weight_reference_speed_mps,
                      Range::openClosed(0.0, 100.0)),
+          rt::number("time_weight_reference_speed_change_mps", &P::time_weight_reference_speed_change_mps,
+                     Range::closed(0.0, 100.0)),
           rt::number("max_time_weight_scale", &P::max_time_weight_scale, Range::closed(1.0, 1000.0)),
           rt::section("goal", &P::goal, trackingGoalFields()),
           rt::section("search", &P::search, kinodynamicSearchFields()),

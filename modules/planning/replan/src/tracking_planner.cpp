@@ -230,13 +230,14 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
     return fail(status);
   };
 
-  time_weight_scale_ = timeWeightScale(person->velocityAt(start_ns).head<2>().norm());
   KinematicState goal = selectGoal(grid, *person, start, start_ns);  // 2. Sect. V-B
   // A relocation's search (issue 21 item 3): to the viewpoint, to rest.
   if (inputs.look != nullptr && !person->live) {
     goal.p_W_m = inputs.look->p_W_m;
     goal.v_W_mps.setZero();
   }
+  time_weight_scale_ =
+      timeWeightScale(person->velocityAt(start_ns).head<2>().norm(), (goal.v_W_mps - start.col(1)).head<2>().norm());
   report.search_status = searchTrackingPath(grid, start, start_ns, goal, *person);  // 3. Sect. V-B
   report.search_expansions = path_.expansions;
   if (person->live && path_.status == SearchStatus::kReachedGoal && !search_goal_clipped_)
@@ -423,9 +424,14 @@ KinematicState TrackingPlanner::selectGoal(const mapping::LocalGrid& grid, const
   return makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal, &p_ahead_W_m);
 }
 
-double TrackingPlanner::timeWeightScale(double person_speed_mps) const {
+double TrackingPlanner::timeWeightScale(double person_speed_mps, double speed_change_mps) const {
   const double ratio = person_speed_mps / params_.time_weight_reference_speed_mps;
-  return std::clamp(ratio * ratio, 1.0, params_.max_time_weight_scale);
+  double scale = ratio * ratio;
+  if (params_.time_weight_reference_speed_change_mps > 0.0) {
+    const double change_ratio = speed_change_mps / params_.time_weight_reference_speed_change_mps;
+    scale = std::max(scale, change_ratio * change_ratio);
+  }
+  return std::clamp(scale, 1.0, params_.max_time_weight_scale);
 }
 
 double TrackingPlanner::goalLeadS() const {

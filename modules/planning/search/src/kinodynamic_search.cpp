@@ -457,6 +457,15 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
     if (current.d < nodes_[static_cast<std::size_t>(best_partial)].d) best_partial = current_index;
 
     const double distance_m = (current.p - goal.p_W_m).norm();
+    // The start is not a lattice node: the one-shot can reach the goal's exact state from it, so it is tried
+    // before the tolerances. Otherwise a drone hovering within 0.2 m and 0.5 m/s of a person who sets off
+    // counts as arrived, and no plan is made until the goal has left the tolerances (0.58 s after a runner
+    // set off in the forest, issue 21); the one-shot's duration says how far from the goal the start is.
+    if (current_index == 0 && distance_m <= params_.one_shot_distance_m &&
+        oneShot(grid, current, goal, shot, shot_cost)) {
+      writePath(current_index, &shot, shot_cost, path);
+      return finish(SearchStatus::kReachedGoal);
+    }
     if (distance_m <= params_.goal_tolerance_m &&
         (current.v - goal.v_W_mps).cwiseAbs().maxCoeff() <= params_.goal_velocity_tolerance_mps) {
       writePath(current_index, nullptr, 0.0, path);

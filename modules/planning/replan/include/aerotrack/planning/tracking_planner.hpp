@@ -80,7 +80,12 @@ struct TrackingPlannerParams {
   /// farther than 5 m in 10 of 10 trials) or hunts after a walker's estimate noise (rho_t 200: a median
   /// commanded acceleration of 1.2 m/s^2 at 1.5 m/s, and the body's tilt tripled the estimate's error).
   double time_weight_reference_speed_mps = 1.5;  ///< > 0.
-  double max_time_weight_scale = 10.0;           ///< >= 1.
+  /// ... or by (dv / this)^2 where larger, dv the horizontal speed change the plan asks for (the goal's velocity
+  /// less the start's); 0: off. Why (issue 21): a person setting off is slow for the first half second, so
+  /// their speed alone keeps rho_t a walker's while the drone falls behind a runner who accelerates at 3 m/s^2;
+  /// the change the plan must make is what a short plan needs (T^4 = 3600 dv^2 / rho_t).
+  double time_weight_reference_speed_change_mps = 0.0;  ///< >= 0.
+  double max_time_weight_scale = 10.0;                  ///< >= 1.
   TrackingGoalParams goal;
   KinodynamicSearchParams search;
   CorridorParams corridor;
@@ -161,9 +166,9 @@ class TrackingPlanner {
   static rt::Expected<TrackingPlanner> create(const TrackingPlannerParams& params);
 
   const TrackingPlannerParams& params() const { return params_; }
-  /// The factor on the optimiser's time weight for a person at this horizontal speed: (v / reference)^2,
-  /// in [1, max_time_weight_scale].
-  double timeWeightScale(double person_speed_mps) const;
+  /// The factor on the optimiser's time weight for a person at this horizontal speed and a plan asking for this
+  /// horizontal speed change: the larger of (v / reference)^2 and (dv / reference)^2, in [1, max_time_weight_scale].
+  double timeWeightScale(double person_speed_mps, double speed_change_mps = 0.0) const;
   /// The baseline mode of the paper's comparison: no occlusion term in the search.
   void setOcclusionAware(bool aware) { search_.setOcclusionAware(aware); }
 
