@@ -59,6 +59,8 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
   // One torso-reliability rule for the detector's output and the estimator's input (keypoint mode, which
   // has no detector, keeps the rule's defaults).
   if (c.perception && c.estimation) c.estimation->task.torso = c.perception->torso;
+  // ... and one appearance rule for the lock-on and the target task's association (issue 22).
+  if (c.perception && c.estimation) c.estimation->task.tracker = c.perception->tracker;
   if (root.has("gimbal_control"))
     c.gimbal_control = gimbal_control::parseGimbalControlParams(root.child("gimbal_control"));
   if (root.has("supervisor")) {
@@ -208,6 +210,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "min_measurement_std_m" << YAML::Value << e.task.min_measurement_std_m;
     out << YAML::Key << "max_wait_s" << YAML::Value << rt::nsToSeconds(e.task.max_wait_ns);
     out << YAML::Key << "unreliable_torso" << YAML::Value << (e.task.bearing_fallback ? "bearing" : "skip");
+    out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
     out << YAML::Key << "estimator" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "accel_psd_xy_m2ps3" << YAML::Value << k.accel_psd_xy_m2ps3;
     out << YAML::Key << "accel_psd_z_m2ps3" << YAML::Value << k.accel_psd_z_m2ps3;

@@ -120,12 +120,20 @@ class GimbalEncoderTask final : public rt::Task {
 /// Advances the simulation to the executor's time (the physics of sim backends).
 class SimWorldTask final : public rt::Task {
  public:
-  SimWorldTask(std::shared_ptr<hal::sim::Simulation> sim, const rt::LatestSlot<hal::DetectionFrame>& newest_detection)
-      : sim_(std::move(sim)), newest_detection_(newest_detection) {}
+  SimWorldTask(std::shared_ptr<hal::sim::Simulation> sim, const rt::LatestSlot<hal::DetectionFrame>& newest_detection,
+               const rt::LatestSlot<hal::DetectionFrame>& followed_detection)
+      : sim_(std::move(sim)), newest_detection_(newest_detection), followed_detection_(followed_detection) {}
   void step(rt::TimeNs now_ns) override {
     // Whom the pipeline follows, for the identity metrics (the followed detection is matched to the
-    // truth by the simulator): each detector output once, whichever task produced it.
-    if (const auto frame = newest_detection_.read(); frame && frame->sequence != last_sequence_) {
+    // truth by the simulator): each frame once. The person the estimator was given where a target task
+    // runs (it may choose another than the lock-on, issue 22), else the detector output's choice.
+    auto frame = followed_detection_.read();
+    if (frame) {
+      uses_followed_ = true;
+    } else if (!uses_followed_) {
+      frame = newest_detection_.read();
+    }
+    if (frame && frame->sequence != last_sequence_) {
       last_sequence_ = frame->sequence;
       sim_->recordFollowed(*frame);
     }
@@ -135,6 +143,8 @@ class SimWorldTask final : public rt::Task {
  private:
   std::shared_ptr<hal::sim::Simulation> sim_;
   const rt::LatestSlot<hal::DetectionFrame>& newest_detection_;
+  const rt::LatestSlot<hal::DetectionFrame>& followed_detection_;
+  bool uses_followed_ = false;
   std::uint64_t last_sequence_ = 0;
 };
 

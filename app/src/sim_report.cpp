@@ -36,7 +36,8 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   if (task == nullptr) return nullptr;
   const estimation::TargetTaskStats& s = task->stats();
   nlohmann::json out = {{"detections", s.detections}, {"unreliable", s.unreliable}, {"bearings", s.bearings},
-                        {"no_pose", s.no_pose},       {"accepted", s.accepted},     {"rejected", s.rejected}};
+                        {"reassigned", s.reassigned}, {"no_pose", s.no_pose},       {"accepted", s.accepted},
+                        {"rejected", s.rejected}};
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

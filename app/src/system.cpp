@@ -88,7 +88,8 @@ std::span<const System::TaskKind> System::taskKinds() {
   static const TaskKind kKinds[] = {
       {"sim_world", true,
        [](System& s, const std::string& /*where*/) {
-         return made(std::make_unique<SimWorldTask>(s.devices_.simulation, s.channels_.newest_detection));
+         return made(std::make_unique<SimWorldTask>(s.devices_.simulation, s.channels_.newest_detection,
+                                                    s.channels_.followed_detection));
        }},
       {"odometry", false,
        [](System& s, const std::string& /*where*/) {
@@ -188,6 +189,7 @@ System::TaskResult System::makeTargetTask(System& s, const std::string& where) {
                                                c.gimbal_stream, c.target);
   if (!target) return rt::Error{s.config_.source + ": estimation: " + target.error().message};
   auto task = std::make_unique<estimation::TargetTask>(std::move(target.value()));
+  task->publishFollowedTo(c.followed_detection);
   s.target_task_ = task.get();
   return made(std::move(task));
 }

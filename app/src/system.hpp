@@ -63,6 +63,7 @@ struct Channels {
   rt::LatestSlot<supervisor::SupervisorState> supervisor;  ///< the supervisor's mode
   std::atomic<int> planner_failures_in_a_row{0};           ///< written by the planning task
   rt::LatestSlot<hal::DetectionFrame> newest_detection;    ///< the newest detector output (for pictures)
+  rt::LatestSlot<hal::DetectionFrame> followed_detection;  ///< each frame the estimator took, with whom (target task)
   std::atomic<std::uint64_t> deadline_misses{0};           ///< periods skipped, fed by the real-time executor only
   std::atomic<bool> vehicle_link_lost{false};              ///< the vehicle link was up and is down (trajectory server)
 };

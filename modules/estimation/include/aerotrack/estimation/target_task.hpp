@@ -20,6 +20,8 @@
 #include "aerotrack/estimation/target_estimator.hpp"
 #include "aerotrack/hal/odometry_history.hpp"
 #include "aerotrack/localization/localization_model.hpp"
+#include "aerotrack/perception/keypoint_lock_on.hpp"
+#include "aerotrack/perception/person_tracker.hpp"
 #include "aerotrack/perception/torso_features.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
@@ -32,11 +34,21 @@ struct TargetTaskParams {
   GimbalCameraExtrinsics extrinsics;
   TargetEstimatorParams estimator;
   perception::TorsoFeatureParams torso;
+  /// The appearance gate, weight and learning rate of the association (the lock-on's; the app copies them).
+  perception::TrackerParams tracker;
   double measurement_std_per_m = 0.025;  ///< Horizontal noise per metre of distance...
   double min_measurement_std_m = 0.05;   ///< ...but at least this.
   /// A torso unreliable for a distance whose shoulders (or hips) are whole: a bearing-only measurement
   /// at the estimate's distance (issue 22, item 4; docs/modules/localization-estimation.md), or skipped.
   bool bearing_fallback = true;
+  /// Which detected person the estimator is given (issue 22 item 2; docs/modules/localization-estimation.md):
+  /// true (`association: estimate`): while the track is live, of the people with a distance inside the
+  /// estimator's gate (Mahalanobis, horizontal) and the appearance gate (the torso colour the task has
+  /// learnt from the measurements it gave), the one of least cost (the lock-on's: gate fraction plus
+  /// weighted appearance fraction), else the lock-on's choice; false (`association: lock_on`): always the
+  /// lock-on's choice. Why: the lock-on judges in the image (a constant image velocity and a colour
+  /// histogram), where a bystander beside the target matches as well; in the world they stand apart.
+  bool choose_by_estimate = true;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
 };
 
@@ -51,6 +63,7 @@ struct TargetTaskStats {
   std::uint64_t no_pose = 0;     ///< ... whose capture time the histories did not cover.
   std::uint64_t accepted = 0;    ///< Measurements the estimator used (or started from).
   std::uint64_t rejected = 0;    ///< Measurements the estimator refused.
+  std::uint64_t reassigned = 0;  ///< Frames whose person the track's prediction chose over the lock-on's.
 };
 
 class TargetTask final : public rt::Task {
@@ -62,13 +75,23 @@ class TargetTask final : public rt::Task {
 
   void step(rt::TimeNs now_ns) override;
   const TargetTaskStats& stats() const { return stats_; }
+  /// Each frame the estimator was given, its target_index set to the person it was given (-1: none): whom
+  /// the pipeline follows (the simulator's identity metrics). Optional; the slot outlives the task.
+  void publishFollowedTo(rt::LatestSlot<hal::DetectionFrame>& slot) { followed_out_ = &slot; }
+  /// The person of the frame the estimator is given (see TargetTaskParams::choose_by_estimate), or -1.
+  int choosePerson(const hal::DetectionFrame& frame) const;
 
  private:
   TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
              TargetEstimator estimator, rt::SpscQueue<hal::DetectionFrame>& detections,
              rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
              rt::LatestSlot<TargetEstimate>& out);
-  void process(const hal::DetectionFrame& frame);
+  void process(const hal::DetectionFrame& frame, int person_index);
+  /// The person's position in W from their torso (the regression, read in the level camera frame), and the
+  /// camera-frame point; nothing if the torso is unreliable or the capture time's pose is unknown.
+  std::optional<Eigen::Vector3d> localize(const hal::DetectionFrame& frame, const perception::TorsoFeatures& torso,
+                                          Eigen::Vector3d& p_C_m) const;
+  double measurementStdM(const Eigen::Vector3d& p_C_m) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
   /// behind or beside the camera).
   std::optional<TargetMeasurement> bearingMeasurement(const hal::DetectionFrame& frame,
@@ -89,6 +112,8 @@ class TargetTask final : public rt::Task {
   rt::TimeNs notified_accepted_ns_ = -1;  ///< last_accepted_ns of the last estimate that woke its readers
   bool notified_lost_ = true;
   TargetTaskStats stats_;
+  rt::LatestSlot<hal::DetectionFrame>* followed_out_ = nullptr;
+  perception::Appearance reference_;  ///< The torso colour of the people given to the estimator and taken.
 };
 
 }  // namespace aerotrack::estimation
