@@ -9,6 +9,7 @@
 
 #include "aerotrack/estimation/target_task.hpp"
 #include "support/require.hpp"
+#include "target_task_test_util.hpp"
 
 namespace aerotrack::estimation {
 namespace association_test {
@@ -17,22 +18,11 @@ namespace {
 using hal::CocoKeypoint;
 using hal::index;
 
-constexpr double kFx = 337.2;
-constexpr double kTorso = 0.5;
-constexpr int kW = 640;
-constexpr int kH = 480;
-constexpr double kRateHz = 30.0;
-
-localization::LocalizationParams camera() {
-  localization::LocalizationParams p;
-  p.model = localization::LocalizationModel::kPinhole;
-  p.pinhole.fx_px = kFx;
-  p.pinhole.fy_px = kFx;
-  p.pinhole.cx_px = 0.5 * kW;
-  p.pinhole.torso_m = kTorso;
-  p.z_m = -0.4;
-  return p;
-}
+constexpr double kFx = test::kFocalPx;
+constexpr double kTorso = test::kTorsoM;
+constexpr int kW = test::kWidthPx;
+constexpr int kH = test::kHeightPx;
+constexpr double kRateHz = test::kFrameRateHz;
 
 /// A whole upright torso of a person at (x forward, y left) of a level camera at the origin along W x, in
 /// one colour (a one-bin appearance signature); `cut`: the hips guessed on the bottom rows (no distance).
@@ -78,7 +68,7 @@ double personY(double t_s) {
 /// end_s at 30 Hz. Person 0 is the followed one, person 1 the look-alike at (5, 1.5) (or the passer-by).
 Scene run(bool choose_by_estimate, Event event, double end_s = 4.0) {
   TargetTaskParams params;
-  params.localization = camera();
+  params.localization = test::pinholeLocalization();
   params.choose_by_estimate = choose_by_estimate;
   rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
   rt::SpscQueue<hal::OdometrySample> odometry(256, rt::OverflowPolicy::kDropOldest);

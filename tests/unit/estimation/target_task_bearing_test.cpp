@@ -6,6 +6,7 @@
 
 #include "aerotrack/estimation/target_task.hpp"
 #include "support/require.hpp"
+#include "target_task_test_util.hpp"
 
 namespace aerotrack::estimation {
 namespace {
@@ -13,22 +14,11 @@ namespace {
 using hal::CocoKeypoint;
 using hal::index;
 
-constexpr double kFocalPx = 337.2;
-constexpr double kTorsoM = 0.5;
-constexpr int kWidthPx = 640;
-constexpr int kHeightPx = 480;
-constexpr double kFrameRateHz = 30.0;
-
-localization::LocalizationParams pinhole() {
-  localization::LocalizationParams p;
-  p.model = localization::LocalizationModel::kPinhole;
-  p.pinhole.fx_px = kFocalPx;
-  p.pinhole.fy_px = kFocalPx;
-  p.pinhole.cx_px = 0.5 * kWidthPx;
-  p.pinhole.torso_m = kTorsoM;
-  p.z_m = -0.4;
-  return p;
-}
+using test::kFocalPx;
+using test::kFrameRateHz;
+using test::kHeightPx;
+using test::kTorsoM;
+using test::kWidthPx;
 
 /// The followed person at (x forward, y left) of a level camera at the origin looking along W x: an
 /// upright torso, or (cut) hips guessed on the bottom rows with a middling score, as MoveNet does.
@@ -62,7 +52,7 @@ struct BearingRun {
 /// and stays; the drone hovers at the origin, the gimbal at 0.
 BearingRun runScene(bool bearing_fallback) {
   TargetTaskParams params;
-  params.localization = pinhole();
+  params.localization = test::pinholeLocalization();
   params.bearing_fallback = bearing_fallback;
   params.estimator.lost_after_s = 2.0;  // the cut views last 1.5 s: the track is still live at the end
   rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
@@ -108,7 +98,7 @@ TEST(TargetTaskBearing, GivenOnlyShouldersWhileThePersonStepsAside_WhenTheFallba
 
 TEST(TargetTaskBearing, GivenNoTrackYet_WhenOnlyCutViewsArrive_ThenNothingStartsFromABearing) {
   TargetTaskParams params;
-  params.localization = pinhole();
+  params.localization = test::pinholeLocalization();
   rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
   rt::SpscQueue<hal::OdometrySample> odometry(64, rt::OverflowPolicy::kDropOldest);
   rt::SpscQueue<hal::GimbalState> gimbal(64, rt::OverflowPolicy::kDropOldest);
