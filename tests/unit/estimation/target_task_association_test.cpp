@@ -15,11 +15,7 @@ namespace aerotrack::estimation {
 namespace association_test {
 namespace {
 
-using hal::CocoKeypoint;
-using hal::index;
-
 constexpr double kFx = test::kFocalPx;
-constexpr double kTorso = test::kTorsoM;
 constexpr int kW = test::kWidthPx;
 constexpr int kH = test::kHeightPx;
 constexpr double kRateHz = test::kFrameRateHz;
@@ -27,17 +23,7 @@ constexpr double kRateHz = test::kFrameRateHz;
 /// A whole upright torso of a person at (x forward, y left) of a level camera at the origin along W x, in
 /// one colour (a one-bin appearance signature); `cut`: the hips guessed on the bottom rows (no distance).
 void drawPerson(hal::PersonDetection& person, double x_m, double y_m, int colour_bin, bool cut = false) {
-  const double u_px = 0.5 * kW - kFx * y_m / x_m;
-  const double torso_px = kFx * kTorso / x_m;
-  const double neck_v_px = 0.5 * kH - 0.3 * torso_px;
-  auto& k = person.keypoints;
-  k[index(CocoKeypoint::kLeftShoulder)] = {u_px + 0.2 * torso_px, neck_v_px, 0.8};
-  k[index(CocoKeypoint::kRightShoulder)] = {u_px - 0.2 * torso_px, neck_v_px, 0.8};
-  const double hip_v_px = cut ? kH - 6.0 : neck_v_px + torso_px;
-  const double hip_score = cut ? 0.4 : 0.8;
-  k[index(CocoKeypoint::kLeftHip)] = {u_px + 0.15 * torso_px, hip_v_px, hip_score};
-  k[index(CocoKeypoint::kRightHip)] = {u_px - 0.15 * torso_px, hip_v_px, hip_score};
-  person.score = 0.6;
+  test::drawTorso(person, x_m, y_m, 0.3, cut);
   person.appearance.fill(0.0F);
   person.appearance[static_cast<std::size_t>(colour_bin)] = 1.0F;
   person.has_appearance = true;
@@ -82,10 +68,7 @@ Scene run(bool choose_by_estimate, Event event, double end_s = 4.0) {
   for (int i = 0; i <= frames; ++i) {
     const double t_s = i / kRateHz;
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
-    hal::OdometrySample pose;
-    pose.stamp_ns = t_ns;
-    odometry.try_push(pose);
-    gimbal.try_push({t_ns, 0.0, 0.0});
+    test::pushHover(odometry, gimbal, t_ns);
     const bool during = t_s >= 1.5 && t_s < 2.5;
     const bool swapped = during && event != Event::kPasserBy;
     const bool hide_person = event == Event::kHide;

@@ -11,13 +11,9 @@
 namespace aerotrack::estimation {
 namespace {
 
-using hal::CocoKeypoint;
-using hal::index;
-
 using test::kFocalPx;
 using test::kFrameRateHz;
 using test::kHeightPx;
-using test::kTorsoM;
 using test::kWidthPx;
 
 /// The followed person at (x forward, y left) of a level camera at the origin looking along W x: an
@@ -29,17 +25,7 @@ hal::DetectionFrame frameOf(rt::TimeNs stamp_ns, double x_m, double y_m, bool cu
   frame.intrinsics = {kWidthPx, kHeightPx, kFocalPx, kFocalPx, 0.5 * kWidthPx, 0.5 * kHeightPx, {}};
   frame.person_count = 1;
   frame.target_index = 0;
-  const double u_px = 0.5 * kWidthPx - kFocalPx * y_m / x_m;
-  const double torso_px = kFocalPx * kTorsoM / x_m;
-  auto& k = frame.persons[0].keypoints;
-  const double neck_v_px = 0.5 * kHeightPx;
-  k[index(CocoKeypoint::kLeftShoulder)] = {u_px + 0.2 * torso_px, neck_v_px, 0.8};
-  k[index(CocoKeypoint::kRightShoulder)] = {u_px - 0.2 * torso_px, neck_v_px, 0.8};
-  const double hip_v_px = cut ? kHeightPx - 6.0 : neck_v_px + torso_px;
-  const double hip_score = cut ? 0.4 : 0.8;
-  k[index(CocoKeypoint::kLeftHip)] = {u_px + 0.15 * torso_px, hip_v_px, hip_score};
-  k[index(CocoKeypoint::kRightHip)] = {u_px - 0.15 * torso_px, hip_v_px, hip_score};
-  frame.persons[0].score = 0.6;
+  test::drawTorso(frame.persons[0], x_m, y_m, 0.0, cut);
   return frame;
 }
 
@@ -65,10 +51,7 @@ BearingRun runScene(bool bearing_fallback) {
   for (int i = 0; i <= frames; ++i) {
     const double t_s = i / kFrameRateHz;
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
-    hal::OdometrySample pose;
-    pose.stamp_ns = t_ns;
-    odometry.try_push(pose);
-    gimbal.try_push({t_ns, 0.0, 0.0});
+    test::pushHover(odometry, gimbal, t_ns);
     detections.try_push(frameOf(t_ns, 5.0, y_at(t_s), t_s >= 2.0));
     task.step(t_ns + 1);
   }
@@ -106,10 +89,7 @@ TEST(TargetTaskBearing, GivenNoTrackYet_WhenOnlyCutViewsArrive_ThenNothingStarts
   TargetTask task = aerotrack::test::require(TargetTask::create(params, detections, odometry, gimbal, out), "task");
   for (int i = 0; i < 30; ++i) {
     const rt::TimeNs t_ns = rt::secondsToNs(i / kFrameRateHz);
-    hal::OdometrySample pose;
-    pose.stamp_ns = t_ns;
-    odometry.try_push(pose);
-    gimbal.try_push({t_ns, 0.0, 0.0});
+    test::pushHover(odometry, gimbal, t_ns);
     detections.try_push(frameOf(t_ns, 4.0, 0.5, true));
     task.step(t_ns + 1);
   }

@@ -2,7 +2,9 @@
 // the world's origin, looking along W x, and the pinhole localization of a 0.5 m torso seen by it.
 #pragma once
 
+#include "aerotrack/hal/types.hpp"
 #include "aerotrack/localization/localization_model.hpp"
+#include "aerotrack/rt/spsc_queue.hpp"
 
 namespace aerotrack::estimation::test {
 
@@ -21,6 +23,34 @@ inline localization::LocalizationParams pinholeLocalization() {
   p.pinhole.torso_m = kTorsoM;
   p.z_m = -0.4;
   return p;
+}
+
+/// An upright torso of a person at (x forward, y left) of the camera, the neck `neck_above_centre` torso
+/// lengths above the image's centre row; `cut`: the hips guessed on the bottom rows with a middling score,
+/// as MoveNet does for hips outside the frame (no distance from such a torso).
+inline void drawTorso(hal::PersonDetection& person, double x_m, double y_m, double neck_above_centre, bool cut) {
+  using hal::CocoKeypoint;
+  using hal::index;
+  const double u_px = 0.5 * kWidthPx - kFocalPx * y_m / x_m;
+  const double torso_px = kFocalPx * kTorsoM / x_m;
+  const double neck_v_px = 0.5 * kHeightPx - neck_above_centre * torso_px;
+  auto& k = person.keypoints;
+  k[index(CocoKeypoint::kLeftShoulder)] = {u_px + 0.2 * torso_px, neck_v_px, 0.8};
+  k[index(CocoKeypoint::kRightShoulder)] = {u_px - 0.2 * torso_px, neck_v_px, 0.8};
+  const double hip_v_px = cut ? kHeightPx - 6.0 : neck_v_px + torso_px;
+  const double hip_score = cut ? 0.4 : 0.8;
+  k[index(CocoKeypoint::kLeftHip)] = {u_px + 0.15 * torso_px, hip_v_px, hip_score};
+  k[index(CocoKeypoint::kRightHip)] = {u_px - 0.15 * torso_px, hip_v_px, hip_score};
+  person.score = 0.6;
+}
+
+/// The drone hovering at the origin, the gimbal at 0: one odometry sample and one encoder reading at t_ns.
+inline void pushHover(rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
+                      rt::TimeNs t_ns) {
+  hal::OdometrySample pose;
+  pose.stamp_ns = t_ns;
+  odometry.try_push(pose);
+  gimbal.try_push({t_ns, 0.0, 0.0});
 }
 
 }  // namespace aerotrack::estimation::test
