@@ -34,6 +34,8 @@ const rt::FieldTable<TargetPredictorParams>& targetPredictorFields() {
           rt::number("max_accel_mps2", &P::max_accel_mps2, Range::closed(1e-3, 100.0)),
           rt::flag("fit_z", &P::fit_z),
           rt::flag("pin_to_newest", &P::pin_to_newest),
+          rt::flag("pin_velocity_to_newest", &P::pin_velocity_to_newest),
+          rt::number("newest_velocity_weight", &P::newest_velocity_weight, Range::closed(0.0, 1e6)),
           rt::integer("min_samples", &P::min_samples, 2, 100'000),
           rt::number("max_data_age_s", &P::max_data_age_s, Range::closed(1e-3, 3600.0)),
           rt::integer("max_samples", &P::max_samples, 2, 100'000),
@@ -104,8 +106,8 @@ TargetPredictor::TargetPredictor(const TargetPredictorParams& params, DenseQpSol
   weights_.setZero(params.max_samples);
   hessian_.setZero(n + 1, n + 1);
   gradient_.setZero(n + 1);
-  a_eq_.setZero(1, n + 1);
-  b_eq_.setZero(1);
+  a_eq_.setZero(2, n + 1);
+  b_eq_.setZero(2);
   a_in_.setZero(m_in, n + 1);
   b_in_.setZero(m_in);
   for (auto& warm : warm_active_) warm.reserve(static_cast<std::size_t>(m_in));
@@ -124,6 +126,13 @@ bool TargetPredictor::add(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_WT_m) {
   samples_.erase(samples_.begin(), first_kept);
   if (samples_.size() == samples_.capacity()) samples_.erase(samples_.begin());
   samples_.push_back(Sample{stamp_ns, p_WT_m});
+  return true;
+}
+
+bool TargetPredictor::add(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_WT_m, const Eigen::Vector3d& v_WT_mps) {
+  if (!v_WT_mps.allFinite() || !add(stamp_ns, p_WT_m)) return false;
+  samples_.back().v_WT_mps = v_WT_mps;
+  samples_.back().has_velocity = true;
   return true;
 }
 
@@ -190,10 +199,31 @@ rt::Expected<TargetPrediction> TargetPredictor::predict(rt::TimeNs now_ns) {
       ++row;
     }
   }
-  const int m_eq = params_.pin_to_newest ? 1 : 0;
+  int m_eq = 0;
   if (params_.pin_to_newest) {
-    for (int i = 0; i < size; ++i) a_eq_(0, i) = basis_(i, count - 1);
-    b_eq_(0) = 0.0;  // relative to the newest estimate
+    for (int i = 0; i < size; ++i) a_eq_(m_eq, i) = basis_(i, count - 1);
+    b_eq_(m_eq) = 0.0;  // relative to the newest estimate
+    ++m_eq;
+  }
+  // The velocity row (its right-hand side is per axis, below): d/dt sum_i c_i b_{n,i}(s) with s = t / T and
+  // d b_{n,i} / ds = n (b_{n-1,i-1} - b_{n-1,i}).
+  const bool soft = !params_.pin_velocity_to_newest && params_.newest_velocity_weight > 0.0 && newest.has_velocity;
+  const int velocity_row = (params_.pin_velocity_to_newest && newest.has_velocity) || soft ? m_eq : -1;
+  if (velocity_row >= 0) {
+    std::array<double, kMaxBezierDegree + 1> b{};
+    bernsteinBasis(n - 1, rt::nsToSeconds(newest.stamp_ns - start_ns) / duration_s, b);
+    for (int i = 0; i < size; ++i) {
+      const double lower = i > 0 ? b[static_cast<std::size_t>(i - 1)] : 0.0;
+      const double upper = i < n ? b[static_cast<std::size_t>(i)] : 0.0;
+      a_eq_(velocity_row, i) = v_scale * (lower - upper);
+    }
+    if (soft) {
+      const double w = params_.newest_velocity_weight;
+      for (int c = 0; c < size; ++c)
+        for (int r = 0; r < size; ++r) hessian_(r, c) += 2.0 * w * a_eq_(velocity_row, r) * a_eq_(velocity_row, c);
+    } else {
+      ++m_eq;
+    }
   }
 
   TargetPrediction prediction;
@@ -210,9 +240,22 @@ rt::Expected<TargetPrediction> TargetPredictor::predict(rt::TimeNs now_ns) {
       const double offset = samples_[static_cast<std::size_t>(k)].p_WT_m(axis) - newest.p_WT_m(axis);
       gradient_ -= (2.0 * weights_(k) * offset) * basis_.col(k);
     }
+    if (soft) {
+      gradient_ -= (2.0 * params_.newest_velocity_weight * newest.v_WT_mps(axis)) * a_eq_.row(velocity_row).transpose();
+    }
+    // The velocity pin is clamped into the hodograph's bounds (else the QP has no solution).
+    if (velocity_row >= 0 && !soft)
+      b_eq_(velocity_row) = std::clamp(newest.v_WT_mps(axis), -params_.max_speed_mps, params_.max_speed_mps);
     const QpProblem problem{hessian_, gradient_, a_eq_.topRows(m_eq), b_eq_.head(m_eq), a_in_, b_in_};
     std::vector<int>& warm = warm_active_[static_cast<std::size_t>(axis)];
-    const QpResult result = solver_.solve(problem, warm);
+    QpResult result = solver_.solve(problem, warm);
+    if (result.status != QpStatus::kOptimal && velocity_row >= 0 && !soft) {
+      // The pinned velocity can still clash with the acceleration bounds near the window's start: fit unpinned.
+      warm.clear();
+      const int m_unpinned = m_eq - 1;
+      const QpProblem unpinned{hessian_, gradient_, a_eq_.topRows(m_unpinned), b_eq_.head(m_unpinned), a_in_, b_in_};
+      result = solver_.solve(unpinned, warm);
+    }
     prediction.qp_iterations += result.iterations;
     if (result.status != QpStatus::kOptimal) {
       warm.clear();

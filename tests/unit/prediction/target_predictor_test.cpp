@@ -180,6 +180,45 @@ TEST(TargetPredictor, GivenPinToNewestThenTheCurvePassesThroughTheNewestEstimate
   EXPECT_LT((prediction->position(stampOf(60)) - newest).head<2>().norm(), 1e-9);
 }
 
+TEST(TargetPredictor, GivenARunnerWhoBrakesWhenTheVelocityIsPinnedThenTheCurveHasTheEstimatesVelocity) {
+  // 4 m/s along x, then braking at 3 m/s^2 from 1 s (issue 21: the fit lags a braking runner). Positions
+  // noisy as estimates are, velocities exact (standing in for the Kalman filter's). 0.8 s into the braking
+  // the runner is at 1.6 m/s.
+  const auto x_at = [](double t_s) {
+    const double braking_s = std::clamp(t_s - 1.0, 0.0, 4.0 / 3.0);
+    return 4.0 * std::min(t_s, 1.0) + 4.0 * braking_s - 1.5 * braking_s * braking_s;
+  };
+  const auto v_at = [](double t_s) { return std::max(0.0, 4.0 - 3.0 * std::max(0.0, t_s - 1.0)); };
+  const auto velocityAtNewest = [&](bool pinned, double weight = 0.0) {
+    TargetPredictorParams params;
+    params.max_speed_mps = 6.0;
+    params.pin_velocity_to_newest = pinned;
+    params.newest_velocity_weight = weight;
+    auto predictor = aerotrack::test::require(TargetPredictor::create(params), "predictor");
+    std::mt19937_64 rng(4);
+    std::normal_distribution<double> noise(0.0, kNoiseM);
+    const int last = static_cast<int>(1.8 * kRateHz);
+    for (int k = 0; k <= last; ++k) {
+      const double t_s = k / kRateHz;
+      EXPECT_TRUE(predictor.add(stampOf(k), Eigen::Vector3d(x_at(t_s) + noise(rng), noise(rng), 0.0),
+                                Eigen::Vector3d(v_at(t_s), 0.0, 0.0)));
+    }
+    const auto prediction = aerotrack::test::require(predictor.predict(stampOf(last)), "prediction");
+    return prediction.velocity(stampOf(last)).x();
+  };
+  const double truth_mps = v_at(1.8);
+  EXPECT_NEAR(velocityAtNewest(true), truth_mps, 1e-6);
+  const double lag_mps = velocityAtNewest(false) - truth_mps;
+  std::printf("braking runner at %.2f m/s: the unpinned fit reads %.2f m/s more\n", truth_mps, lag_mps);
+  EXPECT_GT(lag_mps, 0.3) << "the lag the pin removes";
+  // The soft pull lies between, closer to the estimate as its weight grows.
+  const double soft_mps = velocityAtNewest(false, 0.2) - truth_mps;
+  const double softer_mps = velocityAtNewest(false, 0.02) - truth_mps;
+  EXPECT_GT(soft_mps, 0.0);
+  EXPECT_LT(soft_mps, softer_mps);
+  EXPECT_LT(softer_mps, lag_mps);
+}
+
 TEST(TargetPredictor, GivenADropoutThenKeepsExtrapolatingWithAGrowingDataAge) {
   TargetPredictorParams params;
   auto predictor = TargetPredictor::create(params);
@@ -229,7 +268,8 @@ TEST(TargetPredictorParams, GivenAConfigSectionThenEveryKeyIsRequiredAndChecked)
   const std::string good =
       "prediction:\n  bezier_degree: 5\n  window_s: 1.5\n  horizon_s: 1.5\n  weight_half_life_s: 0.5\n"
       "  accel_energy_weight_s3: 0.01\n  max_speed_mps: 3.0\n  max_accel_mps2: 3.0\n  fit_z: false\n"
-      "  pin_to_newest: false\n  min_samples: 5\n  max_data_age_s: 3.0\n  max_samples: 128\n"
+      "  pin_to_newest: false\n  pin_velocity_to_newest: false\n  newest_velocity_weight: 0.0\n  min_samples: 5\n  "
+      "max_data_age_s: 3.0\n  max_samples: 128\n"
       "  qp_max_iterations: 100\n";
   const auto parse = [](const std::string& text) {
     const rt::ConfigNode root = aerotrack::test::require(rt::ConfigNode::fromString(text, "cfg.yaml"), "cfg.yaml");

@@ -100,7 +100,7 @@ void TrackingPlanner::observeTarget(const estimation::TargetEstimate& estimate) 
   }
   if (estimate.stamp_ns <= last_target_stamp_ns_) return;
   last_target_stamp_ns_ = estimate.stamp_ns;
-  predictor_.add(estimate.stamp_ns, estimate.p_WT_m);
+  predictor_.add(estimate.stamp_ns, estimate.p_WT_m, estimate.v_WT_mps);
 }
 
 StatePva TrackingPlanner::startState(const PlanInputs& inputs, rt::TimeNs start_ns) const {
