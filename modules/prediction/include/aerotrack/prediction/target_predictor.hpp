@@ -50,8 +50,9 @@ struct TargetPredictorParams {
   /// (4.09 m/s against the filter's 3.21 m/s on forest 5 m/s seed 1), so the goal stays metres ahead of
   /// a person who stops and the drone overshoots them.
   bool pin_velocity_to_newest = false;
-  /// Softer: w (s^2/m^0, against the residuals' unit weight) x (curve velocity at the newest estimate's time
-  /// - the estimate's)^2 added to the fit; 0: off. Ignored when pin_velocity_to_newest; >= 0.
+  /// Softer: w x (curve velocity at the newest estimate's time - the estimate's)^2 added to the fit (w in s^2:
+  /// 1 m/s off costs w m^2, against position residuals whose weights sum to 1); 0: off. Ignored when
+  /// pin_velocity_to_newest; >= 0.
   double newest_velocity_weight = 0.0;
   int min_samples = 5;          ///< Fewer estimates in the window: no prediction; >= 2.
   double max_data_age_s = 3.0;  ///< Newest estimate older than this at now: no prediction; > 0.
