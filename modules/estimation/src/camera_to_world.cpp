@@ -28,6 +28,16 @@ Eigen::Matrix3d opticalAxesInCamera() {
   return R;
 }
 
+namespace {
+
+/// The level frame's orientation in W: the camera's heading (its forward axis projected on the ground).
+Eigen::Matrix3d levelRotation(const Eigen::Isometry3d& T_WC) {
+  const Eigen::Vector3d forward_W = T_WC.linear().col(0);
+  return Eigen::AngleAxisd(std::atan2(forward_W.y(), forward_W.x()), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+}  // namespace
+
 Eigen::Isometry3d cameraPoseInWorld(const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
                                     const GimbalCameraExtrinsics& extrinsics) {
   Eigen::Isometry3d T_BG = Eigen::Isometry3d::Identity();
@@ -36,19 +46,28 @@ Eigen::Isometry3d cameraPoseInWorld(const Eigen::Isometry3d& T_WB, double gimbal
   return T_WB * T_BG * extrinsics.T_GC;
 }
 
-Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
-                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
-  const Eigen::Isometry3d T_WC = cameraPoseInWorld(T_WB, gimbal_angle_rad, extrinsics);
+Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WC, CameraFrame frame) {
   if (frame == CameraFrame::kCamera) return T_WC * p_C_m;
-  const Eigen::Vector3d forward_W = T_WC.linear().col(0);
-  const double heading_rad = std::atan2(forward_W.y(), forward_W.x());
-  return T_WC.translation() + Eigen::AngleAxisd(heading_rad, Eigen::Vector3d::UnitZ()) * p_C_m;
+  return T_WC.translation() + levelRotation(T_WC) * p_C_m;
 }
 
-rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
-                                              const hal::OdometryHistory& poses, const GimbalAngleHistory& gimbal,
-                                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
-  if (!p_C_m.allFinite()) return rt::Error{"camera to world: p_C is not finite"};
+Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
+                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
+  return cameraToWorld(p_C_m, cameraPoseInWorld(T_WB, gimbal_angle_rad, extrinsics), frame);
+}
+
+Eigen::Matrix3d levelHomography(const Eigen::Isometry3d& T_WC, const hal::CameraIntrinsics& intrinsics) {
+  Eigen::Matrix3d K;
+  K << intrinsics.fx_px, 0.0, intrinsics.cx_px, 0.0, intrinsics.fy_px, intrinsics.cy_px, 0.0, 0.0, 1.0;
+  // A ray in the camera's optical frame, into W, into the level camera's optical frame.
+  const Eigen::Matrix3d R_W_optical = T_WC.linear() * opticalAxesInCamera();
+  const Eigen::Matrix3d R_W_level_optical = levelRotation(T_WC) * opticalAxesInCamera();
+  return K * (R_W_level_optical.transpose() * R_W_optical) * K.inverse();
+}
+
+rt::Expected<Eigen::Isometry3d> cameraPoseAt(rt::TimeNs stamp_ns, const hal::OdometryHistory& poses,
+                                             const GimbalAngleHistory& gimbal,
+                                             const GimbalCameraExtrinsics& extrinsics) {
   const hal::OdometryHistory::Lookup pose = poses.lookup(stamp_ns);
   if (pose.status != rt::HistoryStatus::kOk) {
     return rt::Error{std::string("camera to world: no body pose at t = ") + std::to_string(stamp_ns) +
@@ -59,9 +78,16 @@ rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::
     return rt::Error{std::string("camera to world: no gimbal angle at t = ") + std::to_string(stamp_ns) +
                      " ns: " + rt::toString(angle.status)};
   }
-  const Eigen::Isometry3d& T_WB = pose.value;
-  const double gimbal_angle_rad = angle.value;
-  return cameraToWorld(p_C_m, T_WB, gimbal_angle_rad, extrinsics, frame);
+  return cameraPoseInWorld(pose.value, angle.value, extrinsics);
+}
+
+rt::Expected<Eigen::Vector3d> cameraToWorldAt(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_C_m,
+                                              const hal::OdometryHistory& poses, const GimbalAngleHistory& gimbal,
+                                              const GimbalCameraExtrinsics& extrinsics, CameraFrame frame) {
+  if (!p_C_m.allFinite()) return rt::Error{"camera to world: p_C is not finite"};
+  const auto T_WC = cameraPoseAt(stamp_ns, poses, gimbal, extrinsics);
+  if (!T_WC) return T_WC.error();
+  return cameraToWorld(p_C_m, T_WC.value(), frame);
 }
 
 }  // namespace aerotrack::estimation

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <string>
 
 #include <Eigen/Cholesky>
@@ -12,6 +13,26 @@ namespace aerotrack::estimation {
 namespace {
 
 using Matrix3d = Eigen::Matrix3d;
+
+bool valid(const TargetMeasurement& m) {
+  const bool bad_bearing = m.bearingOnly() && (!m.bearing_W.allFinite() || std::abs(m.bearing_W.norm() - 1.0) > 1e-6 ||
+                                               !std::isfinite(m.range_std_m) || !(m.range_std_m > 0.0));
+  return m.p_WT_m.allFinite() && std::isfinite(m.std_xy_m) && std::isfinite(m.std_z_m) && m.std_xy_m >= 0.0 &&
+         m.std_z_m >= 0.0 && !bad_bearing;
+}
+
+/// R: std_xy across the line of sight and, for a bearing, range_std_m along it (R = s^2 I + (r^2 - s^2) b b^T).
+Matrix3d measurementNoise(const TargetEstimatorParams& params, const TargetMeasurement& m) {
+  const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params.measurement_std_xy_m;
+  const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params.measurement_std_z_m;
+  Matrix3d R = Eigen::Vector3d(std_xy * std_xy, std_xy * std_xy, std_z * std_z).asDiagonal();
+  if (m.bearingOnly()) {
+    const Eigen::Vector2d& b = m.bearing_W;
+    R.topLeftCorner<2, 2>() += (m.range_std_m * m.range_std_m - std_xy * std_xy) * b * b.transpose();
+  }
+  return R;
+}
+
 using Matrix36d = Eigen::Matrix<double, 3, 6>;
 
 bool positiveFinite(double v) {
@@ -136,14 +157,7 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
   }
   State predicted = state;
   predict(predicted, m.stamp_ns);
-  const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params_.measurement_std_xy_m;
-  const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params_.measurement_std_z_m;
-  // R: std_xy across the line of sight and, for a bearing, range_std_m along it (R = s^2 I + (r^2 - s^2) b b^T).
-  Matrix3d R = Eigen::Vector3d(std_xy * std_xy, std_xy * std_xy, std_z * std_z).asDiagonal();
-  if (m.bearingOnly()) {
-    const Eigen::Vector2d& b = m.bearing_W;
-    R.topLeftCorner<2, 2>() += (m.range_std_m * m.range_std_m - std_xy * std_xy) * b * b.transpose();
-  }
+  const Matrix3d R = measurementNoise(params_, m);
   const Eigen::Vector3d innovation = m.p_WT_m - predicted.x.head<3>();
   const Matrix3d S = predicted.P.topLeftCorner<3, 3>() + R;
   const Eigen::LLT<Matrix3d> llt(S);
@@ -170,11 +184,22 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
   return MeasurementVerdict::kAccepted;
 }
 
+std::optional<double> TargetEstimator::mahalanobisSq(const TargetMeasurement& m) const {
+  if (!valid(m) || (folded_any_ && m.stamp_ns < folded_until_ns_)) return std::nullopt;
+  // The state add() would update: after the newest buffered measurement at or before m's time.
+  const auto after = std::upper_bound(buffer_.begin(), buffer_.end(), m.stamp_ns,
+                                      [](rt::TimeNs t, const Entry& e) { return t < e.measurement.stamp_ns; });
+  State state = after == buffer_.begin() ? anchor_ : std::prev(after)->after;
+  if (!state.initialised) return std::nullopt;
+  predict(state, m.stamp_ns);
+  const Eigen::Vector3d innovation = m.p_WT_m - state.x.head<3>();
+  const Eigen::LLT<Matrix3d> llt(state.P.topLeftCorner<3, 3>() + measurementNoise(params_, m));
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  return innovation.dot(llt.solve(innovation));
+}
+
 MeasurementVerdict TargetEstimator::add(const TargetMeasurement& m) {
-  const bool bad_bearing = m.bearingOnly() && (!m.bearing_W.allFinite() || std::abs(m.bearing_W.norm() - 1.0) > 1e-6 ||
-                                               !std::isfinite(m.range_std_m) || !(m.range_std_m > 0.0));
-  if (!m.p_WT_m.allFinite() || !std::isfinite(m.std_xy_m) || !std::isfinite(m.std_z_m) || m.std_xy_m < 0.0 ||
-      m.std_z_m < 0.0 || bad_bearing) {
+  if (!valid(m)) {
     ++rejected_;
     return MeasurementVerdict::kRejectedInvalid;
   }

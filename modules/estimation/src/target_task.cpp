@@ -28,14 +28,16 @@ rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
   if (!gimbal_history) return gimbal_history.error();
   auto estimator = TargetEstimator::create(params.estimator);
   if (!estimator) return rt::Error{"estimator: " + estimator.error().message};
+  auto bystanders = BystanderTracks::create(params.estimator, params.choose_by_estimate ? kMaxBystanderTracks : 0);
+  if (!bystanders) return rt::Error{"bystander tracks: " + bystanders.error().message};
   return TargetTask(params, std::move(poses.value()), std::move(gimbal_history.value()), std::move(estimator.value()),
-                    detections, odometry, gimbal, out);
+                    std::move(bystanders.value()), detections, odometry, gimbal, out);
 }
 
 TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
-                       TargetEstimator estimator, rt::SpscQueue<hal::DetectionFrame>& detections,
-                       rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
-                       rt::LatestSlot<TargetEstimate>& out)
+                       TargetEstimator estimator, BystanderTracks bystanders,
+                       rt::SpscQueue<hal::DetectionFrame>& detections, rt::SpscQueue<hal::OdometrySample>& odometry,
+                       rt::SpscQueue<hal::GimbalState>& gimbal, rt::LatestSlot<TargetEstimate>& out)
     : params_(params),
       poses_(std::move(poses)),
       gimbal_history_(std::move(gimbal_history)),
@@ -43,115 +45,220 @@ TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory pose
       detections_(detections),
       odometry_(odometry),
       gimbal_(gimbal),
-      out_(out) {}
+      out_(out),
+      bystanders_(std::move(bystanders)) {}
 
-std::optional<Eigen::Vector3d> TargetTask::localize(const hal::DetectionFrame& frame,
-                                                    const perception::TorsoFeatures& torso,
-                                                    Eigen::Vector3d& p_C_m) const {
-  if (!torso.reliable) return std::nullopt;
+Eigen::Vector3d TargetTask::localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
+                                     Eigen::Vector3d& p_C_m) const {
   p_C_m = localization::predict(params_.localization, torso.torso_px, torso.u_px);
   // The regression was fitted on a level camera: read its output in the level frame.
-  const auto p_WT_m =
-      cameraToWorldAt(frame.stamp_ns, p_C_m, poses_, gimbal_history_, params_.extrinsics, CameraFrame::kLevel);
-  if (!p_WT_m) return std::nullopt;
-  return *p_WT_m;
+  return cameraToWorld(p_C_m, T_WC, CameraFrame::kLevel);
 }
 
 double TargetTask::measurementStdM(const Eigen::Vector3d& p_C_m) const {
   return std::max(params_.min_measurement_std_m, params_.measurement_std_per_m * p_C_m.head<2>().norm());
 }
 
-int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
-  const int count = static_cast<int>(std::min(frame.person_count, hal::kMaxPersons));
-  const int lock_on = frame.target_index >= 0 && frame.target_index < count ? frame.target_index : -1;
-  if (!params_.choose_by_estimate) return lock_on;
-  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
-  if (!prior.initialised || prior.lost) return lock_on;
-  // Each person with a distance: the squared Mahalanobis distance of their localized position from the
-  // prediction, horizontally (the regression's height is a constant), S = P_xy + R; inside the estimator's
-  // gate and (where both are known) the appearance gate, the cost is the lock-on's form.
-  const Eigen::Matrix2d p_xy = prior.covariance.topLeftCorner<2, 2>();
-  const double gate = params_.estimator.gate_chi2;
-  const perception::TrackerParams& t = params_.tracker;
-  int best = -1;
-  double best_cost = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < count; ++i) {
-    const auto& person = frame.persons[static_cast<std::size_t>(i)];
-    const perception::TorsoFeatures torso = perception::torsoFeatures(person.keypoints, frame.intrinsics.width_px,
-                                                                      frame.intrinsics.height_px, params_.torso);
-    Eigen::Vector3d p_C_m;
-    const auto p_WT_m = localize(frame, torso, p_C_m);
-    if (!p_WT_m) continue;
-    const double std_m = measurementStdM(p_C_m);
-    const Eigen::Matrix2d s = p_xy + std_m * std_m * Eigen::Matrix2d::Identity();
-    const Eigen::Vector2d d = (*p_WT_m - prior.p_WT_m).head<2>();
-    const double d2 = d.dot(s.ldlt().solve(d));
-    if (!(d2 < gate)) continue;
-    const perception::Appearance look = perception::toAppearance(person);
-    double appearance = 0.0;
-    if (reference_.valid && look.valid) {
-      appearance = perception::appearanceDistance(reference_, look);
-      if (appearance > t.max_appearance_distance) continue;
-    }
-    const double cost = d2 / gate + t.appearance_weight * appearance / t.max_appearance_distance;
-    if (cost < best_cost) {
-      best_cost = cost;
-      best = i;
-    }
+TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, int index,
+                                            const std::optional<Eigen::Isometry3d>& T_WC) const {
+  const auto& person = frame.persons[static_cast<std::size_t>(index)];
+  Candidate c;
+  // Judged in the image the network saw (its edges, its scores)...
+  c.torso =
+      perception::torsoFeatures(person.keypoints, frame.intrinsics.width_px, frame.intrinsics.height_px, params_.torso);
+  c.look = perception::toAppearance(person);
+  if (!T_WC) return c;  // the capture time's pose unknown: no measurement (stats: no_pose)
+  // ... measured in the level camera's (levelHomography): the regression's inputs as it was fitted.
+  const Eigen::Matrix3d H = levelHomography(*T_WC, frame.intrinsics);
+  std::array<hal::Keypoint2D, hal::kNumKeypoints> level = person.keypoints;
+  for (const hal::CocoKeypoint k : {hal::CocoKeypoint::kLeftShoulder, hal::CocoKeypoint::kRightShoulder,
+                                    hal::CocoKeypoint::kLeftHip, hal::CocoKeypoint::kRightHip}) {
+    hal::Keypoint2D& kp = level[hal::index(k)];
+    const Eigen::Vector3d h = H * Eigen::Vector3d(kp.u_px, kp.v_px, 1.0);
+    if (!(h.z() > 0.0)) return c;  // behind the level camera: no measurement
+    kp.u_px = h.x() / h.z();
+    kp.v_px = h.y() / h.z();
   }
-  return best >= 0 ? best : lock_on;
+  c.torso = perception::remeasured(c.torso, level);
+  if (c.torso.reliable) {
+    Eigen::Vector3d p_C_m;
+    const Eigen::Vector3d p_WT_m = localize(c.torso, *T_WC, p_C_m);
+    if (p_WT_m.allFinite()) {
+      c.measurement.emplace();
+      c.measurement->stamp_ns = frame.stamp_ns;
+      c.measurement->p_WT_m = p_WT_m;
+      c.measurement->std_xy_m = measurementStdM(p_C_m);
+    }
+  } else if (params_.bearing_fallback) {
+    c.measurement = bearingMeasurement(frame, c.torso, *T_WC);
+  }
+  return c;
 }
 
-void TargetTask::process(const hal::DetectionFrame& frame, int person_index) {
-  const auto& person = frame.persons[static_cast<std::size_t>(person_index)];
-  const perception::TorsoFeatures torso =
-      perception::torsoFeatures(person.keypoints, frame.intrinsics.width_px, frame.intrinsics.height_px, params_.torso);
-  if (!torso.reliable) {
-    ++stats_.unreliable;
-    if (!params_.bearing_fallback) return;
-    if (const auto bearing = bearingMeasurement(frame, torso)) {
-      const MeasurementVerdict verdict = estimator_.add(*bearing);
-      if (verdict == MeasurementVerdict::kAccepted) ++stats_.bearings;
+TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
+                                              std::array<Candidate, hal::kMaxPersons>& candidates) const {
+  Association a;
+  a.track.fill(kNoTrack);
+  const int count = static_cast<int>(std::min(frame.person_count, hal::kMaxPersons));
+  const int lock_on = frame.target_index >= 0 && frame.target_index < count ? frame.target_index : -1;
+  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
+  const auto pose = cameraPoseAt(frame.stamp_ns, poses_, gimbal_history_, params_.extrinsics);
+  const std::optional<Eigen::Isometry3d> T_WC =
+      pose ? std::optional<Eigen::Isometry3d>(pose.value()) : std::optional<Eigen::Isometry3d>();
+  if (!params_.choose_by_estimate) {
+    if (lock_on >= 0) candidates[static_cast<std::size_t>(lock_on)] = candidate(frame, lock_on, T_WC);
+    a.followed = lock_on;
+    return a;
+  }
+  for (int i = 0; i < count; ++i) candidates[static_cast<std::size_t>(i)] = candidate(frame, i, T_WC);
+  const auto distance = [&](int i) {
+    const auto& m = candidates[static_cast<std::size_t>(i)].measurement;
+    return m && !m->bearingOnly();
+  };
+  if (!prior.initialised) {  // the lock-on designates; everyone else with a distance is someone else
+    a.followed = lock_on;
+    for (int i = 0; i < count; ++i)
+      if (i != lock_on && distance(i)) a.track[static_cast<std::size_t>(i)] = kNewTrack;
+    return a;
+  }
+  // Every (person, track) pair within the track's gate -- the estimator's own test against the state it would
+  // update: live, the prediction; lost, the prediction with its grown covariance (where the person can have
+  // gone since: the re-identification after an occlusion). The followed track's pairs also pass the colour the
+  // task has learnt, a bystander's the colour learnt for their track; the cost is the lock-on's form (gate
+  // fraction plus weighted colour fraction) for every track alike. While the followed person is lost, a bystander track
+  // never seen beside them may be them, and does not compete. The cheapest distance pairs first (global nearest
+  // neighbour, greedy); then, if nobody went to the followed track, a bearing -- unless it fits better a bystander
+  // track that no one in the frame explains (a bearing fits anyone on its line of sight). Nobody for the followed
+  // track: it coasts (never the lock-on's choice, whose bystander the estimator's restart rule would hand the
+  // track to).
+  struct Pair {
+    int person;
+    int track;  // kFollowed or a bystander track
+    double cost;
+  };
+  std::array<Pair, hal::kMaxPersons*(kMaxBystanderTracks + 1)> pairs{};
+  std::size_t pair_count = 0;
+  std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
+  std::array<double, hal::kMaxPersons> bearing_d2{};
+  bearing_cost.fill(std::numeric_limits<double>::infinity());
+  const double gate = params_.estimator.gate_chi2;
+  const perception::TrackerParams& t = params_.tracker;
+  const auto competes = [&](std::size_t j) { return !prior.lost || bystanders_.seenWithFollowed(j); };
+  for (int i = 0; i < count; ++i) {
+    const Candidate& c = candidates[static_cast<std::size_t>(i)];
+    if (!c.measurement) continue;
+    const bool bearing = c.measurement->bearingOnly();
+    // The lock-on's cost against a track's prediction and colour; nothing outside either gate.
+    const auto cost_of = [&](std::optional<double> d2, const perception::Appearance& colour) -> std::optional<double> {
+      if (!d2 || !(*d2 <= gate)) return std::nullopt;
+      double appearance = 0.0;
+      if (colour.valid && c.look.valid) {
+        appearance = perception::appearanceDistance(colour, c.look);
+        if (appearance > t.max_appearance_distance) return std::nullopt;
+      }
+      return *d2 / gate + t.appearance_weight * appearance / t.max_appearance_distance;
+    };
+    for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
+      if (!competes(j)) continue;
+      if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, *c.measurement), bystanders_.look(j)))
+        pairs[pair_count++] = {i, static_cast<int>(j), *cost};
     }
-    return;
+    const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
+    const std::optional<double> followed_cost = cost_of(d2, reference_);
+    if (!followed_cost) continue;
+    const double cost = *followed_cost;
+    if (bearing) {
+      bearing_cost[static_cast<std::size_t>(i)] = cost;
+      bearing_d2[static_cast<std::size_t>(i)] = *d2;
+    } else {
+      pairs[pair_count++] = {i, kFollowed, cost};
+    }
   }
-  Eigen::Vector3d p_C_m;
-  const auto p_WT_m = localize(frame, torso, p_C_m);
-  if (!p_WT_m) {
+  std::sort(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(pair_count),
+            [](const Pair& x, const Pair& y) { return x.cost < y.cost; });
+  std::array<bool, kMaxBystanderTracks> track_taken{};
+  std::array<bool, hal::kMaxPersons> person_taken{};
+  for (std::size_t k = 0; k < pair_count; ++k) {
+    const Pair& p = pairs[k];
+    if (person_taken[static_cast<std::size_t>(p.person)]) continue;
+    if (p.track == kFollowed) {
+      if (a.followed >= 0) continue;
+      a.followed = p.person;
+    } else {
+      if (track_taken[static_cast<std::size_t>(p.track)]) continue;
+      track_taken[static_cast<std::size_t>(p.track)] = true;
+      a.track[static_cast<std::size_t>(p.person)] = p.track;
+    }
+    person_taken[static_cast<std::size_t>(p.person)] = true;
+  }
+  double best_bearing_cost = std::numeric_limits<double>::infinity();
+  int best_bearing = -1;
+  for (int i = 0; i < count && a.followed < 0; ++i) {
+    const double cost = bearing_cost[static_cast<std::size_t>(i)];
+    if (!(cost < best_bearing_cost)) continue;
+    bool explains_bystander = false;
+    for (std::size_t j = 0; j < bystanders_.capacity() && !explains_bystander; ++j) {
+      if (track_taken[j] || !competes(j)) continue;
+      const std::optional<double> d2 =
+          bystanders_.mahalanobisSq(j, *candidates[static_cast<std::size_t>(i)].measurement);
+      explains_bystander = d2 && *d2 <= bearing_d2[static_cast<std::size_t>(i)];
+    }
+    if (explains_bystander) continue;
+    best_bearing_cost = cost;
+    best_bearing = i;
+  }
+  if (a.followed < 0) a.followed = best_bearing;
+  // Someone new is someone else only beside the followed person's distance in the same frame: alone, they may
+  // be the followed person whom the gate lost (a turn, a jump of the localization), and a track started on
+  // them would then take the person's measurements from their own track.
+  const bool followed_ranged = a.followed >= 0 && distance(a.followed);
+  if (a.followed >= 0) person_taken[static_cast<std::size_t>(a.followed)] = true;
+  for (int i = 0; i < count; ++i)
+    if (followed_ranged && !person_taken[static_cast<std::size_t>(i)] && distance(i))
+      a.track[static_cast<std::size_t>(i)] = kNewTrack;
+  return a;
+}
+
+int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
+  std::array<Candidate, hal::kMaxPersons> candidates;
+  return associate(frame, candidates).followed;
+}
+
+bool TargetTask::process(const Candidate& c) {
+  if (!c.torso.reliable) {
+    ++stats_.unreliable;
+    if (!c.measurement) return false;
+    const MeasurementVerdict verdict = estimator_.add(*c.measurement);
+    if (verdict == MeasurementVerdict::kAccepted) ++stats_.bearings;
+    return false;
+  }
+  if (!c.measurement) {
     ++stats_.no_pose;
-    return;
+    return false;
   }
-  TargetMeasurement m;
-  m.stamp_ns = frame.stamp_ns;
-  m.p_WT_m = *p_WT_m;
-  m.std_xy_m = measurementStdM(p_C_m);
-  const MeasurementVerdict verdict = estimator_.add(m);
+  const MeasurementVerdict verdict = estimator_.add(*c.measurement);
   if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted) {
     ++stats_.accepted;
-    // The colour of whom the track follows: learnt slowly, and afresh when the track (re)starts on someone.
-    const perception::Appearance look = perception::toAppearance(person);
-    if (verdict == MeasurementVerdict::kStarted)
-      reference_ = look;
-    else if (look.valid)
-      perception::blendAppearance(reference_, look, params_.tracker.appearance_rate);
-  } else {
-    ++stats_.rejected;
+    // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
+    // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).
+    if (c.look.valid) perception::blendAppearance(reference_, c.look, params_.tracker.appearance_rate);
+    return true;
   }
+  ++stats_.rejected;
+  return false;
 }
 
 std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::DetectionFrame& frame,
-                                                                const perception::TorsoFeatures& torso) const {
+                                                                const perception::TorsoFeatures& torso,
+                                                                const Eigen::Isometry3d& T_WC) const {
   if (!torso.bearing_ok) return std::nullopt;
   const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
   if (!prior.initialised || prior.lost) return std::nullopt;
   // The level camera frame at the capture time: its origin and forward axis in W.
-  const auto origin_W = cameraToWorldAt(frame.stamp_ns, Eigen::Vector3d::Zero(), poses_, gimbal_history_,
-                                        params_.extrinsics, CameraFrame::kLevel);
-  const auto ahead_W = cameraToWorldAt(frame.stamp_ns, Eigen::Vector3d::UnitX(), poses_, gimbal_history_,
-                                       params_.extrinsics, CameraFrame::kLevel);
-  if (!origin_W || !ahead_W) return std::nullopt;
-  const Eigen::Vector2d forward_W = (*ahead_W - *origin_W).head<2>();
-  const Eigen::Vector2d prior_W = (prior.p_WT_m - *origin_W).head<2>();
+  const Eigen::Vector3d origin_W = T_WC.translation();
+  const Eigen::Vector3d ahead_W = cameraToWorld(Eigen::Vector3d::UnitX(), T_WC, CameraFrame::kLevel);
+  const Eigen::Vector2d forward_W = (ahead_W - origin_W).head<2>();
+  const Eigen::Vector2d prior_W = (prior.p_WT_m - origin_W).head<2>();
   const double x_m = prior_W.dot(forward_W);
   // Nearer than this the person is under the camera, where u says little of the bearing.
   constexpr double kMinDistanceM = 0.5;
@@ -161,14 +268,12 @@ std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::Detec
   // bearing), so the range the filter carries is kept, not pulled.
   Eigen::Vector3d p_C_m = localization::predictAtDistance(params_.localization, x_m, torso.bearing_u_px);
   p_C_m.head<2>() *= prior_W.norm() / p_C_m.head<2>().norm();
-  const auto p_WT_m =
-      cameraToWorldAt(frame.stamp_ns, p_C_m, poses_, gimbal_history_, params_.extrinsics, CameraFrame::kLevel);
-  if (!p_WT_m) return std::nullopt;
-  const Eigen::Vector2d line_W = (*p_WT_m - *origin_W).head<2>();
-  if (!(line_W.norm() > 0.0)) return std::nullopt;
+  const Eigen::Vector3d p_WT_m = cameraToWorld(p_C_m, T_WC, CameraFrame::kLevel);
+  const Eigen::Vector2d line_W = (p_WT_m - origin_W).head<2>();
+  if (!(line_W.norm() > 0.0) || !p_WT_m.allFinite()) return std::nullopt;
   TargetMeasurement m;
   m.stamp_ns = frame.stamp_ns;
-  m.p_WT_m = *p_WT_m;
+  m.p_WT_m = p_WT_m;
   m.std_xy_m = measurementStdM(p_C_m);
   m.bearing_W = line_W.normalized();
   // No distance information: along the line of sight the noise dwarfs any error the filter carries.
@@ -198,11 +303,27 @@ void TargetTask::step(rt::TimeNs now_ns) {
     const hal::DetectionFrame& frame = pending_[done];
     const bool covered = newest_pose_ns_ >= frame.stamp_ns && newest_gimbal_ns_ >= frame.stamp_ns;
     if (!covered && now_ns - frame.stamp_ns < params_.max_wait_ns) break;  // readings still on their way
-    const int person = choosePerson(frame);
+    std::array<Candidate, hal::kMaxPersons> candidates;
+    const Association a = associate(frame, candidates);
+    const int person = a.followed;
+    bool followed_measured = false;
     if (person >= 0) {
       ++stats_.detections;
       if (person != frame.target_index) ++stats_.reassigned;
-      process(frame, person);
+      followed_measured = process(candidates[static_cast<std::size_t>(person)]);
+    } else if (frame.target_index >= 0 &&
+               frame.target_index < static_cast<int>(std::min(frame.person_count, hal::kMaxPersons)) &&
+               !candidates[static_cast<std::size_t>(frame.target_index)].measurement) {
+      process(candidates[static_cast<std::size_t>(frame.target_index)]);  // counted: why it gave nothing
+    }
+    for (std::size_t i = 0; i < a.track.size(); ++i) {
+      if (a.track[i] == kNoTrack) continue;
+      const TargetMeasurement& m = *candidates[i].measurement;
+      if (a.track[i] == kNewTrack)
+        bystanders_.start(m, candidates[i].look, followed_measured);
+      else
+        bystanders_.update(static_cast<std::size_t>(a.track[i]), m, candidates[i].look, params_.tracker.appearance_rate,
+                           followed_measured);
     }
     if (followed_out_ != nullptr) {
       hal::DetectionFrame followed = frame;

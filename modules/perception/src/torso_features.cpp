@@ -31,8 +31,13 @@ std::string_view keypointName(CocoKeypoint k) {
   return kNames[index(k)];
 }
 
-TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints, int width_px,
-                            int height_px, const TorsoFeatureParams& params) {
+namespace {
+
+struct TorsoGeometry {
+  double torso_px, u_px, v_px, neck_u_px, hip_u_px;
+};
+
+TorsoGeometry torsoGeometry(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints) {
   const hal::Keypoint2D& ls = keypoints[index(CocoKeypoint::kLeftShoulder)];
   const hal::Keypoint2D& rs = keypoints[index(CocoKeypoint::kRightShoulder)];
   const hal::Keypoint2D& lh = keypoints[index(CocoKeypoint::kLeftHip)];
@@ -41,11 +46,33 @@ TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints
   const double neck_v = 0.5 * (ls.v_px + rs.v_px);
   const double hip_u = 0.5 * (lh.u_px + rh.u_px);
   const double hip_v = 0.5 * (lh.v_px + rh.v_px);
+  return {std::hypot(neck_u - hip_u, neck_v - hip_v), 0.5 * (neck_u + hip_u), 0.5 * (neck_v + hip_v), neck_u, hip_u};
+}
+
+}  // namespace
+
+TorsoFeatures remeasured(const TorsoFeatures& verdicts, const std::array<hal::Keypoint2D, hal::kNumKeypoints>& moved) {
+  const TorsoGeometry g = torsoGeometry(moved);
+  TorsoFeatures f = verdicts;
+  f.torso_px = g.torso_px;
+  f.u_px = g.u_px;
+  f.v_px = g.v_px;
+  f.bearing_u_px = f.bearing_from_shoulders ? g.neck_u_px : g.hip_u_px;
+  return f;
+}
+
+TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints, int width_px,
+                            int height_px, const TorsoFeatureParams& params) {
+  const hal::Keypoint2D& ls = keypoints[index(CocoKeypoint::kLeftShoulder)];
+  const hal::Keypoint2D& rs = keypoints[index(CocoKeypoint::kRightShoulder)];
+  const hal::Keypoint2D& lh = keypoints[index(CocoKeypoint::kLeftHip)];
+  const hal::Keypoint2D& rh = keypoints[index(CocoKeypoint::kRightHip)];
+  const TorsoGeometry g = torsoGeometry(keypoints);
 
   TorsoFeatures f;
-  f.torso_px = std::hypot(neck_u - hip_u, neck_v - hip_v);
-  f.u_px = 0.5 * (neck_u + hip_u);
-  f.v_px = 0.5 * (neck_v + hip_v);
+  f.torso_px = g.torso_px;
+  f.u_px = g.u_px;
+  f.v_px = g.v_px;
 
   // The vertical margin scales with the body as measured: a waist cut shortens the torso, but the guessed
   // hips then lie within a fraction of even the shortened torso of the edge (the header's numbers). A cut
@@ -68,10 +95,11 @@ TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints
   };
   if (whole(CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder)) {
     f.bearing_ok = true;
-    f.bearing_u_px = neck_u;
+    f.bearing_u_px = g.neck_u_px;
   } else if (whole(CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip)) {
     f.bearing_ok = true;
-    f.bearing_u_px = hip_u;
+    f.bearing_u_px = g.hip_u_px;
+    f.bearing_from_shoulders = false;
   }
 
   constexpr std::array<CocoKeypoint, 4> kTorso = {CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder,

@@ -105,6 +105,50 @@ TEST(CameraToWorld, GivenAPitchedDroneThenTheLevelFrameIgnoresThePitchAndKeepsTh
   EXPECT_GT((tilted - level).head<2>().norm(), 0.25);
 }
 
+TEST(CameraToWorld, GivenARolledPitchedCamera_ThenTheLevelHomographyMovesEachPixelToTheLevelCamerasPixel) {
+  // The drone rolled 25 and pitched -15 degrees (braking hard sideways), yawed 0.7 rad, the gimbal at 0.4.
+  Eigen::Isometry3d T_WB = Eigen::Isometry3d::Identity();
+  T_WB.linear() =
+      (Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(-15.0 * kDeg, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(25.0 * kDeg, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  T_WB.translation() = Eigen::Vector3d(2.0, -1.0, 1.6);
+  const Eigen::Isometry3d T_WC = cameraPoseInWorld(T_WB, 0.4, simLikeExtrinsics());
+  const hal::CameraIntrinsics k{640, 480, 337.2, 331.0, 322.0, 236.0, {}};
+  // The level camera built independently: the same centre, its optical axis the camera's forward axis laid
+  // flat on the ground.
+  const Eigen::Vector3d forward_W = T_WC.linear().col(0);
+  const Eigen::Vector3d flat_W = Eigen::Vector3d(forward_W.x(), forward_W.y(), 0.0).normalized();
+  Eigen::Matrix3d R_W_level_optical;  // columns: right, down, forward
+  R_W_level_optical.col(2) = flat_W;
+  R_W_level_optical.col(1) = -Eigen::Vector3d::UnitZ();
+  R_W_level_optical.col(0) = R_W_level_optical.col(1).cross(flat_W);
+  const auto pixel = [&](const Eigen::Matrix3d& R_W_optical, const Eigen::Vector3d& p_W) {
+    const Eigen::Vector3d q = R_W_optical.transpose() * (p_W - T_WC.translation());
+    return Eigen::Vector2d(k.fx_px * q.x() / q.z() + k.cx_px, k.fy_px * q.y() / q.z() + k.cy_px);
+  };
+  const Eigen::Matrix3d H = levelHomography(T_WC, k);
+  // People's joints 2-8 m ahead, 2 m either side, from the ground to 2 m up.
+  for (const double ahead : {2.0, 4.5, 8.0})
+    for (const double side : {-2.0, 0.3, 2.0})
+      for (const double up : {0.0, 1.2, 2.0}) {
+        const Eigen::Vector3d p_W = T_WC.translation() + ahead * flat_W +
+                                    side * Eigen::Vector3d::UnitZ().cross(flat_W) +
+                                    Eigen::Vector3d(0.0, 0.0, up - T_WC.translation().z());
+        const Eigen::Vector2d tilted = pixel(T_WC.linear() * opticalAxesInCamera(), p_W);
+        const Eigen::Vector3d h = H * tilted.homogeneous();
+        ASSERT_GT(h.z(), 0.0);
+        const Eigen::Vector2d level = pixel(R_W_level_optical, p_W);
+        EXPECT_NEAR((h.hnormalized() - level).norm(), 0.0, 1e-9) << ahead << " " << side << " " << up;
+      }
+  // And a level camera's homography is the identity.
+  Eigen::Isometry3d level_WB = Eigen::Isometry3d::Identity();
+  level_WB.linear() = Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_NEAR(
+      (levelHomography(cameraPoseInWorld(level_WB, 2.0, simLikeExtrinsics()), k) - Eigen::Matrix3d::Identity()).norm(),
+      0.0, 1e-12);
+}
+
 TEST(CameraToWorld, GivenHistoriesThenTheCaptureTimeIsInterpolatedNotTheLatest) {
   // Given odometry at 0 and 100 ms (moving 1 m along x, yaw 0 -> 90 degrees) and gimbal samples
   // at 0 and 100 ms (0 -> 90 degrees).

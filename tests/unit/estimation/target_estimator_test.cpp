@@ -212,6 +212,37 @@ TEST(TargetEstimator, GivenAJumpThePersonCannotMakeThenItIsRejected) {
   EXPECT_EQ(with_outlier->rejectedCount(), 1u);
 }
 
+TEST(TargetEstimator, GivenMeasurementsAtGrowingOffsets_ThenTheirMahalanobisDistanceDecidesTheGateAsAddDoes) {
+  // The association's test (mahalanobisSq) is the estimator's own: for offsets from on the path to far off,
+  // late ones too (applied at their capture time), the distance is under the gate exactly when add() takes it.
+  std::mt19937_64 rng(4);
+  auto estimator = TargetEstimator::create({});
+  ASSERT_TRUE(estimator);
+  TargetMeasurement probe;
+  probe.stamp_ns = 1;
+  EXPECT_FALSE(estimator->mahalanobisSq(probe).has_value()) << "no track yet";
+  for (int k = 0; k < 60; ++k) estimator->add(measure(straight, k, rng));
+  int inside = 0;
+  for (const int k : {60, 58}) {
+    for (double off_m = 0.0; off_m < 2.0; off_m += 0.05) {
+      TargetMeasurement m = measure(straight, k, rng);
+      m.stamp_ns += 1;
+      m.p_WT_m += Eigen::Vector3d(0.6 * off_m, 0.8 * off_m, 0.0);
+      const std::optional<double> d2 = estimator->mahalanobisSq(m);
+      ASSERT_TRUE(d2.has_value());
+      auto copy = *estimator;
+      const bool taken = copy.add(m) == MeasurementVerdict::kAccepted;
+      EXPECT_EQ(*d2 <= TargetEstimatorParams{}.gate_chi2, taken) << off_m << " m, frame " << k;
+      inside += taken ? 1 : 0;
+    }
+  }
+  EXPECT_GT(inside, 4);
+  EXPECT_LT(inside, 76);
+  TargetMeasurement bad = measure(straight, 60, rng);
+  bad.p_WT_m.x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(estimator->mahalanobisSq(bad).has_value());
+}
+
 TEST(TargetEstimator, GivenRepeatedConsistentRejectionsThenTheFilterRestarts) {
   // Given a track, then the measurements move 3 m away and stay there (the track was wrong).
   TargetEstimatorParams params;

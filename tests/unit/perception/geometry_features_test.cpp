@@ -122,6 +122,26 @@ TEST(TorsoFeatures, GivenHipsCutOffByTheBottomEdge_WhenMeasured_ThenItIsUnreliab
   EXPECT_EQ(keypointName(f.culprit), "left_hip");
 }
 
+TEST(TorsoFeatures, GivenKeypointsMovedElsewhere_WhenRemeasured_ThenTheVerdictsStayAndTheLengthsAreTheMovedOnes) {
+  // A torso with whole shoulders and hips cut at the bottom edge (a bearing from the shoulders), then the same
+  // joints moved (as into a level camera's image): 60 px further right and stretched to 100 px.
+  Keypoints k = standingPerson(300.0, 480.0 - 0.45 * 80.0, 80.0, 0.9);
+  k[index(CocoKeypoint::kLeftHip)].score = 0.4;
+  k[index(CocoKeypoint::kRightHip)].score = 0.4;
+  const TorsoFeatures seen = torsoFeatures(k, 640, 480, TorsoFeatureParams{});
+  ASSERT_FALSE(seen.reliable);
+  ASSERT_TRUE(seen.bearing_ok && seen.bearing_from_shoulders);
+  const Keypoints moved = standingPerson(360.0, 300.0, 100.0, 0.9);
+  const TorsoFeatures f = remeasured(seen, moved);
+  EXPECT_FALSE(f.reliable);
+  EXPECT_EQ(f.reason, seen.reason);
+  EXPECT_TRUE(f.bearing_ok);
+  EXPECT_DOUBLE_EQ(f.torso_px, 100.0);
+  EXPECT_DOUBLE_EQ(f.u_px, 360.0);
+  EXPECT_DOUBLE_EQ(f.v_px, 250.0);
+  EXPECT_DOUBLE_EQ(f.bearing_u_px, 360.0);  // the moved shoulders' midpoint
+}
+
 /// The hips (or shoulders) of `k` given a guess's score, as MoveNet scores the joints of a cut-off body.
 Keypoints guessed(Keypoints k, CocoKeypoint a, CocoKeypoint b) {
   k[index(a)].score = 0.4;

@@ -15,6 +15,7 @@
 
 #include "aerotrack/estimation/gimbal_history.hpp"
 #include "aerotrack/hal/odometry_history.hpp"
+#include "aerotrack/hal/types.hpp"
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
 #include "aerotrack/rt/time.hpp"
@@ -49,8 +50,26 @@ enum class CameraFrame : std::uint8_t { kCamera, kLevel };
 
 /// p_WT = T_WC p_C (kCamera), or the camera's position plus p_C turned by the camera's heading
 /// (kLevel), in metres. Pure, reentrant, allocation-free.
+Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WC, CameraFrame frame);
+
+/// The same, with T_WC = cameraPoseInWorld(T_WB, gimbal_angle_rad, extrinsics).
 Eigen::Vector3d cameraToWorld(const Eigen::Vector3d& p_C_m, const Eigen::Isometry3d& T_WB, double gimbal_angle_rad,
                               const GimbalCameraExtrinsics& extrinsics, CameraFrame frame = CameraFrame::kCamera);
+
+/// T_WC with T_WB and the gimbal angle interpolated from the histories at stamp_ns. Error (saying which
+/// history and why) if either lookup fails. Allocation: only for an error.
+rt::Expected<Eigen::Isometry3d> cameraPoseAt(rt::TimeNs stamp_ns, const hal::OdometryHistory& poses,
+                                             const GimbalAngleHistory& gimbal,
+                                             const GimbalCameraExtrinsics& extrinsics);
+
+/// The homography H = K R K^-1 that takes a pixel of the image of the camera at T_WC to the pixel where a
+/// level camera (kLevel: the same centre and heading, no roll or pitch) with the same intrinsics sees the
+/// same ray (homogeneous; a third coordinate <= 0 is a ray the level camera has behind it). Why: the
+/// localization regression was fitted on level views (hal/sim calibration_views.hpp), and a drone tilted
+/// 30 degrees while braking turns and moves the person in its image: the regression read there put the
+/// person 0.8 m off (crowd, seed 2, 21.1 s), where the level camera's image gives the fitted reading.
+/// Lens distortion is not modelled (the intrinsics' distortion is ignored). Pure, allocation-free.
+Eigen::Matrix3d levelHomography(const Eigen::Isometry3d& T_WC, const hal::CameraIntrinsics& intrinsics);
 
 /// cameraToWorld with T_WB and the gimbal angle interpolated from the histories at the image's
 /// capture time stamp_ns. Error (saying which history and why) if either lookup fails or p_C is

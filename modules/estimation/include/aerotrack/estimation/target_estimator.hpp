@@ -19,6 +19,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -112,6 +113,13 @@ class TargetEstimator {
   /// The state predicted to now_ns from the newest state (now_ns before it: the newest state
   /// itself, stamped with its own time). `lost` is judged at now_ns.
   TargetEstimate estimate(rt::TimeNs now_ns) const;
+
+  /// The squared Mahalanobis distance of the measurement from the state it would update (the state at its
+  /// capture time, as add() would compute it), the quantity add() compares with gate_chi2; nothing if the
+  /// filter has not started, or the measurement is invalid or older than the window. Whether the track is
+  /// lost is the caller's concern (the distance is then measured against the prediction's grown
+  /// covariance: where the person can have gone since). Allocation-free.
+  std::optional<double> mahalanobisSq(const TargetMeasurement& measurement) const;
 
   /// Forgets everything (the buffer keeps its memory).
   void reset();

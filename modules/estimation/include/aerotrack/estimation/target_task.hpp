@@ -1,8 +1,9 @@
 // The target pipeline of the paper's Sect. IV-B as one task: each detection of the followed person
-// (target_index of a DetectionFrame) with a reliable torso becomes a position in the camera frame
-// (the fitted localization regression), then in the world at the image's capture time (drone pose
-// and gimbal angle interpolated from their histories, camera_to_world.hpp), then a measurement of
-// the target estimator, whose newest estimate is published. A detection waits (up to max_wait)
+// (chosen by the association, TargetTaskParams::choose_by_estimate) with a reliable torso becomes a
+// position in the camera frame (the fitted localization regression, its inputs measured in the image
+// of a level camera at the same place: levelHomography), then in the world at the image's capture time
+// (drone pose and gimbal angle interpolated from their histories, camera_to_world.hpp), then a
+// measurement of the target estimator, whose newest estimate is published. A detection waits (up to max_wait)
 // until odometry and encoder readings cover its capture time; the measurement noise grows with
 // distance as the localization's error does (measured: about 2.5 % of the distance).
 //
@@ -15,6 +16,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "aerotrack/estimation/bystander_tracks.hpp"
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
 #include "aerotrack/estimation/target_estimator.hpp"
@@ -42,15 +44,19 @@ struct TargetTaskParams {
   /// at the estimate's distance (issue 22, item 4; docs/modules/localization-estimation.md), or skipped.
   bool bearing_fallback = true;
   /// Which detected person the estimator is given (issue 22 item 2; docs/modules/localization-estimation.md):
-  /// true (`association: estimate`): while the track is live, of the people with a distance inside the
-  /// estimator's gate (Mahalanobis, horizontal) and the appearance gate (the torso colour the task has
-  /// learnt from the measurements it gave), the one of least cost (the lock-on's: gate fraction plus
-  /// weighted appearance fraction), else the lock-on's choice; false (`association: lock_on`): always the
-  /// lock-on's choice. Why: the lock-on judges in the image (a constant image velocity and a colour
-  /// histogram), where a bystander beside the target matches as well; in the world they stand apart.
+  /// true (`association: estimate`): once the filter has started, an assignment (global nearest neighbour) of
+  /// the frame's people to the followed track and to tracks of the other people (bystander_tracks.hpp), each
+  /// pair within the track's gate (the estimator's own test; lost, the prediction's grown covariance is the
+  /// re-identification's reach) and colour gate, the cheapest distances first, then a bearing that no
+  /// unexplained bystander track fits better; nobody left, nobody. Before the first measurement, the
+  /// lock-on's choice. false (`association: lock_on`): always the lock-on's choice. Why: the lock-on judges in
+  /// the image, where a bystander beside the target matches as well; in the world they stand apart.
   bool choose_by_estimate = true;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
 };
+
+/// The most other people tracked at once (choose_by_estimate): MoveNet reports six a frame.
+inline constexpr std::size_t kMaxBystanderTracks = 12;
 
 /// Reads the `estimation:` config section except `localization_params` (a file the app loads):
 /// gimbal_camera extrinsics, measurement noise, estimator. Throws rt::ConfigError naming the key.
@@ -83,19 +89,42 @@ class TargetTask final : public rt::Task {
 
  private:
   TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
-             TargetEstimator estimator, rt::SpscQueue<hal::DetectionFrame>& detections,
+             TargetEstimator estimator, BystanderTracks bystanders, rt::SpscQueue<hal::DetectionFrame>& detections,
              rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
              rt::LatestSlot<TargetEstimate>& out);
-  void process(const hal::DetectionFrame& frame, int person_index);
-  /// The person's position in W from their torso (the regression, read in the level camera frame), and the
-  /// camera-frame point; nothing if the torso is unreliable or the capture time's pose is unknown.
-  std::optional<Eigen::Vector3d> localize(const hal::DetectionFrame& frame, const perception::TorsoFeatures& torso,
-                                          Eigen::Vector3d& p_C_m) const;
+  /// A detected person as the estimator would be given them.
+  struct Candidate {
+    perception::TorsoFeatures torso;
+    perception::Appearance look;
+    /// A distance (a reliable torso whose capture pose is known) or a bearing (bearing_fallback, a live
+    /// track); nothing otherwise.
+    std::optional<TargetMeasurement> measurement;
+  };
+  /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
+  /// (the capture time's pose; unknown: no measurement).
+  Candidate candidate(const hal::DetectionFrame& frame, int index, const std::optional<Eigen::Isometry3d>& T_WC) const;
+  static constexpr int kFollowed = -1;
+  static constexpr int kNoTrack = -1;
+  static constexpr int kNewTrack = -2;
+  struct Association {
+    int followed = -1;                          ///< The person given to the estimator, or -1.
+    std::array<int, hal::kMaxPersons> track{};  ///< Each person's bystander track, kNoTrack or kNewTrack.
+  };
+  /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
+  /// estimate: everyone's; else the lock-on's choice's).
+  Association associate(const hal::DetectionFrame& frame, std::array<Candidate, hal::kMaxPersons>& candidates) const;
+  /// Gives the candidate to the estimator; true if it took a distance.
+  bool process(const Candidate& candidate);
+  /// The person's position in W from their (levelled) torso: the regression, read in the level camera frame
+  /// of the camera at T_WC; and the camera-frame point.
+  Eigen::Vector3d localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
+                           Eigen::Vector3d& p_C_m) const;
   double measurementStdM(const Eigen::Vector3d& p_C_m) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
   /// behind or beside the camera).
   std::optional<TargetMeasurement> bearingMeasurement(const hal::DetectionFrame& frame,
-                                                      const perception::TorsoFeatures& torso) const;
+                                                      const perception::TorsoFeatures& torso,
+                                                      const Eigen::Isometry3d& T_WC) const;
 
   TargetTaskParams params_;
   hal::OdometryHistory poses_;
@@ -113,7 +142,8 @@ class TargetTask final : public rt::Task {
   bool notified_lost_ = true;
   TargetTaskStats stats_;
   rt::LatestSlot<hal::DetectionFrame>* followed_out_ = nullptr;
-  perception::Appearance reference_;  ///< The torso colour of the people given to the estimator and taken.
+  perception::Appearance reference_;
+  BystanderTracks bystanders_;  ///< The torso colour of the people given to the estimator and taken.
 };
 
 }  // namespace aerotrack::estimation

@@ -47,12 +47,18 @@ struct TorsoFeatures {
   /// A whole joint pair (both scores and positions pass, shoulders first, else hips) whose midpoint
   /// gives the person's bearing; set whether or not the torso is reliable.
   bool bearing_ok = false;
-  double bearing_u_px = 0.0;  ///< That pair's horizontal midpoint, pixels.
+  double bearing_u_px = 0.0;           ///< That pair's horizontal midpoint, pixels.
+  bool bearing_from_shoulders = true;  ///< Which pair gave it (when bearing_ok).
 };
 
 /// Features of one detection in an image of width_px x height_px. Pure, allocation-free.
 TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints, int width_px,
                             int height_px, const TorsoFeatureParams& params);
+
+/// The features' measurements (torso_px, u_px, v_px, bearing_u_px from the pair `verdicts` took its bearing
+/// from) taken from `moved`, the same keypoints moved to other pixels (a level camera's image, issue 22 item 3);
+/// the verdicts (reliable, reason, culprit, bearing_ok), judged in the image the network saw, are kept. Pure.
+TorsoFeatures remeasured(const TorsoFeatures& verdicts, const std::array<hal::Keypoint2D, hal::kNumKeypoints>& moved);
 
 /// COCO name of a joint ("left_hip"), for reasons printed to people.
 std::string_view keypointName(hal::CocoKeypoint k);

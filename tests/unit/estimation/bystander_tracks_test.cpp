@@ -1,0 +1,53 @@
+// The tracks of the other people in view (bystander_tracks.hpp): started, gated on their own prediction,
+// forgotten after lost_after_s, their slots reused oldest first, and marked when seen beside the followed
+// person.
+#include <gtest/gtest.h>
+
+#include "aerotrack/estimation/bystander_tracks.hpp"
+#include "support/require.hpp"
+
+namespace aerotrack::estimation {
+namespace {
+
+TargetMeasurement at(double t_s, double x_m, double y_m) {
+  TargetMeasurement m;
+  m.stamp_ns = rt::secondsToNs(t_s);
+  m.p_WT_m = Eigen::Vector3d(x_m, y_m, 1.2);
+  m.std_xy_m = 0.1;
+  return m;
+}
+
+TEST(BystanderTracks, GivenAWalkerTracked_ThenTheirNextPositionFitsTheirTrackAndAJumpDoesNot) {
+  TargetEstimatorParams params;
+  BystanderTracks tracks = aerotrack::test::require(BystanderTracks::create(params, 3), "tracks");
+  EXPECT_EQ(tracks.liveCount(0), 0U);
+  const std::size_t i = tracks.start(at(0.0, 5.0, 0.0), {}, false);
+  for (int k = 1; k <= 30; ++k)
+    EXPECT_EQ(tracks.update(i, at(k / 30.0, 5.0 + k / 30.0, 0.0), {}, 0.1, k > 20), MeasurementVerdict::kAccepted);
+  EXPECT_TRUE(tracks.live(i, rt::secondsToNs(1.0)));
+  EXPECT_TRUE(tracks.seenWithFollowed(i));
+  // Walking on at 1 m/s: 6.1 m at 1.1 s fits; 1.5 m aside does not.
+  EXPECT_LT(*tracks.mahalanobisSq(i, at(1.1, 6.1, 0.0)), 1.0);
+  EXPECT_GT(*tracks.mahalanobisSq(i, at(1.1, 6.1, 1.5)), params.gate_chi2);
+  // Unmeasured for longer than lost_after_s: no longer live, no distance to it, its slot free.
+  EXPECT_FALSE(tracks.live(i, rt::secondsToNs(1.0 + params.lost_after_s + 0.1)));
+  EXPECT_FALSE(tracks.mahalanobisSq(i, at(2.2, 6.2, 0.0)).has_value());
+  EXPECT_EQ(tracks.start(at(2.2, 0.0, 3.0), {}, false), i);
+  EXPECT_FALSE(tracks.seenWithFollowed(i));
+}
+
+TEST(BystanderTracks, GivenEverySlotLive_WhenAnotherStarts_ThenTheOneMeasuredLongestAgoIsReused) {
+  BystanderTracks tracks = aerotrack::test::require(BystanderTracks::create(TargetEstimatorParams{}, 2), "tracks");
+  const std::size_t a = tracks.start(at(0.0, 1.0, 0.0), {}, false);
+  const std::size_t b = tracks.start(at(0.1, 2.0, 0.0), {}, false);
+  ASSERT_NE(a, b);
+  tracks.update(a, at(0.2, 1.0, 0.0), {}, 0.1, false);
+  EXPECT_EQ(tracks.start(at(0.3, 3.0, 0.0), {}, true), b);
+  EXPECT_TRUE(tracks.seenWithFollowed(b));
+  tracks.drop(a);
+  EXPECT_FALSE(tracks.live(a, rt::secondsToNs(0.3)));
+  EXPECT_EQ(tracks.liveCount(rt::secondsToNs(0.3)), 1U);
+}
+
+}  // namespace
+}  // namespace aerotrack::estimation
