@@ -48,7 +48,7 @@ struct TargetPredictorParams {
   /// The curve's velocity at the newest estimate's time is the estimate's (the Kalman filter's), where the
   /// estimate carries one. Why (issue 21): weighted over its window, the fit lags a runner who brakes
   /// (4.09 m/s against the filter's 3.21 m/s on forest 5 m/s seed 1), so the goal stays metres ahead of
-  /// a person who stops and the drone overshoots them.
+  /// a person who stops and the drone overshoots them. (The shipped configs turn it on: docs/benchmarks.md.)
   bool pin_velocity_to_newest = false;
   /// Softer: w x (curve velocity at the newest estimate's time - the estimate's)^2 added to the fit (w in s^2:
   /// 1 m/s off costs w m^2, against position residuals whose weights sum to 1); 0: off. Ignored when
