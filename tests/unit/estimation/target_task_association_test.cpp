@@ -57,12 +57,9 @@ Scene run(bool choose_by_estimate, Event event, double end_s = 4.0) {
   TargetTaskParams params;
   params.localization = test::pinholeLocalization();
   params.choose_by_estimate = choose_by_estimate;
-  rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::OdometrySample> odometry(256, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::GimbalState> gimbal(256, rt::OverflowPolicy::kDropOldest);
-  rt::LatestSlot<TargetEstimate> out;
   rt::LatestSlot<hal::DetectionFrame> followed;
-  TargetTask task = aerotrack::test::require(TargetTask::create(params, detections, odometry, gimbal, out), "task");
+  test::TaskRig rig(params);
+  auto& [detections, odometry, gimbal, out, task] = rig;
   task.publishFollowedTo(followed);
   Scene scene;
   const int frames = static_cast<int>(end_s * kRateHz);

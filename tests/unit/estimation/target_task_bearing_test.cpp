@@ -41,11 +41,8 @@ BearingRun runScene(bool bearing_fallback) {
   params.localization = test::pinholeLocalization();
   params.bearing_fallback = bearing_fallback;
   params.estimator.lost_after_s = 2.0;  // the cut views last 1.5 s: the track is still live at the end
-  rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::OdometrySample> odometry(256, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::GimbalState> gimbal(256, rt::OverflowPolicy::kDropOldest);
-  rt::LatestSlot<TargetEstimate> out;
-  TargetTask task = aerotrack::test::require(TargetTask::create(params, detections, odometry, gimbal, out), "task");
+  test::TaskRig rig(params);
+  auto& [detections, odometry, gimbal, out, task] = rig;
   const auto y_at = [](double t_s) { return std::clamp(t_s - 2.0, 0.0, 1.0); };
   const int frames = static_cast<int>(3.5 * kFrameRateHz);
   for (int i = 0; i <= frames; ++i) {
@@ -82,11 +79,8 @@ TEST(TargetTaskBearing, GivenOnlyShouldersWhileThePersonStepsAside_WhenTheFallba
 TEST(TargetTaskBearing, GivenNoTrackYet_WhenOnlyCutViewsArrive_ThenNothingStartsFromABearing) {
   TargetTaskParams params;
   params.localization = test::pinholeLocalization();
-  rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::OdometrySample> odometry(64, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::GimbalState> gimbal(64, rt::OverflowPolicy::kDropOldest);
-  rt::LatestSlot<TargetEstimate> out;
-  TargetTask task = aerotrack::test::require(TargetTask::create(params, detections, odometry, gimbal, out), "task");
+  test::TaskRig rig(params);
+  auto& [detections, odometry, gimbal, out, task] = rig;
   for (int i = 0; i < 30; ++i) {
     const rt::TimeNs t_ns = rt::secondsToNs(i / kFrameRateHz);
     test::pushHover(odometry, gimbal, t_ns);

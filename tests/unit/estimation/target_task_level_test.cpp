@@ -49,11 +49,8 @@ hal::DetectionFrame tiltedFrame(rt::TimeNs stamp_ns) {
 TEST(TargetTaskLevel, GivenARolledPitchedDrone_ThenTheTorsoMeasuredInTheLevelImageLocalizesThePerson) {
   TargetTaskParams params;
   params.localization = test::pinholeLocalization();
-  rt::SpscQueue<hal::DetectionFrame> detections(64, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::OdometrySample> odometry(64, rt::OverflowPolicy::kDropOldest);
-  rt::SpscQueue<hal::GimbalState> gimbal(64, rt::OverflowPolicy::kDropOldest);
-  rt::LatestSlot<TargetEstimate> out;
-  TargetTask task = aerotrack::test::require(TargetTask::create(params, detections, odometry, gimbal, out), "task");
+  test::TaskRig rig(params);
+  auto& [detections, odometry, gimbal, out, task] = rig;
   for (int i = 0; i < 10; ++i) {
     const rt::TimeNs t_ns = rt::secondsToNs(i / test::kFrameRateHz);
     hal::OdometrySample pose;

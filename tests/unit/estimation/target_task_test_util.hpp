@@ -2,9 +2,11 @@
 // the world's origin, looking along W x, and the pinhole localization of a 0.5 m torso seen by it.
 #pragma once
 
+#include "aerotrack/estimation/target_task.hpp"
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/localization/localization_model.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
+#include "support/require.hpp"
 
 namespace aerotrack::estimation::test {
 
@@ -52,5 +54,18 @@ inline void pushHover(rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueu
   odometry.try_push(pose);
   gimbal.try_push({t_ns, 0.0, 0.0});
 }
+
+/// A target task on its own input queues and estimate slot (not movable: the task refers to them).
+struct TaskRig {
+  explicit TaskRig(const TargetTaskParams& params)
+      : task(aerotrack::test::require(TargetTask::create(params, detections, odometry, gimbal, out), "task")) {}
+  TaskRig(const TaskRig&) = delete;
+  TaskRig& operator=(const TaskRig&) = delete;
+  rt::SpscQueue<hal::DetectionFrame> detections{64, rt::OverflowPolicy::kDropOldest};
+  rt::SpscQueue<hal::OdometrySample> odometry{256, rt::OverflowPolicy::kDropOldest};
+  rt::SpscQueue<hal::GimbalState> gimbal{256, rt::OverflowPolicy::kDropOldest};
+  rt::LatestSlot<TargetEstimate> out;
+  TargetTask task;
+};
 
 }  // namespace aerotrack::estimation::test
