@@ -115,9 +115,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const auto& m = candidates[static_cast<std::size_t>(i)].measurement;
     return m && !m->bearingOnly();
   };
-  if (!prior.initialised) {  // the lock-on designates; everyone else with a distance is someone else
+  if (!prior.initialised) {  // the lock-on designates; beside their distance, everyone else is someone else
     a.followed = lock_on;
-    for (int i = 0; i < count; ++i)
+    for (int i = 0; i < count && lock_on >= 0 && distance(lock_on); ++i)
       if (i != lock_on && distance(i)) a.track[static_cast<std::size_t>(i)] = kNewTrack;
     return a;
   }
