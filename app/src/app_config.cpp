@@ -222,6 +222,9 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "lost_after_s" << YAML::Value << k.lost_after_s;
     out << YAML::Key << "replay_window_s" << YAML::Value << k.replay_window_s;
     out << YAML::Key << "max_buffered_measurements" << YAML::Value << k.max_buffered_measurements;
+    out << YAML::Key << "manoeuvre_accel_psd_xy_m2ps3" << YAML::Value << k.manoeuvre_accel_psd_xy_m2ps3;
+    out << YAML::Key << "steady_mean_s" << YAML::Value << k.steady_mean_s;
+    out << YAML::Key << "manoeuvre_mean_s" << YAML::Value << k.manoeuvre_mean_s;
     out << YAML::EndMap;
     out << YAML::EndMap;
   }

@@ -35,6 +35,17 @@ Matrix3d measurementNoise(const TargetEstimatorParams& params, const TargetMeasu
 
 using Matrix36d = Eigen::Matrix<double, 3, 6>;
 
+/// The Kalman update with H = [I 0]: K = P H^T S^-1 (S factored in llt); Joseph form (I - K H) P (I - K H)^T + K R K^T.
+void kalmanUpdate(Vector6d& x, Matrix6d& P, const Eigen::Vector3d& innovation, const Eigen::LLT<Matrix3d>& llt,
+                  const Matrix3d& R) {
+  const Eigen::Matrix<double, 6, 3> PHt = P.leftCols<3>();
+  const Eigen::Matrix<double, 6, 3> K = llt.solve(PHt.transpose()).transpose();
+  x += K * innovation;
+  Matrix6d I_KH = Matrix6d::Identity();
+  I_KH.leftCols<3>() -= K;
+  P = I_KH * P * I_KH.transpose() + K * R * K.transpose();
+}
+
 bool positiveFinite(double v) {
   return std::isfinite(v) && v > 0.0;
 }
@@ -58,6 +69,11 @@ rt::Status validate(const TargetEstimatorParams& p) {
   }
   if (p.reinit_after_rejections < 1) return rt::Error{"target estimator: reinit_after_rejections must be >= 1"};
   if (p.max_buffered_measurements < 2) return rt::Error{"target estimator: max_buffered_measurements must be >= 2"};
+  if (!std::isfinite(p.manoeuvre_accel_psd_xy_m2ps3) || p.manoeuvre_accel_psd_xy_m2ps3 < 0.0 ||
+      (p.manoeuvre_accel_psd_xy_m2ps3 > 0.0 && !(p.manoeuvre_accel_psd_xy_m2ps3 > p.accel_psd_xy_m2ps3)))
+    return rt::Error{"target estimator: manoeuvre_accel_psd_xy_m2ps3 must be 0 (off) or > accel_psd_xy_m2ps3"};
+  if (rt::Status s = positive("steady_mean_s", p.steady_mean_s); !s) return s;
+  if (rt::Status s = positive("manoeuvre_mean_s", p.manoeuvre_mean_s); !s) return s;
   return rt::ok();
 }
 
@@ -73,6 +89,9 @@ TargetEstimatorParams parseTargetEstimatorParams(const rt::ConfigNode& node) {
   p.lost_after_s = node.getDouble("lost_after_s", 1e-3, 3600.0);
   p.replay_window_s = node.getDouble("replay_window_s", 1e-3, 60.0);
   p.max_buffered_measurements = static_cast<std::size_t>(node.getInt("max_buffered_measurements", 2, 100000));
+  p.manoeuvre_accel_psd_xy_m2ps3 = node.getDouble("manoeuvre_accel_psd_xy_m2ps3", 0.0, 1e3);
+  p.steady_mean_s = node.getDouble("steady_mean_s", 1e-3, 3600.0);
+  p.manoeuvre_mean_s = node.getDouble("manoeuvre_mean_s", 1e-3, 3600.0);
   node.finish();
   return p;
 }
@@ -123,28 +142,80 @@ void TargetEstimator::start(State& state, const TargetMeasurement& m) const {
       Eigen::Vector3d::Constant(params_.initial_speed_std_mps * params_.initial_speed_std_mps);
   state.last_accepted_ns = m.stamp_ns;
   state.consecutive_rejections = 0;
+  // Both models start at the measurement, weighted by the chain's stationary probabilities.
+  const double manoeuvring = params_.manoeuvre_mean_s / (params_.steady_mean_s + params_.manoeuvre_mean_s);
+  state.models[0] = Model{state.x, state.P, imm() ? 1.0 - manoeuvring : 1.0};
+  state.models[1] = Model{state.x, state.P, imm() ? manoeuvring : 0.0};
+}
+
+void TargetEstimator::predictModel(Vector6d& x, Matrix6d& P, double dt, double q_xy) const {
+  // x' = F x with F = [I dt I; 0 I]; P' = F P F^T + Q, computed blockwise.
+  x.head<3>() += dt * x.tail<3>();
+  const Matrix3d Ppp = P.topLeftCorner<3, 3>();
+  const Matrix3d Ppv = P.topRightCorner<3, 3>();
+  const Matrix3d Pvv = P.bottomRightCorner<3, 3>();
+  const Matrix3d new_Ppv = Ppv + dt * Pvv;
+  P.topLeftCorner<3, 3>() = Ppp + dt * (Ppv + Ppv.transpose()) + dt * dt * Pvv;
+  P.topRightCorner<3, 3>() = new_Ppv;
+  P.bottomLeftCorner<3, 3>() = new_Ppv.transpose();
+  const Eigen::Vector3d q(q_xy, q_xy, params_.accel_psd_z_m2ps3);
+  for (int i = 0; i < 3; ++i) {
+    P(i, i) += q[i] * dt * dt * dt / 3.0;
+    P(i, i + 3) += q[i] * dt * dt / 2.0;
+    P(i + 3, i) += q[i] * dt * dt / 2.0;
+    P(i + 3, i + 3) += q[i] * dt;
+  }
+}
+
+void TargetEstimator::combine(State& state) {
+  state.x.setZero();
+  for (const Model& model : state.models) state.x += model.probability * model.x;
+  state.P.setZero();
+  for (const Model& model : state.models) {
+    const Vector6d d = model.x - state.x;
+    state.P += model.probability * (model.P + d * d.transpose());
+  }
 }
 
 void TargetEstimator::predict(State& state, rt::TimeNs t_ns) const {
   if (t_ns <= state.stamp_ns) return;
   const double dt = rt::nsToSeconds(t_ns - state.stamp_ns);
-  // x' = F x with F = [I dt I; 0 I]; P' = F P F^T + Q, computed blockwise.
-  state.x.head<3>() += dt * state.x.tail<3>();
-  const Matrix3d Ppp = state.P.topLeftCorner<3, 3>();
-  const Matrix3d Ppv = state.P.topRightCorner<3, 3>();
-  const Matrix3d Pvv = state.P.bottomRightCorner<3, 3>();
-  const Matrix3d new_Ppv = Ppv + dt * Pvv;
-  state.P.topLeftCorner<3, 3>() = Ppp + dt * (Ppv + Ppv.transpose()) + dt * dt * Pvv;
-  state.P.topRightCorner<3, 3>() = new_Ppv;
-  state.P.bottomLeftCorner<3, 3>() = new_Ppv.transpose();
-  const Eigen::Vector3d q(params_.accel_psd_xy_m2ps3, params_.accel_psd_xy_m2ps3, params_.accel_psd_z_m2ps3);
-  for (int i = 0; i < 3; ++i) {
-    state.P(i, i) += q[i] * dt * dt * dt / 3.0;
-    state.P(i, i + 3) += q[i] * dt * dt / 2.0;
-    state.P(i + 3, i) += q[i] * dt * dt / 2.0;
-    state.P(i + 3, i + 3) += q[i] * dt;
-  }
   state.stamp_ns = t_ns;
+  if (!imm()) {
+    predictModel(state.x, state.P, dt, params_.accel_psd_xy_m2ps3);
+    return;
+  }
+  // The chain's transition probabilities over dt (exact for a two-state continuous-time Markov chain):
+  // pi[i][j] = P(model j at the end | model i at the start).
+  const double to_manoeuvre = 1.0 / params_.steady_mean_s;
+  const double to_steady = 1.0 / params_.manoeuvre_mean_s;
+  const double rate = to_manoeuvre + to_steady;
+  const double settled = 1.0 - std::exp(-rate * dt);
+  const double stationary_manoeuvre = to_manoeuvre / rate;
+  const double pi[2][2] = {{1.0 - stationary_manoeuvre * settled, stationary_manoeuvre * settled},
+                           {(1.0 - stationary_manoeuvre) * settled, 1.0 - (1.0 - stationary_manoeuvre) * settled}};
+  // Interaction (mixing): each model starts from the mixture of both, weighted by where it came from.
+  std::array<Model, 2> mixed;
+  for (int j = 0; j < 2; ++j) {
+    double c = 0.0;
+    for (int i = 0; i < 2; ++i) c += pi[i][j] * state.models[i].probability;
+    mixed[j].probability = c;
+    mixed[j].x.setZero();
+    for (int i = 0; i < 2; ++i) {
+      const double w = c > 0.0 ? pi[i][j] * state.models[i].probability / c : 0.5;
+      mixed[j].x += w * state.models[i].x;
+    }
+    mixed[j].P.setZero();
+    for (int i = 0; i < 2; ++i) {
+      const double w = c > 0.0 ? pi[i][j] * state.models[i].probability / c : 0.5;
+      const Vector6d d = state.models[i].x - mixed[j].x;
+      mixed[j].P += w * (state.models[i].P + d * d.transpose());
+    }
+  }
+  predictModel(mixed[0].x, mixed[0].P, dt, params_.accel_psd_xy_m2ps3);
+  predictModel(mixed[1].x, mixed[1].P, dt, params_.manoeuvre_accel_psd_xy_m2ps3);
+  state.models = mixed;
+  combine(state);
 }
 
 MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& m) const {
@@ -170,13 +241,29 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
     }
     return MeasurementVerdict::kRejectedGate;  // state stays at its own time; prediction composes exactly
   }
-  // K = P H^T S^-1 with H = [I 0]; Joseph form (I - K H) P (I - K H)^T + K R K^T.
-  const Eigen::Matrix<double, 6, 3> PHt = predicted.P.leftCols<3>();
-  const Eigen::Matrix<double, 6, 3> K = llt.solve(PHt.transpose()).transpose();
-  predicted.x += K * innovation;
-  Matrix6d I_KH = Matrix6d::Identity();
-  I_KH.leftCols<3>() -= K;
-  predicted.P = I_KH * predicted.P * I_KH.transpose() + K * R * K.transpose();
+  if (imm()) {
+    // Each model updated on its own; its probability by the likelihood of its own innovation.
+    double log_likelihood[2];
+    for (int j = 0; j < 2; ++j) {
+      Model& model = predicted.models[j];
+      const Eigen::Vector3d nu = m.p_WT_m - model.x.head<3>();
+      const Eigen::LLT<Matrix3d> llt_j(model.P.topLeftCorner<3, 3>() + R);
+      if (llt_j.info() != Eigen::Success) return MeasurementVerdict::kRejectedInvalid;
+      const Matrix3d L = llt_j.matrixL();
+      log_likelihood[j] = -0.5 * nu.dot(llt_j.solve(nu)) - L.diagonal().array().log().sum();
+      kalmanUpdate(model.x, model.P, nu, llt_j, R);
+    }
+    const double top = std::max(log_likelihood[0], log_likelihood[1]);
+    double total = 0.0;
+    for (int j = 0; j < 2; ++j) {
+      predicted.models[j].probability *= std::exp(log_likelihood[j] - top);
+      total += predicted.models[j].probability;
+    }
+    for (Model& model : predicted.models) model.probability = total > 0.0 ? model.probability / total : 0.5;
+    combine(predicted);
+  } else {
+    kalmanUpdate(predicted.x, predicted.P, innovation, llt, R);
+  }
   // A bearing does not keep the track alive: without a distance for lost_after_s the range is a guess.
   if (!m.bearingOnly()) predicted.last_accepted_ns = m.stamp_ns;
   predicted.consecutive_rejections = 0;
@@ -262,6 +349,7 @@ TargetEstimate TargetEstimator::estimate(rt::TimeNs now_ns) const {
   e.p_WT_m = state.x.head<3>();
   e.v_WT_mps = state.x.tail<3>();
   e.covariance = state.P;
+  e.manoeuvre_probability = imm() ? state.models[1].probability : 0.0;
   e.last_accepted_ns = state.last_accepted_ns;
   e.lost = now_ns - state.last_accepted_ns > rt::secondsToNs(params_.lost_after_s);
   return e;
