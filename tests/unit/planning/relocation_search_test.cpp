@@ -176,7 +176,7 @@ TEST(RelocationSearch, TheBestViewpointIsTheBruteForceBestOfTheCandidatesAndEver
   Corner corner;
   RelocationSearch& s = corner.search;
   s.look(corner.grid, corner.drone, 1.0);  // part of the mass seen already
-  s.makeCandidates(corner.grid, Eigen::Vector3d(6.0, 6.0, kSightHeightM));
+  s.makeCandidates(corner.grid, Eigen::Vector3d(6.0, 6.0, kSightHeightM), corner.drone);
   ASSERT_GT(s.candidates().size(), 20U);
   // The reference: every candidate scored with the plain loop.
   double best_score = -1.0;
@@ -216,6 +216,32 @@ TEST(RelocationSearch, RoundACornerTheViewpointSeesTheLikelyPlacesTheHoverCannot
   EXPECT_GT(v->mass, 3.0 * from_hover);
   EXPECT_GT(v->p_W_m.x(), 5.0);     // beyond the building's corner
   EXPECT_GT(v->look_W_m.y(), 1.6);  // looking along the far wall, where the person went
+}
+
+TEST(RelocationSearch, InOpenAirTheDepthCameraLeftUnknownTheViewpointsAreThoseInPlainSight) {
+  // Given the corner's hollow building, and nothing else known at the flight altitude: the depth camera's level rays
+  // found nothing to hit in the open, so no free space was carved there (corner_hide in the closed loop: 300 idle
+  // search cycles while every candidate had to be known free).
+  const std::vector<OccupiedBox> walls = {{{-4.0, 1.0, 0.0}, {5.0, 1.1, 2.5}},
+                                          {{4.9, 1.0, 0.0}, {5.0, 9.0, 2.5}},
+                                          {{-4.0, 8.9, 0.0}, {5.0, 9.0, 2.5}},
+                                          {{-4.0, 1.0, 0.0}, {-3.9, 9.0, 2.5}}};
+  const mapping::LocalGrid grid = makeSeenGrid(walls, 0.0, 4.0, {{{-20.0, -20.0, 0.0}, {20.0, 20.0, 4.0}}});
+  const Eigen::Vector3d drone(-3.0, 0.0, kAltitudeM);
+  RelocationSearch s = makeSearch();
+  s.start(Eigen::Vector3d(5.6, 1.6, 0.0), Eigen::Vector3d(0.0, 1.5, 0.0), 0);
+  s.updateBelief(grid, rt::secondsToNs(5.0));
+  // When candidates are made round the unseen mass and the last position;
+  s.makeCandidates(grid, Eigen::Vector3d(6.0, 6.0, kSightHeightM), drone);
+  // Then there are some, every one in plain sight of the drone, none in the building's unknown inside.
+  ASSERT_GT(s.candidates().size(), 5U);
+  for (const Eigen::Vector3d& p : s.candidates()) {
+    EXPECT_EQ(grid.state(p), mapping::CellState::kUnknown);
+    EXPECT_TRUE(grid.lineOfSight(drone, p)) << p.transpose();
+    EXPECT_FALSE(p.x() > -4.0 && p.x() < 5.0 && p.y() > 1.0 && p.y() < 9.0) << p.transpose();
+  }
+  // And the search has a viewpoint to fly to, not an idle hover.
+  EXPECT_TRUE(s.update(grid, drone, rt::secondsToNs(5.0)).has_value());
 }
 
 TEST(RelocationSearch, FlyingFromViewpointToViewpointSeesMostOfTheMassAndKeepsAViewpointUntilReached) {

@@ -225,9 +225,14 @@ Eigen::Vector3d RelocationSearch::unseenCentroid() const {
   return mass > 0.0 ? Eigen::Vector3d(sum / mass) : p_last_W_m_;
 }
 
-bool RelocationSearch::viewpointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_W_m) const {
-  // Known free (seen by the depth camera): the unknown inside of a building is no place to look from.
-  if (!grid.isFree(p_W_m)) return false;
+bool RelocationSearch::viewpointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_W_m,
+                                     const Eigen::Vector3d& p_WB_m) const {
+  // Known free (seen by the depth camera), or unknown but in plain sight of the drone: the unknown inside of a
+  // building lies behind its mapped walls, while open air at the flight altitude stays unknown where the depth
+  // camera's level rays found nothing to hit (no return: no free space is carved; corner_hide, issue 21). The
+  // planner checks the way there against the map as it fills, and an unreached viewpoint is abandoned.
+  if (!grid.isFree(p_W_m) && (grid.isOccupied(p_W_m) || !grid.inWindow(p_W_m) || !grid.lineOfSight(p_WB_m, p_W_m)))
+    return false;
   for (const Eigen::Vector3d& tabu : abandoned_W_m_) {
     if ((tabu - p_W_m).head<2>().norm() < params_.reached_m) return false;
   }
@@ -241,14 +246,15 @@ bool RelocationSearch::viewpointFree(const mapping::LocalGrid& grid, const Eigen
   return true;
 }
 
-void RelocationSearch::makeCandidates(const mapping::LocalGrid& grid, const Eigen::Vector3d& centre_W_m) {
+void RelocationSearch::makeCandidates(const mapping::LocalGrid& grid, const Eigen::Vector3d& centre_W_m,
+                                      const Eigen::Vector3d& p_WB_m) {
   candidates_.clear();
   for (const Eigen::Vector3d& centre : {centre_W_m, p_last_W_m_}) {
     for (const double r_m : params_.viewpoint_radii_m) {
       for (int k = 0; k < params_.viewpoint_bearings; ++k) {
         const double a = 2.0 * std::numbers::pi * k / params_.viewpoint_bearings;
         const Eigen::Vector3d p(centre.x() + r_m * std::cos(a), centre.y() + r_m * std::sin(a), flight_altitude_m_);
-        if (viewpointFree(grid, p)) candidates_.push_back(p);
+        if (viewpointFree(grid, p, p_WB_m)) candidates_.push_back(p);
       }
     }
   }
@@ -284,13 +290,14 @@ std::optional<Viewpoint> RelocationSearch::update(const mapping::LocalGrid& grid
   const bool stale = !current_ || rt::nsToSeconds(now_ns - chosen_ns_) >= params_.reselect_s;
   if (!reached && !stale) return current_;
   chosen_ns_ = now_ns;
-  makeCandidates(grid, unseenCentroid());
+  makeCandidates(grid, unseenCentroid(), p_WC_m);
   std::optional<Viewpoint> best = bestViewpoint(grid, p_WC_m);
   if (current_ && !reached) {  // keep the current one unless clearly beaten (or nothing is left to see from it)
     Viewpoint kept = *current_;
     kept.mass = visibleMass(grid, kept.p_W_m, kept.look_W_m);
     kept.score = kept.mass / ((kept.p_W_m - p_WC_m).norm() / params_.travel_speed_mps + params_.full_look_s);
-    if (kept.mass >= kMinMass && viewpointFree(grid, kept.p_W_m) && (!best || kSwitchGain * kept.score >= best->score))
+    if (kept.mass >= kMinMass && viewpointFree(grid, kept.p_W_m, p_WC_m) &&
+        (!best || kSwitchGain * kept.score >= best->score))
       best = kept;
   }
   if (best && (!current_ || best->p_W_m != current_->p_W_m)) {  // a new goal: its time to get there starts

@@ -91,8 +91,9 @@ class RelocationSearch {
   void look(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_WC_m, double dt_s);
   /// The unseen mass a camera at p_WC_m would see, and its centroid (sight height) in look_W_m.
   double visibleMass(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_WC_m, Eigen::Vector3d& look_W_m) const;
-  /// The candidate viewpoints round `centre_W_m` (flight altitude), free ones only, into candidates().
-  void makeCandidates(const mapping::LocalGrid& grid, const Eigen::Vector3d& centre_W_m);
+  /// The candidate viewpoints round `centre_W_m` (flight altitude), free ones only, into candidates(). Free: known
+  /// free, or unknown in plain sight of the drone at p_WB_m (no mapped surface between them), and clear all round.
+  void makeCandidates(const mapping::LocalGrid& grid, const Eigen::Vector3d& centre_W_m, const Eigen::Vector3d& p_WB_m);
   /// The best candidate for a drone at p_WB_m (nothing if none sees unseen mass).
   std::optional<Viewpoint> bestViewpoint(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_WB_m) const;
 
@@ -112,7 +113,7 @@ class RelocationSearch {
  private:
   RelocationSearch(const RelocationSearchParams& params, double sight_height_m, double flight_altitude_m);
   bool cellBlocked(const mapping::LocalGrid& grid, const Eigen::Vector3d& centre_W_m) const;
-  bool viewpointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_W_m) const;
+  bool viewpointFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p_W_m, const Eigen::Vector3d& p_WB_m) const;
   Eigen::Vector3d unseenCentroid() const;
 
   RelocationSearchParams params_;
