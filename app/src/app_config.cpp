@@ -225,6 +225,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "manoeuvre_accel_psd_xy_m2ps3" << YAML::Value << k.manoeuvre_accel_psd_xy_m2ps3;
     out << YAML::Key << "steady_mean_s" << YAML::Value << k.steady_mean_s;
     out << YAML::Key << "manoeuvre_mean_s" << YAML::Value << k.manoeuvre_mean_s;
+    out << YAML::Key << "hold_probabilities_coasting" << YAML::Value << k.hold_probabilities_coasting;
     out << YAML::EndMap;
     out << YAML::EndMap;
   }

@@ -92,6 +92,7 @@ TargetEstimatorParams parseTargetEstimatorParams(const rt::ConfigNode& node) {
   p.manoeuvre_accel_psd_xy_m2ps3 = node.getDouble("manoeuvre_accel_psd_xy_m2ps3", 0.0, 1e3);
   p.steady_mean_s = node.getDouble("steady_mean_s", 1e-3, 3600.0);
   p.manoeuvre_mean_s = node.getDouble("manoeuvre_mean_s", 1e-3, 3600.0);
+  p.hold_probabilities_coasting = node.getBool("hold_probabilities_coasting");
   node.finish();
   return p;
 }
@@ -344,7 +345,19 @@ TargetEstimate TargetEstimator::estimate(rt::TimeNs now_ns) const {
     e.stamp_ns = now_ns;
     return e;
   }
-  predict(state, now_ns);
+  if (imm() && params_.hold_probabilities_coasting && now_ns > state.stamp_ns) {
+    // Coasting: each model predicted on its own, the probabilities held at the newest measurement's. Without a
+    // measurement the chain would only relax them to its stationary ones, and the covariance the planner and
+    // the gimbal read would grow as if a manoeuvre were likelier than the measurements said (issue 21: the
+    // gimbal stopped looking at the prediction sooner when the person turned a corner out of sight).
+    const double dt = rt::nsToSeconds(now_ns - state.stamp_ns);
+    predictModel(state.models[0].x, state.models[0].P, dt, params_.accel_psd_xy_m2ps3);
+    predictModel(state.models[1].x, state.models[1].P, dt, params_.manoeuvre_accel_psd_xy_m2ps3);
+    combine(state);
+    state.stamp_ns = now_ns;
+  } else {
+    predict(state, now_ns);
+  }
   e.stamp_ns = state.stamp_ns;
   e.p_WT_m = state.x.head<3>();
   e.v_WT_mps = state.x.tail<3>();

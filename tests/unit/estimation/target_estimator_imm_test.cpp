@@ -170,10 +170,9 @@ TEST(TargetEstimatorImm, GivenTwoEqualModelsThenItIsTheOneModelFilter) {
   }
 }
 
-TEST(TargetEstimatorImm, GivenADropoutThenTheModelProbabilitiesTendToTheChainsStationaryOnes) {
-  const TargetEstimatorParams params = imm();
+/// An IMM estimator fed a runner braking hard, measured without noise, to t = 4 s (the newest measurement).
+TargetEstimator brakedTo4s(const TargetEstimatorParams& params) {
   TargetEstimator estimator = aerotrack::test::require(TargetEstimator::create(params), "TargetEstimator::create");
-  // Given a runner braking hard, measured without noise...
   for (int k = 0; k <= static_cast<int>(4.0 * kRateHz); ++k) {
     TargetMeasurement m;
     m.stamp_ns = rt::secondsToNs(k / kRateHz);
@@ -181,6 +180,14 @@ TEST(TargetEstimatorImm, GivenADropoutThenTheModelProbabilitiesTendToTheChainsSt
     m.std_xy_m = kNoiseXyM;
     estimator.add(m);
   }
+  return estimator;
+}
+
+TEST(TargetEstimatorImm, GivenADropoutThenTheModelProbabilitiesTendToTheChainsStationaryOnes) {
+  // Given the chain left to run while coasting (hold_probabilities_coasting off)...
+  TargetEstimatorParams params = imm();
+  params.hold_probabilities_coasting = false;
+  const TargetEstimator estimator = brakedTo4s(params);
   const double at_loss = estimator.estimate(rt::secondsToNs(4.0)).manoeuvre_probability;
   const double stationary = params.manoeuvre_mean_s / (params.steady_mean_s + params.manoeuvre_mean_s);
   ASSERT_GT(std::abs(at_loss - stationary), 0.05);  // far enough from it for the relaxation to show
@@ -191,6 +198,27 @@ TEST(TargetEstimatorImm, GivenADropoutThenTheModelProbabilitiesTendToTheChainsSt
     const double expected = stationary + (at_loss - stationary) * std::exp(-rate * after_s);
     EXPECT_NEAR(estimator.estimate(rt::secondsToNs(4.0 + after_s)).manoeuvre_probability, expected, 1e-9);
   }
+}
+
+TEST(TargetEstimatorImm, GivenADropoutWhileHoldingTheProbabilitiesThenEachModelCoastsOnItsOwn) {
+  // Given the same run, coasting with the probabilities held (the shipped setting) and without;
+  TargetEstimatorParams relaxing = imm();
+  relaxing.hold_probabilities_coasting = false;
+  const TargetEstimator held = brakedTo4s(imm());
+  const TargetEstimator relaxed = brakedTo4s(relaxing);
+  const TargetEstimate at_loss = held.estimate(rt::secondsToNs(4.0));
+  // when coasting 2 s;
+  const TargetEstimate a = held.estimate(rt::secondsToNs(6.0));
+  const TargetEstimate b = relaxed.estimate(rt::secondsToNs(6.0));
+  // then the held probability is the last measured one, the mean is each model's constant-velocity
+  // prediction mixed with it (both models share the velocity, so the mean is the same either way), and the
+  // covariance is that of the probabilities the measurements supported: narrower here, where they had
+  // the manoeuvre less likely than the chain's stationary 23 %.
+  EXPECT_DOUBLE_EQ(a.manoeuvre_probability, at_loss.manoeuvre_probability);
+  EXPECT_LT((a.p_WT_m - (at_loss.p_WT_m + 2.0 * at_loss.v_WT_mps)).norm(), 1e-9);
+  EXPECT_LT(at_loss.manoeuvre_probability, b.manoeuvre_probability);
+  EXPECT_LT(a.covariance(0, 0), b.covariance(0, 0));
+  EXPECT_LT(a.covariance(3, 3), b.covariance(3, 3));
 }
 
 TEST(TargetEstimatorImm, GivenBadChainParametersThenRefusedNamingTheKey) {

@@ -383,7 +383,8 @@ TEST(TargetEstimatorParams, GivenAConfigSectionThenEveryKeyIsRequiredAndChecked)
       "estimator:\n  accel_psd_xy_m2ps3: 0.4\n  accel_psd_z_m2ps3: 0.05\n  measurement_std_xy_m: 0.15\n"
       "  measurement_std_z_m: 0.3\n  initial_speed_std_mps: 1.5\n  gate_chi2: 16.27\n  reinit_after_rejections: 8\n"
       "  lost_after_s: 1.0\n  replay_window_s: 0.5\n  max_buffered_measurements: 64\n"
-      "  manoeuvre_accel_psd_xy_m2ps3: 9.0\n  steady_mean_s: 5.0\n  manoeuvre_mean_s: 1.5\n";
+      "  manoeuvre_accel_psd_xy_m2ps3: 9.0\n  steady_mean_s: 5.0\n  manoeuvre_mean_s: 1.5\n"
+      "  hold_probabilities_coasting: true\n";
   const auto parse = [](const std::string& text) {
     const rt::ConfigNode root = aerotrack::test::require(rt::ConfigNode::fromString(text, "cfg.yaml"), "cfg.yaml");
     return rt::parseConfig<TargetEstimatorParams>(

@@ -63,6 +63,10 @@ struct TargetEstimatorParams {
   double manoeuvre_accel_psd_xy_m2ps3 = 0.0;
   double steady_mean_s = 5.0;     ///< Mean time between manoeuvres (the chain's sojourn in steady); > 0.
   double manoeuvre_mean_s = 1.5;  ///< Mean length of a manoeuvre; > 0.
+  /// estimate() past the newest measurement (coasting) holds the models' probabilities at the newest
+  /// measurement's instead of letting the chain relax them (each model still predicted on its own). The
+  /// filter's own steps and the gate (mahalanobisSq) always use the chain.
+  bool hold_probabilities_coasting = true;
 };
 
 /// Ok if every field is in its documented range; the error names the field.
@@ -71,7 +75,8 @@ rt::Status validate(const TargetEstimatorParams& params);
 /// Reads the estimator's config section: every field of TargetEstimatorParams by its name, all
 /// required (accel_psd_xy_m2ps3, accel_psd_z_m2ps3, measurement_std_xy_m, measurement_std_z_m,
 /// initial_speed_std_mps, gate_chi2, reinit_after_rejections, lost_after_s, replay_window_s,
-/// max_buffered_measurements, manoeuvre_accel_psd_xy_m2ps3, steady_mean_s, manoeuvre_mean_s). Throws rt::ConfigError
+/// max_buffered_measurements, manoeuvre_accel_psd_xy_m2ps3, steady_mean_s, manoeuvre_mean_s,
+/// hold_probabilities_coasting). Throws rt::ConfigError
 /// naming the key (use inside rt::parseConfig).
 TargetEstimatorParams parseTargetEstimatorParams(const rt::ConfigNode& node);
 
