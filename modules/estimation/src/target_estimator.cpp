@@ -168,17 +168,21 @@ void TargetEstimator::predictModel(Vector6d& x, Matrix6d& P, double dt, double q
   }
 }
 
-void TargetEstimator::combine(State& state) {
-  state.x.setZero();
-  for (const Model& model : state.models) state.x += model.probability * model.x;
-  state.P.setZero();
-  for (const Model& model : state.models) {
-    const Vector6d d = model.x - state.x;
-    state.P += model.probability * (model.P + d * d.transpose());
+void TargetEstimator::mixture(const std::array<Model, 2>& models, const std::array<double, 2>& weights, Vector6d& x,
+                              Matrix6d& P) {
+  x = weights[0] * models[0].x + weights[1] * models[1].x;
+  P.setZero();
+  for (int i = 0; i < 2; ++i) {
+    const Vector6d d = models[i].x - x;
+    P += weights[i] * (models[i].P + d * d.transpose());
   }
 }
 
-void TargetEstimator::predict(State& state, rt::TimeNs t_ns) const {
+void TargetEstimator::combine(State& state) {
+  mixture(state.models, {state.models[0].probability, state.models[1].probability}, state.x, state.P);
+}
+
+void TargetEstimator::predict(State& state, rt::TimeNs t_ns, bool transitions) const {
   if (t_ns <= state.stamp_ns) return;
   const double dt = rt::nsToSeconds(t_ns - state.stamp_ns);
   state.stamp_ns = t_ns;
@@ -186,36 +190,30 @@ void TargetEstimator::predict(State& state, rt::TimeNs t_ns) const {
     predictModel(state.x, state.P, dt, params_.accel_psd_xy_m2ps3);
     return;
   }
-  // The chain's transition probabilities over dt (exact for a two-state continuous-time Markov chain):
-  // pi[i][j] = P(model j at the end | model i at the start).
-  const double to_manoeuvre = 1.0 / params_.steady_mean_s;
-  const double to_steady = 1.0 / params_.manoeuvre_mean_s;
-  const double rate = to_manoeuvre + to_steady;
-  const double settled = 1.0 - std::exp(-rate * dt);
-  const double stationary_manoeuvre = to_manoeuvre / rate;
-  const double pi[2][2] = {{1.0 - stationary_manoeuvre * settled, stationary_manoeuvre * settled},
-                           {(1.0 - stationary_manoeuvre) * settled, 1.0 - (1.0 - stationary_manoeuvre) * settled}};
-  // Interaction (mixing): each model starts from the mixture of both, weighted by where it came from.
-  std::array<Model, 2> mixed;
-  for (int j = 0; j < 2; ++j) {
-    double c = 0.0;
-    for (int i = 0; i < 2; ++i) c += pi[i][j] * state.models[i].probability;
-    mixed[j].probability = c;
-    mixed[j].x.setZero();
-    for (int i = 0; i < 2; ++i) {
-      const double w = c > 0.0 ? pi[i][j] * state.models[i].probability / c : 0.5;
-      mixed[j].x += w * state.models[i].x;
+  if (transitions) {
+    // The chain's transition probabilities over dt (exact for a two-state continuous-time Markov chain):
+    // pi[i][j] = P(model j at the end | model i at the start).
+    const double to_manoeuvre = 1.0 / params_.steady_mean_s;
+    const double to_steady = 1.0 / params_.manoeuvre_mean_s;
+    const double rate = to_manoeuvre + to_steady;
+    const double settled = 1.0 - std::exp(-rate * dt);
+    const double stationary_manoeuvre = to_manoeuvre / rate;
+    const double pi[2][2] = {{1.0 - stationary_manoeuvre * settled, stationary_manoeuvre * settled},
+                             {(1.0 - stationary_manoeuvre) * settled, 1.0 - (1.0 - stationary_manoeuvre) * settled}};
+    // Interaction (mixing): each model starts from the mixture of both, weighted by where it came from.
+    std::array<Model, 2> mixed;
+    for (int j = 0; j < 2; ++j) {
+      const double c = pi[0][j] * state.models[0].probability + pi[1][j] * state.models[1].probability;
+      const std::array<double, 2> from = c > 0.0 ? std::array<double, 2>{pi[0][j] * state.models[0].probability / c,
+                                                                         pi[1][j] * state.models[1].probability / c}
+                                                 : std::array<double, 2>{0.5, 0.5};
+      mixture(state.models, from, mixed[j].x, mixed[j].P);
+      mixed[j].probability = c;
     }
-    mixed[j].P.setZero();
-    for (int i = 0; i < 2; ++i) {
-      const double w = c > 0.0 ? pi[i][j] * state.models[i].probability / c : 0.5;
-      const Vector6d d = state.models[i].x - mixed[j].x;
-      mixed[j].P += w * (state.models[i].P + d * d.transpose());
-    }
+    state.models = mixed;
   }
-  predictModel(mixed[0].x, mixed[0].P, dt, params_.accel_psd_xy_m2ps3);
-  predictModel(mixed[1].x, mixed[1].P, dt, params_.manoeuvre_accel_psd_xy_m2ps3);
-  state.models = mixed;
+  predictModel(state.models[0].x, state.models[0].P, dt, params_.accel_psd_xy_m2ps3);
+  predictModel(state.models[1].x, state.models[1].P, dt, params_.manoeuvre_accel_psd_xy_m2ps3);
   combine(state);
 }
 
@@ -345,19 +343,11 @@ TargetEstimate TargetEstimator::estimate(rt::TimeNs now_ns) const {
     e.stamp_ns = now_ns;
     return e;
   }
-  if (imm() && params_.hold_probabilities_coasting && now_ns > state.stamp_ns) {
-    // Coasting: each model predicted on its own, the probabilities held at the newest measurement's. Without a
-    // measurement the chain would only relax them to its stationary ones, and the covariance the planner and
-    // the gimbal read would grow as if a manoeuvre were likelier than the measurements said (issue 21: the
-    // gimbal stopped looking at the prediction sooner when the person turned a corner out of sight).
-    const double dt = rt::nsToSeconds(now_ns - state.stamp_ns);
-    predictModel(state.models[0].x, state.models[0].P, dt, params_.accel_psd_xy_m2ps3);
-    predictModel(state.models[1].x, state.models[1].P, dt, params_.manoeuvre_accel_psd_xy_m2ps3);
-    combine(state);
-    state.stamp_ns = now_ns;
-  } else {
-    predict(state, now_ns);
-  }
+  // Coasting with the probabilities held (hold_probabilities_coasting): without a measurement the chain would only
+  // relax them to its stationary ones, and the covariance the planner and the gimbal read would grow as if a
+  // manoeuvre were likelier than the measurements said (issue 21: the gimbal stopped looking at the prediction
+  // sooner when the person turned a corner out of sight).
+  predict(state, now_ns, !params_.hold_probabilities_coasting);
   e.stamp_ns = state.stamp_ns;
   e.p_WT_m = state.x.head<3>();
   e.v_WT_mps = state.x.tail<3>();

@@ -76,8 +76,7 @@ rt::Status validate(const TargetEstimatorParams& params);
 /// required (accel_psd_xy_m2ps3, accel_psd_z_m2ps3, measurement_std_xy_m, measurement_std_z_m,
 /// initial_speed_std_mps, gate_chi2, reinit_after_rejections, lost_after_s, replay_window_s,
 /// max_buffered_measurements, manoeuvre_accel_psd_xy_m2ps3, steady_mean_s, manoeuvre_mean_s,
-/// hold_probabilities_coasting). Throws rt::ConfigError
-/// naming the key (use inside rt::parseConfig).
+/// hold_probabilities_coasting). Throws rt::ConfigError naming the key (use inside rt::parseConfig).
 TargetEstimatorParams parseTargetEstimatorParams(const rt::ConfigNode& node);
 
 /// One localized position of the person.
@@ -175,11 +174,15 @@ class TargetEstimator {
   /// The filter step: state (at or before m's time) and m -> the state at m's time.
   MeasurementVerdict step(State& state, const TargetMeasurement& m) const;
   void start(State& state, const TargetMeasurement& m) const;
-  void predict(State& state, rt::TimeNs t_ns) const;
+  /// Predicts to t_ns; with the IMM, transitions=false skips the chain's mixing (the probabilities held).
+  void predict(State& state, rt::TimeNs t_ns, bool transitions = true) const;
   bool imm() const { return params_.manoeuvre_accel_psd_xy_m2ps3 > 0.0; }
   /// Predicts one constant-velocity state over dt with horizontal spectral density q_xy.
   void predictModel(Vector6d& x, Matrix6d& P, double dt_s, double q_xy) const;
-  /// The IMM's output: state.x and state.P from the models (mean, and covariance with their spread).
+  /// The models' mixture with these weights: mean, and covariance with their spread.
+  static void mixture(const std::array<Model, 2>& models, const std::array<double, 2>& weights, Vector6d& x,
+                      Matrix6d& P);
+  /// The IMM's output: state.x and state.P, the models' mixture by their probabilities.
   static void combine(State& state);
   const State& newest() const { return buffer_.empty() ? anchor_ : buffer_.back().after; }
 
