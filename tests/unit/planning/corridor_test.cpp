@@ -183,6 +183,29 @@ TEST(Corridor, GivenAStraightPathInFreeSpaceThenOneBoxGrownToTheCapHoldsIt) {
   EXPECT_LE(corridor.boxes.size(), 5u);
 }
 
+// Issue 21: the search's altitude band holds the boxes too (else the optimiser could take the path back under
+// a crosser's torso); a path partly below the band keeps its own cells.
+TEST(Corridor, GivenAnAltitudeBandThenBoxesGrowOnlyAcrossItsCellsAndThePathsOwn) {
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(10.0, 8.0, 4.0), Eigen::Vector3d(2.0, 0.0, 2.0), {});
+  const std::vector<Eigen::Vector3d> path = polyline({{0.03, 0.02, 1.51}, {2.47, 0.02, 1.51}});
+  CorridorBuilder builder = makeBuilder();
+  builder.setAltitudeBand(1.0, 2.0);
+  Corridor corridor;
+  ASSERT_TRUE(builder.build(grid, path, corridor).has_value());
+  expectValidCorridor(grid, path, corridor, builder.params(), "banded");
+  ASSERT_EQ(corridor.boxes.size(), 1u);
+  EXPECT_EQ(corridor.boxes[0].cells.lo.z(), 10) << "the cell holding 1.0 m";
+  EXPECT_EQ(corridor.boxes[0].cells.hi.z(), 21) << "one past the cell holding 2.0 m";
+
+  const std::vector<Eigen::Vector3d> low = polyline({{0.03, 0.02, 0.75}, {2.47, 0.02, 1.51}});
+  ASSERT_TRUE(builder.build(grid, low, corridor).has_value());
+  expectValidCorridor(grid, low, corridor, builder.params(), "from below the band");
+  for (const CorridorBox& box : corridor.boxes) {
+    EXPECT_GE(box.cells.lo.z(), 7) << "never below the path's lowest cell";
+    EXPECT_LE(box.cells.hi.z(), 21);
+  }
+}
+
 TEST(Corridor, GivenASinglePointThenOneBoxAndNoWaypoints) {
   const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(6.0, 6.0, 3.0), Eigen::Vector3d(0.0, 0.0, 1.5), {});
   const std::vector<Eigen::Vector3d> path{{0.5, 0.5, 1.0}};

@@ -232,7 +232,8 @@ int CorridorBuilder::room(const LocalGrid& grid, const CellBox& box, int axis, b
   const int cap = max_box_cells_[axis] - (box.hi[axis] - box.lo[axis]);
   const int window = upper ? grid.windowMinCell()[axis] + grid.windowSizeCells()[axis] - box.hi[axis]
                            : box.lo[axis] - grid.windowMinCell()[axis];
-  return std::min(cap, window);
+  const int band = axis != 2 ? window : upper ? band_hi_cell_ - box.hi[axis] : box.lo[axis] - band_lo_cell_;
+  return std::min({cap, window, band});
 }
 
 bool CorridorBuilder::slabFree(const LocalGrid& grid, const CellBox& box, int axis, bool upper, int depth) const {
@@ -338,6 +339,17 @@ rt::Status CorridorBuilder::build(const LocalGrid& grid, std::span<const Eigen::
   if (rt::Status walked = walkPath(grid, path_W_m); !walked) return walked;
 
   const int cells = static_cast<int>(walk_.size());
+  // The altitude band in cells (a cell belongs when it holds a height in the band), widened to the walk.
+  constexpr int kUnbounded = 1 << 29;
+  const auto bandCell = [resolution_m](double z_m, int unbounded) {
+    return std::isfinite(z_m) ? static_cast<int>(std::clamp(std::floor(z_m / resolution_m), -1e9, 1e9)) : unbounded;
+  };
+  band_lo_cell_ = bandCell(min_z_m_, -kUnbounded);
+  band_hi_cell_ = bandCell(max_z_m_, kUnbounded - 1) + 1;
+  for (const mapping::CellIndex& cell : walk_) {
+    band_lo_cell_ = std::min(band_lo_cell_, cell.z());
+    band_hi_cell_ = std::max(band_hi_cell_, cell.z() + 1);
+  }
   boxes_.clear();
   box_first_.clear();
   boxes_.push_back(growBox(grid, 0, 1));

@@ -19,6 +19,8 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::number("person_sight_height_m", &P::person_sight_height_m, Range::closed(0.1, 5.0)),
           rt::number("person_torso_half_m", &P::person_torso_half_m, Range::closed(0.0, 1.0)),
           rt::number("takeoff_below_m", &P::takeoff_below_m, Range::closed(0.0, 100.0)),
+          rt::number("min_altitude_m", &P::min_altitude_m, Range::closed(0.0, 100.0)),
+          rt::number("max_altitude_m", &P::max_altitude_m, Range::closed(0.1, 1000.0)),
           rt::number("min_person_distance_m", &P::min_person_distance_m, Range::closed(0.0, 50.0)),
           rt::number("optimizer_limit_fraction", &P::optimizer_limit_fraction, Range::openClosed(0.0, 1.0)),
           rt::number("time_weight_reference_speed_mps", &P::time_weight_reference_speed_mps,
@@ -36,7 +38,10 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::section("relocation", &P::relocation, relocationSearchFields()),
       },
       {{"flight_altitude_m", "must be > takeoff_below_m",
-        [](const P& p) { return p.flight_altitude_m > p.takeoff_below_m; }}});
+        [](const P& p) { return p.flight_altitude_m > p.takeoff_below_m; }},
+       {"flight_altitude_m", "must lie in [min_altitude_m, max_altitude_m]", [](const P& p) {
+          return p.min_altitude_m <= p.flight_altitude_m && p.flight_altitude_m <= p.max_altitude_m;
+        }}});
   return kTable;
 }
 

@@ -142,7 +142,7 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   }
   const bool flies = report.status == PlanStatus::kPlanned || report.status == PlanStatus::kRelocating ||
                      report.status == PlanStatus::kStopped || report.status == PlanStatus::kTakeOff ||
-                     report.status == PlanStatus::kEvading;
+                     report.status == PlanStatus::kEvading || report.status == PlanStatus::kEscaping;
   // The plan used the estimate's newest measurement (tracking) or none (relocation, stop, take-off).
   const bool tracked = report.status == PlanStatus::kPlanned && target && target->initialised && !target->lost;
   if (flies) publish(lent, report.start_ns, tracked ? target->last_accepted_ns : -1);

@@ -12,6 +12,11 @@ namespace {
 // The person's torso for the camera-view term: every 50 ms (a runner moves 0.3 m) for up to 8 s.
 constexpr double kPersonSampleStepS = 0.05;
 constexpr std::size_t kPersonSamples = 161;
+// escapeMargin: a free point farther than this means the drone is boxed in, not grazing a margin (the
+// inflation radius is 0.35 m; two margins facing each other across a gap leave a free cell within 0.8 m).
+constexpr double kEscapeRadiusM = 1.0;
+constexpr std::size_t kEscapeCandidates = 16;
+constexpr int kEscapeRetimes = 4;
 
 }  // namespace
 
@@ -43,6 +48,8 @@ std::string_view toString(PlanStatus status) {
       return "check_failed";
     case PlanStatus::kEvading:
       return "evading";
+    case PlanStatus::kEscaping:
+      return "escaping";
   }
   return "unknown";
 }
@@ -80,6 +87,8 @@ TrackingPlanner::TrackingPlanner(const TrackingPlannerParams& params, Kinodynami
       optimizer_(std::move(optimizer)),
       predictor_(std::move(predictor)),
       checker_(checker) {
+  search_.setAltitudeBand(params.min_altitude_m, params.max_altitude_m);
+  corridor_builder_.setAltitudeBand(params.min_altitude_m, params.max_altitude_m);
   // The longest search path: every expansion adds a primitive, plus the one-shot.
   const double longest_s = params.search.primitive_duration_s * (params.search.max_expansions + 1) + 10.0;
   polyline_.reserve(static_cast<std::size_t>(std::min(longest_s / params.path_sample_step_s, 1e5)) + 2);
@@ -242,6 +251,13 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   report.search_expansions = path_.expansions;
   if (person->live && path_.status == SearchStatus::kReachedGoal && !search_goal_clipped_)
     arrival_s_ = path_.duration_s;
+  // Only a start in a margin is escaped (searchTrackingPath clamps the start's velocity into the search's limits,
+  // the other reason for start_blocked; a start outside the window has nowhere known to go).
+  if (path_.status == SearchStatus::kStartBlocked && grid.inWindow(start.col(0)) && grid.isOccupied(start.col(0)) &&
+      escapeMargin(start, grid, inputs.octree, out)) {
+    report.status = PlanStatus::kEscaping;
+    return report;
+  }
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
     return fail_or_evade(PlanStatus::kSearchFailed);
   if (path_.duration_s <= params_.min_piece_duration_s) {
@@ -333,6 +349,61 @@ bool TrackingPlanner::evadePerson(const StatePva& start, const mapping::LocalGri
     if (!pieceToRest(start, c.end_W_m, c.duration_s)) continue;
     out.assign(stop_spline_);
     if (checkTrajectory(out, params_.check, grid, checker_, octree).verdict == CheckVerdict::kOk) return true;
+  }
+  return false;
+}
+
+bool TrackingPlanner::escapeMargin(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+                                   PolynomialTrajectory& out) {
+  const Eigen::Vector3d p0 = start.col(0);
+  const double resolution_m = grid.params().resolution_m;
+  const int reach = static_cast<int>(std::ceil(kEscapeRadiusM / resolution_m));
+  const mapping::CellIndex centre = (p0 / resolution_m).array().floor().cast<int>();
+  const double min_z_m = std::min(params_.min_altitude_m, p0.z());
+  const double max_z_m = std::max(params_.max_altitude_m, p0.z());
+  // The kEscapeCandidates nearest unblocked cell centres, nearest first (a fixed buffer: no allocation).
+  struct Candidate {
+    Eigen::Vector3d p_W_m;
+    double distance_m;
+  };
+  std::array<Candidate, kEscapeCandidates> best{};
+  std::size_t found = 0;
+  for (int dz = -reach; dz <= reach; ++dz) {
+    for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const Eigen::Vector3d c =
+            ((centre + mapping::CellIndex(dx, dy, dz)).cast<double>().array() + 0.5) * resolution_m;
+        const double d = (c - p0).norm();
+        if (d > kEscapeRadiusM || c.z() < min_z_m || c.z() > max_z_m) continue;
+        if (found == best.size() && d >= best.back().distance_m) continue;
+        if (!grid.inWindow(c) || grid.isOccupied(c)) continue;
+        std::size_t i = std::min(found, best.size() - 1);
+        for (; i > 0 && best[i - 1].distance_m > d; --i) best[i] = best[i - 1];
+        best[i] = {c, d};
+        found = std::min(found + 1, best.size());
+      }
+    }
+  }
+  // Timed as makeMoveTrajectory at the check's full limits, then stretched to them; the check may find the
+  // start in the margin for the whole move (it is what the move leaves), never a raw obstacle on the way.
+  TrajectoryCheckParams check = params_.check;
+  const double v_max = params_.check.max_velocity_mps;
+  const double a_max = params_.check.max_acceleration_mps2;
+  for (std::size_t i = 0; i < found; ++i) {
+    const Eigen::Vector3d& end_W_m = best[i].p_W_m;
+    if (!grid.lineOfSight(p0, end_W_m)) continue;
+    const double d = best[i].distance_m;
+    // Stretched until within the limits (a start still braking makes the peaks shrink slower than 1/k).
+    double duration_s = std::max({0.3, 1.875 * d / v_max, std::sqrt(5.7735 * d / a_max)});
+    for (int attempt = 0; attempt < kEscapeRetimes; ++attempt) {
+      if (!pieceToRest(start, end_W_m, duration_s)) break;
+      out.assign(stop_spline_);
+      check.margin_escape_s = std::max(params_.check.margin_escape_s, duration_s);
+      const CheckResult result = checkTrajectory(out, check, grid, checker_, octree);
+      if (result.verdict == CheckVerdict::kOk) return true;
+      if (!isDynamicLimit(result.verdict)) break;
+      duration_s *= std::max(1.1, dynamicStretchFactor(out, params_.check));
+    }
   }
   return false;
 }

@@ -292,14 +292,15 @@ int* KinodynamicSearch::findSlot(std::int64_t key) {
 
 bool KinodynamicSearch::primitiveFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p,
                                       const Eigen::Vector3d& v, const Eigen::Vector3d& u, double duration_s) const {
-  if (!pointFree(grid, p + duration_s * (v + 0.5 * duration_s * u))) return false;  // cheap early reject
+  const Eigen::Vector3d end = p + duration_s * (v + 0.5 * duration_s * u);
+  if (!pointFree(grid, end) || !inBand(end)) return false;  // cheap early reject
   const int chords = chordCount(u.norm(), duration_s);
   const double dt = duration_s / chords;
   Eigen::Vector3d previous = p;
   for (int i = 1; i <= chords; ++i) {
     const double t = i * dt;
     const Eigen::Vector3d next = p + t * (v + 0.5 * t * u);
-    if (!chordFree(grid, previous, next)) return false;
+    if (!inBand(next) || !chordFree(grid, previous, next)) return false;
     previous = next;
   }
   return true;
@@ -332,7 +333,7 @@ bool KinodynamicSearch::oneShot(const mapping::LocalGrid& grid, const Node& from
   Eigen::Vector3d previous = from.p;
   for (int i = 1; i <= chords; ++i) {
     const Eigen::Vector3d next = positionOf(shot, t_end * i / chords);
-    if (!chordFree(grid, previous, next)) return false;
+    if (!inBand(next) || !chordFree(grid, previous, next)) return false;
     previous = next;
   }
   cost = obvp.cost;
@@ -390,6 +391,8 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
   if (!pointFree(grid, start.p_W_m) || !withinLimits(start.v_W_mps, params_.max_velocity_mps)) {
     return finish(SearchStatus::kStartBlocked);
   }
+  search_min_z_m_ = std::min(min_z_m_, start.p_W_m.z());
+  search_max_z_m_ = std::max(max_z_m_, start.p_W_m.z());
   // A goal velocity beyond the per-axis limit could never be matched (one-shot or tolerance): scaled into it,
   // direction kept (a runner at 5 m/s along an axis made every search partial, issue 21).
   const double goal_v_inf = goal_in.v_W_mps.cwiseAbs().maxCoeff();

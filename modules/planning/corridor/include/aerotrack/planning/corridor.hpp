@@ -40,6 +40,7 @@
 // Cost per build: O(walk cells + sum of the box volumes in cells); no allocation once warm.
 #pragma once
 
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -118,6 +119,13 @@ class CorridorBuilder {
   static rt::Expected<CorridorBuilder> create(const CorridorParams& params);
 
   const CorridorParams& params() const { return params_; }
+  /// Boxes grow in W z only across the cells that hold heights in [min_z_m, max_z_m], widened to the path's
+  /// own cells (default: unbounded). The search's altitude band (KinodynamicSearch::setAltitudeBand): a box
+  /// reaching below it would let the optimiser take the path back down where the search may not go.
+  void setAltitudeBand(double min_z_m, double max_z_m) {
+    min_z_m_ = min_z_m;
+    max_z_m_ = max_z_m;
+  }
 
   /// Builds the corridor of the polyline path_W_m (points in W, metres: the search's path sampled densely,
   /// consecutive points joined by straight chords) in `grid` (a cell is blocked when outside the window or
@@ -150,6 +158,10 @@ class CorridorBuilder {
   int runEndIn(const mapping::CellBox& box, int first, int cap) const;
 
   CorridorParams params_;
+  double min_z_m_ = -std::numeric_limits<double>::infinity();  // setAltitudeBand
+  double max_z_m_ = std::numeric_limits<double>::infinity();
+  int band_lo_cell_ = 0;  // per build: the band's lowest z cell and one past its highest, widened to the walk
+  int band_hi_cell_ = 0;
   mapping::CellIndex max_box_cells_ = mapping::CellIndex::Zero();  // per build, from the grid's resolution
   int period_ = 1;                                                 // per build: the sparse check's row period
   std::vector<mapping::CellIndex> walk_;                           // c_0 .. c_{L-1}

@@ -58,6 +58,13 @@ struct TrackingPlannerParams {
   double stop_check_horizon_s = 1.0;     ///< On a failed cycle, this much of the current trajectory must be clear.
   double flight_altitude_m = 1.5;        ///< The goal's height (W z); > takeoff_below_m.
   double takeoff_below_m = 0.5;          ///< A start lower than this climbs straight to flight_altitude_m first; >= 0.
+  /// The heights (W z) the search's paths and the corridor's boxes keep to (a start outside climbs or sinks
+  /// back, never away); min_altitude_m <= flight_altitude_m <= max_altitude_m. Why (issue 21): unknown space
+  /// counts as free (Fast-Tracker), and a crosser's legs, below the depth camera's view at close range, left
+  /// free-looking space under their mapped torso: the path dived to 0.5 m and the drone stuck in the floor's
+  /// margin. Fast-Planner bounds its search's height the same way (a ground and a ceiling).
+  double min_altitude_m = 1.0;
+  double max_altitude_m = 3.0;
   /// The height (W z) at which the planner sees the person: lines of sight for the occlusion term and the
   /// visible goal end at the estimate's horizontal position at this height (the torso's centre). The
   /// estimate's own z is the localization regression's ground-plane constant (the paper's assumption 1),
@@ -124,8 +131,11 @@ enum class PlanStatus : std::uint8_t {
   /// The cycle failed (any reason above) with the person coming within min_person_distance_m of a drone that
   /// would only brake: a move away from their predicted path was flown instead (issue 21, evadePerson).
   kEvading,
+  /// The start lay in an obstacle's inflation margin, where no search can begin (start_blocked): a short move
+  /// to rest at the nearest free point in plain sight was flown instead (issue 21, escapeMargin).
+  kEscaping,
 };
-inline constexpr int kPlanStatusCount = 13;
+inline constexpr int kPlanStatusCount = 14;
 std::string_view toString(PlanStatus status);
 
 /// What a cycle reads.
@@ -277,6 +287,15 @@ class TrackingPlanner {
   /// the final check's limits, grid and FCL. False (out undefined) when no evasion is needed or none passes.
   bool evadePerson(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
                    const PersonMotion& person, rt::TimeNs start_ns, PolynomialTrajectory& out);
+  /// The start lies in the inflation margin (the search said start_blocked): writes into `out` one minimum-jerk
+  /// move to rest at the nearest cell centre within kEscapeRadiusM that is unblocked, in the altitude band (or
+  /// no farther from it than the start), and joined to the start by a segment through no raw-occupied cell,
+  /// timed at the final check's limits; it must pass that check, with the margin left within the move.
+  /// False (out undefined) when none of the kEscapeCandidates nearest passes. Why (issue 21): a bystander
+  /// mapped beside a hovering drone, or a brake that ended in a margin, made every later search start blocked;
+  /// the drone stopped for good (crossing seed 18: 30 s) while the person walked on.
+  bool escapeMargin(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+                    PolynomialTrajectory& out);
   /// The smallest horizontal distance (m) between `trajectory` (held at its end after it) and the person's
   /// predicted path over check.horizon_s from start_ns.
   double minPersonDistanceM(const PolynomialTrajectory& trajectory, const PersonMotion& person,

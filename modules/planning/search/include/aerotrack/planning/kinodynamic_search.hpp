@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string_view>
 #include <vector>
 
@@ -170,6 +171,14 @@ class KinodynamicSearch {
   /// Switches the occlusion penalty on or off (the baseline mode) without reallocating.
   void setOcclusionAware(bool occlusion_aware) { params_.occlusion_aware = occlusion_aware; }
   bool occlusionAware() const { return params_.occlusion_aware; }
+  /// Keeps every path inside the heights [min_z_m, max_z_m] (W z; default: unbounded). A start outside the band
+  /// widens it to the start's height for that search: the path may climb (or sink) back into the band, never
+  /// away from it. Why (issue 21): unknown space counts as free, and the space under a person or a wall's
+  /// edge that the depth camera never saw drew the path down to the floor's margin, where it stopped.
+  void setAltitudeBand(double min_z_m, double max_z_m) {
+    min_z_m_ = min_z_m;
+    max_z_m_ = max_z_m;
+  }
 
   /// Searches from start to goal in `grid` (blocked = LocalGrid::isOccupied, which applies the inflation
   /// and the grid's unknown policy; the path must also stay in the window). start_time_s is the absolute
@@ -217,6 +226,11 @@ class KinodynamicSearch {
   void writePath(int end_node, const PathSegment* shot, double shot_cost, SearchPath& path);
 
   KinodynamicSearchParams params_;
+  double min_z_m_ = -std::numeric_limits<double>::infinity();  // setAltitudeBand
+  double max_z_m_ = std::numeric_limits<double>::infinity();
+  double search_min_z_m_ = 0.0;  // per search: the band widened to the start's height
+  double search_max_z_m_ = 0.0;
+  bool inBand(const Eigen::Vector3d& p) const { return p.z() >= search_min_z_m_ && p.z() <= search_max_z_m_; }
   std::vector<Eigen::Vector3d> inputs_;
   std::vector<Node> nodes_;
   std::vector<int> table_;                  // node index per slot
