@@ -351,6 +351,30 @@ TEST(TrackingGoal, GivenCurrentAndPredictedPersonStatesThenTheGoalIsTheMixHeldAt
   EXPECT_TRUE(behind.p_W_m.isApprox(Eigen::Vector3d(2.0, 0.0, 2.0))) << behind.p_W_m.transpose();
 }
 
+// Issue 21: with trail_speed_mps, a walking person is followed from behind (fully at that speed), partly
+// below it, and a person walking towards the drone is backed away from as before (not passed).
+TEST(TrackingGoal, GivenATrailSpeedThenTheGoalMovesBehindAWalkerButNotPastOneComingCloser) {
+  TrackingGoalParams params;
+  params.predicted_weight = 0.0;
+  params.tracking_distance_m = 2.0;
+  params.trail_speed_mps = 2.0;
+  const Eigen::Vector3d drone(0.0, 0.0, 1.5);  // the person is 3 m along +x, walking along -y
+  KinematicState person = at(3.0, 0.0, 0.9);
+  person.v_W_mps = Eigen::Vector3d(0.0, -2.0, 0.0);
+  EXPECT_TRUE(makeTrackingGoal(person, person, drone, params).p_W_m.isApprox(Eigen::Vector3d(3.0, 2.0, 1.5)))
+      << "at the trail speed: right behind them";
+  person.v_W_mps = Eigen::Vector3d(0.0, -1.0, 0.0);  // half the trail speed: halfway between -x and +y
+  const Eigen::Vector3d half = makeTrackingGoal(person, person, drone, params).p_W_m;
+  EXPECT_TRUE(half.isApprox(Eigen::Vector3d(3.0 - std::sqrt(2.0), std::sqrt(2.0), 1.5))) << half.transpose();
+  person.v_W_mps.setZero();  // standing: towards the drone, as without trailing
+  EXPECT_TRUE(makeTrackingGoal(person, person, drone, params).p_W_m.isApprox(Eigen::Vector3d(1.0, 0.0, 1.5)));
+  person.v_W_mps = Eigen::Vector3d(-2.0, 0.5, 0.0);  // coming at the drone: it backs off, not round them
+  EXPECT_TRUE(makeTrackingGoal(person, person, drone, params).p_W_m.isApprox(Eigen::Vector3d(1.0, 0.0, 1.5)));
+  params.trail_speed_mps = 0.0;  // off: towards the drone whatever the speed
+  person.v_W_mps = Eigen::Vector3d(0.0, -2.0, 0.0);
+  EXPECT_TRUE(makeTrackingGoal(person, person, drone, params).p_W_m.isApprox(Eigen::Vector3d(1.0, 0.0, 1.5)));
+}
+
 TEST(TrackingGoal, GivenAPersonRoundACornerThenTheVisibleGoalTurnsOutOfTheCornersShadow) {
   // A building x in [0, 4], y in [1, 5]; the person beside its east face, the drone south of it: the
   // plain goal (on the line from the person to the drone) lies at the building's south-east corner, in

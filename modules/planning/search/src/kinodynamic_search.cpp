@@ -104,6 +104,7 @@ const rt::FieldTable<TrackingGoalParams>& trackingGoalFields() {
       rt::number("visible_step_rad", &P::visible_step_rad, Range::closed(0.01, 3.2)),
       rt::number("visible_max_turn_rad", &P::visible_max_turn_rad, Range::closed(0.0, 3.2)),
       rt::number("max_lead_s", &P::max_lead_s, Range::closed(0.0, 10.0)),
+      rt::number("trail_speed_mps", &P::trail_speed_mps, Range::closed(0.0, 50.0)),
   });
   return kTable;
 }
@@ -121,6 +122,15 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
   if (away.norm() < 1e-6) away = -v_mix.head<2>();
   if (away.norm() < 1e-6) away = Eigen::Vector2d(-1.0, 0.0);
   away.normalize();
+  // Trailing (issue 21): a walking person is followed from behind, the more so the faster they walk; a person
+  // walking towards the drone is not (the drone would have to pass them): it backs off along `away`.
+  const Eigen::Vector2d v_xy = v_mix.head<2>();
+  const double speed_mps = v_xy.norm();
+  if (params.trail_speed_mps > 0.0 && speed_mps > 1e-6 && away.dot(v_xy) <= 0.0) {
+    const double beta = std::min(speed_mps / params.trail_speed_mps, 1.0);
+    const Eigen::Vector2d blended = (1.0 - beta) * away - beta * v_xy / speed_mps;
+    if (blended.norm() > 1e-6) away = blended.normalized();
+  }
   KinematicState goal;
   goal.p_W_m.head<2>() = p_mix.head<2>() + params.tracking_distance_m * away;
   goal.p_W_m.z() = p_drone_W_m.z();

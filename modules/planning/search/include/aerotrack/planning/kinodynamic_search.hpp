@@ -83,6 +83,12 @@ struct TrackingGoalParams {
   /// horizon shorter than the path to it trails the person, and the drone settled 1.5-2 m farther back
   /// than the tracking distance at 2.5 m/s and more at a run.
   double max_lead_s = 0.0;
+  /// Which side of the person the goal is held on: 0, towards the drone (the paper's reading); > 0, blended
+  /// towards behind the person's (mixed) velocity, fully behind at this speed and faster, unless the person
+  /// walks towards the drone. Why (issue 21): held towards the drone, a goal barely moves while the person
+  /// walks across the drone-person line (the distance grows only to second order), and a person turning a
+  /// corner at a run left the drone behind it, the building between them (sharp_turn 3 m/s seeds 8, 14).
+  double trail_speed_mps = 0.0;
 };
 
 /// The planner's `goal:` config section (every field above, all required; ranges in the .cpp).
