@@ -17,18 +17,7 @@ namespace {
 using test::defaultParams;
 using test::makePlanner;
 
-struct EscapeCase {
-  mapping::LocalGrid grid;
-  hal::OdometrySample odometry;
-  estimation::TargetEstimate person;
-  PlanInputs inputs() const {
-    PlanInputs in;
-    in.odometry = &odometry;
-    in.target = &person;
-    in.grid = &grid;
-    return in;
-  }
-};
+using EscapeCase = test::PlanCase;
 
 // The drone hovers at (0, 0, 1.5); a mapped torso (x 0.1-0.5, |y| <= 0.3, z 0.9-1.8) lies 0.15 m from it,
 // inside the 0.25 m inflation; the person stands 3 m behind the drone, the other way.
@@ -91,19 +80,13 @@ TEST(Escape, BoxedInWithNothingFreeWithinReachTheFailureStands) {
 }
 
 TEST(Escape, PlanningTaskFliesTheEscapeAndDoesNotCountItAsAFailure) {
-  test::TaskChannels rig;
-  std::atomic<int> failures{7};
-  PlanningChannels channels = rig.channels();
-  channels.failures_in_a_row = &failures;
-  PlanningTask task(makePlanner(), channels, rig.clock);
   const EscapeCase c = besideATorso();
-  rig.grid.write(std::make_shared<const mapping::LocalGrid>(c.grid));
-  rig.odometry.write(c.odometry);
-  rig.target.write(c.person);
-  task.step(0);
-  EXPECT_EQ(task.count(PlanStatus::kEscaping), 1U);
-  ASSERT_TRUE(task.lastPublished().trajectory);
-  EXPECT_EQ(failures.load(), 0);
+  test::stepTaskOnce(c.grid, c.odometry, c.person, [](const PlanningTask& task, test::TaskChannels& rig, int failures) {
+    EXPECT_EQ(task.count(PlanStatus::kEscaping), 1U);
+    ASSERT_TRUE(task.lastPublished().trajectory);
+    EXPECT_EQ(rig.trajectories.version(), 1U);
+    EXPECT_EQ(failures, 0);
+  });
 }
 
 }  // namespace

@@ -48,18 +48,7 @@ double closestApproachM(const PolynomialTrajectory& trajectory, const estimation
   return min_m;
 }
 
-struct EvasionCase {
-  mapping::LocalGrid grid;
-  hal::OdometrySample odometry;
-  estimation::TargetEstimate walker;
-  PlanInputs inputs() const {
-    PlanInputs in;
-    in.odometry = &odometry;
-    in.target = &walker;
-    in.grid = &grid;
-    return in;
-  }
-};
+using EvasionCase = test::PlanCase;
 
 EvasionCase walkerThroughTheDrone(const std::vector<test::OccupiedBox>& extra = {}) {
   EvasionCase c{groundWith(extra), {}, walkerAt(3.0, 0.0, 2.5)};
@@ -77,9 +66,9 @@ TEST(Evasion, APersonWalkingThroughTheDroneIsSteppedAwayFromNotStoppedFor) {
 
   // It keeps its distance: farther than braking on the spot would (the walker passes through it) and at
   // least min_person_distance_m.
-  const double braked_m = closestApproachM(PolynomialTrajectory(), c.walker, report.start_ns, params);
+  const double braked_m = closestApproachM(PolynomialTrajectory(), c.person, report.start_ns, params);
   EXPECT_LT(braked_m, 0.1);
-  const double evaded_m = closestApproachM(out, c.walker, report.start_ns, params);
+  const double evaded_m = closestApproachM(out, c.person, report.start_ns, params);
   EXPECT_GE(evaded_m, params.min_person_distance_m);
   // A sidestep (the walker comes along x, and backing away along x cannot outrun 2.5 m/s), to rest, and
   // within the final check (limits, grid).
@@ -122,21 +111,14 @@ TEST(Evasion, APersonFarEnoughAwayLeavesAFailedCycleAFailure) {
 }
 
 TEST(Evasion, PlanningTaskFliesTheEvasionAndDoesNotCountItAsAFailure) {
-  test::TaskChannels rig;
-  std::atomic<int> failures{7};
-  PlanningChannels channels = rig.channels();
-  channels.failures_in_a_row = &failures;
-  PlanningTask task(makePlanner(), channels, rig.clock);
   const EvasionCase c = walkerThroughTheDrone();
-  rig.grid.write(std::make_shared<const mapping::LocalGrid>(c.grid));
-  rig.odometry.write(c.odometry);
-  rig.target.write(c.walker);
-  task.step(0);
-  EXPECT_EQ(task.count(PlanStatus::kEvading), 1U);
-  ASSERT_TRUE(task.lastPublished().trajectory);
-  EXPECT_EQ(rig.trajectories.version(), 1U);
-  EXPECT_EQ(failures.load(), 0);  // evading is flying a plan: no streak towards degraded
-  EXPECT_EQ(task.checkFailures(CheckVerdict::kTooCloseToPerson), task.checksRejected());
+  test::stepTaskOnce(c.grid, c.odometry, c.person, [](const PlanningTask& task, test::TaskChannels& rig, int failures) {
+    EXPECT_EQ(task.count(PlanStatus::kEvading), 1U);
+    ASSERT_TRUE(task.lastPublished().trajectory);
+    EXPECT_EQ(rig.trajectories.version(), 1U);
+    EXPECT_EQ(failures, 0);  // evading is flying a plan: no streak towards degraded
+    EXPECT_EQ(task.checkFailures(CheckVerdict::kTooCloseToPerson), task.checksRejected());
+  });
 }
 
 }  // namespace

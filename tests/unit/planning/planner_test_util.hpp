@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <memory>
 #include <utility>
 
 #include "aerotrack/planning/planning_task.hpp"
@@ -46,6 +48,20 @@ inline estimation::TargetEstimate personAt(const Eigen::Vector3d& p, rt::TimeNs 
   return e;
 }
 
+/// One planning cycle's inputs as a test owns them: a grid, the drone's odometry, the person's estimate.
+struct PlanCase {
+  mapping::LocalGrid grid;
+  hal::OdometrySample odometry;
+  estimation::TargetEstimate person;
+  PlanInputs inputs() const {
+    PlanInputs in;
+    in.odometry = &odometry;
+    in.target = &person;
+    in.grid = &grid;
+    return in;
+  }
+};
+
 /// The planning task's channels and stats clock, as a test owns them.
 struct TaskChannels {
   rt::LatestSlot<hal::OdometrySample> odometry;
@@ -59,5 +75,22 @@ struct TaskChannels {
     return PlanningChannels{odometry, target, grid, octree, trajectories, modes};
   }
 };
+
+/// One planning-task cycle at t = 0 on `grid`, `odometry` and `target`, the failures-in-a-row channel starting
+/// at 7 (a streak under way); then check(task, rig, failures after the cycle).
+template <typename Check>
+void stepTaskOnce(const mapping::LocalGrid& grid, const hal::OdometrySample& odometry,
+                  const estimation::TargetEstimate& target, Check&& check) {
+  TaskChannels rig;
+  std::atomic<int> failures{7};
+  PlanningChannels channels = rig.channels();
+  channels.failures_in_a_row = &failures;
+  PlanningTask task(makePlanner(), channels, rig.clock);
+  rig.grid.write(std::make_shared<const mapping::LocalGrid>(grid));
+  rig.odometry.write(odometry);
+  rig.target.write(target);
+  task.step(0);
+  check(task, rig, failures.load());
+}
 
 }  // namespace aerotrack::planning::test
