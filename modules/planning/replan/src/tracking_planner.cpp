@@ -18,6 +18,12 @@ constexpr double kEscapeRadiusM = 1.0;
 constexpr std::size_t kEscapeCandidates = 16;
 constexpr int kEscapeRetimes = 4;
 
+// A minimum-jerk piece from rest to rest over distance d peaks at 1.875 d / T in speed and 5.77 d / T^2 in
+// acceleration: the shortest T (at least min_s) that keeps both within v_max and a_max.
+double restToRestDurationS(double distance_m, double v_max, double a_max, double min_s) {
+  return std::max({min_s, 1.875 * distance_m / v_max, std::sqrt(5.7735 * distance_m / a_max)});
+}
+
 }  // namespace
 
 std::string_view toString(PlanStatus status) {
@@ -147,12 +153,11 @@ bool TrackingPlanner::currentBlocked(const PlanInputs& inputs) const {
 
 void TrackingPlanner::makeMoveTrajectory(const StatePva& start, const Eigen::Vector3d& end_W_m,
                                          PolynomialTrajectory& out) {
-  // A minimum-jerk piece from rest to rest over distance d peaks at 1.875 d / T in speed and 5.77 d / T^2 in
-  // acceleration: T is the shortest that keeps both at half the optimiser's limits (a gentle manoeuvre).
+  // At half the optimiser's limits (a gentle manoeuvre).
   const double distance_m = (end_W_m - start.col(0)).norm();
   const double v_max = 0.5 * params_.optimizer.max_velocity_mps;
   const double a_max = 0.5 * params_.optimizer.max_acceleration_mps2;
-  const double duration_s = std::max({0.5, 1.875 * distance_m / v_max, std::sqrt(5.7735 * distance_m / a_max)});
+  const double duration_s = restToRestDurationS(distance_m, v_max, a_max, 0.5);
   onePieceToRest(start, end_W_m, duration_s, out);
 }
 
@@ -312,7 +317,7 @@ bool TrackingPlanner::evadePerson(const StatePva& start, const mapping::LocalGri
   const double d_m = std::max(params_.goal.tracking_distance_m, params_.min_person_distance_m);
   const double v_max = params_.optimizer.max_velocity_mps;
   const double a_max = params_.optimizer.max_acceleration_mps2;
-  const double move_s = std::max({0.5, 1.875 * d_m / v_max, std::sqrt(5.7735 * d_m / a_max)});
+  const double move_s = restToRestDurationS(d_m, v_max, a_max, 0.5);
   struct Candidate {
     Eigen::Vector3d end_W_m;
     double duration_s = 0.0;
@@ -394,7 +399,7 @@ bool TrackingPlanner::escapeMargin(const StatePva& start, const mapping::LocalGr
     if (!grid.lineOfSight(p0, end_W_m)) continue;
     const double d = best[i].distance_m;
     // Stretched until within the limits (a start still braking makes the peaks shrink slower than 1/k).
-    double duration_s = std::max({0.3, 1.875 * d / v_max, std::sqrt(5.7735 * d / a_max)});
+    double duration_s = restToRestDurationS(d, v_max, a_max, 0.3);
     for (int attempt = 0; attempt < kEscapeRetimes; ++attempt) {
       if (!pieceToRest(start, end_W_m, duration_s)) break;
       out.assign(stop_spline_);
