@@ -25,7 +25,8 @@
 
 namespace aerotrack::app {
 
-/// outputs/estimates.csv: every field of a TargetEstimate (the covariance's upper triangle, row by row).
+/// outputs/estimates.csv: every field of a TargetEstimate (the covariance's upper triangle, row by row) but the
+/// other people it carries for the planner (`others`, the bystander tracks' states).
 struct EstimateCodec {
   static const std::vector<std::string>& columns();
   static std::vector<double> encode(const estimation::TargetEstimate& estimate);

@@ -71,7 +71,7 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
     search_failures[std::string(planning::toString(status))] = task->searchFailures(status);
   }
   nlohmann::json check_failures = nlohmann::json::object();
-  for (int i = 1; i <= static_cast<int>(planning::CheckVerdict::kTooCloseToPerson); ++i) {
+  for (int i = 1; i < planning::kCheckVerdictCount; ++i) {
     const auto verdict = static_cast<planning::CheckVerdict>(i);
     check_failures[std::string(planning::toString(verdict))] = task->checkFailures(verdict);
   }

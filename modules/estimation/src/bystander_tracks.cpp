@@ -72,4 +72,14 @@ std::size_t BystanderTracks::liveCount(rt::TimeNs t_ns) const {
   return n;
 }
 
+void BystanderTracks::fillOthers(rt::TimeNs t_ns, TargetEstimate& estimate) const {
+  estimate.other_count = 0;
+  for (const Track& track : tracks_) {
+    if (!track.used || estimate.other_count == estimate.others.size()) continue;
+    const TargetEstimate e = track.filter.estimate(t_ns);
+    if (!e.initialised || e.lost) continue;
+    estimate.others[estimate.other_count++] = {e.p_WT_m, e.v_WT_mps};
+  }
+}
+
 }  // namespace aerotrack::estimation

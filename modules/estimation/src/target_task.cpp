@@ -334,7 +334,8 @@ void TargetTask::step(rt::TimeNs now_ns) {
   std::move(pending_.begin() + static_cast<std::ptrdiff_t>(done),
             pending_.begin() + static_cast<std::ptrdiff_t>(pending_count_), pending_.begin());
   pending_count_ -= done;
-  const TargetEstimate estimate = estimator_.estimate(now_ns);
+  TargetEstimate estimate = estimator_.estimate(now_ns);
+  bystanders_.fillOthers(estimate.stamp_ns, estimate);
   const bool news =
       estimate.initialised && (estimate.last_accepted_ns != notified_accepted_ns_ || estimate.lost != notified_lost_);
   if (news) {

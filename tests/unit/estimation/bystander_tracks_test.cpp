@@ -49,5 +49,23 @@ TEST(BystanderTracks, GivenEverySlotLive_WhenAnotherStarts_ThenTheOneMeasuredLon
   EXPECT_EQ(tracks.liveCount(rt::secondsToNs(0.3)), 1U);
 }
 
+TEST(BystanderTracks, GivenOneWalkerLiveAndOneLost_ThenTheEstimateCarriesTheLiveOneAtItsPredictedPlace) {
+  // The planner keeps away from the other people along their constant-velocity paths (issue 21 item 5): the
+  // estimate carries each live track's state at its stamp, and none of a track unmeasured for lost_after_s.
+  TargetEstimatorParams params;
+  BystanderTracks tracks = aerotrack::test::require(BystanderTracks::create(params, 3), "tracks");
+  const std::size_t walker = tracks.start(at(0.0, 5.0, 0.0), {}, false);
+  for (int k = 1; k <= 30; ++k) tracks.update(walker, at(k / 10.0, 5.0, -k / 10.0), {}, 0.1, false);  // 1 m/s -y
+  tracks.start(at(0.5, 9.0, 9.0), {}, false);  // seen once, at 0.5 s
+  TargetEstimate estimate;
+  tracks.fillOthers(rt::secondsToNs(3.0 + 0.6), estimate);
+  ASSERT_EQ(estimate.other_count, 1U);
+  EXPECT_NEAR(estimate.others[0].p_W_m.x(), 5.0, 0.05);
+  EXPECT_NEAR(estimate.others[0].p_W_m.y(), -3.6, 0.1);
+  EXPECT_NEAR(estimate.others[0].v_W_mps.y(), -1.0, 0.1);
+  tracks.fillOthers(rt::secondsToNs(3.0 + params.lost_after_s + 0.1), estimate);
+  EXPECT_EQ(estimate.other_count, 0U);
+}
+
 }  // namespace
 }  // namespace aerotrack::estimation

@@ -247,6 +247,66 @@ TEST(KinodynamicSearch, GivenAnAltitudeBandThenPathsKeepToItAndAStartBelowItOnly
   EXPECT_NEAR(path.stateAt(path.duration_s).p_W_m.z(), 1.5, params.goal_tolerance_m);
 }
 
+// The smallest horizontal distance between the path and `person`'s motion, sampled every 10 ms.
+double closestToPersonM(const SearchPath& path, const MovingPerson& person) {
+  double min_m = INFINITY;
+  for (double t = 0.0; t <= path.duration_s; t += 0.01)
+    min_m = std::min(min_m, (path.stateAt(t).p_W_m.head<2>() - person.at(t)).norm());
+  return min_m;
+}
+
+TEST(KinodynamicSearch, GivenPeopleToKeepClearOfThenThePathPassesThemAtTheClearanceWhenItGetsThere) {
+  // An open grid; the goal 6 m ahead. Someone stands on the straight way; someone else crosses it at 1.4 m/s.
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(12.0, 12.0, 3.2), Eigen::Vector3d(3.0, 0.0, 1.6), {});
+  KinodynamicSearchParams params;
+  params.max_expansions = 20000;
+  params.max_nodes = 400000;
+  KinodynamicSearch search = makeSearch(params);
+  const PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(8.0, 0.0, 1.5); };
+  const std::array<MovingPerson, 2> people = {MovingPerson{{2.0, 0.0}, {0.0, 0.0}, 0.0},
+                                              MovingPerson{{4.5, -3.0}, {0.0, 1.4}, 5.0}};
+  SearchPath path;
+  ASSERT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(6.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kReachedGoal);
+  EXPECT_LT(closestToPersonM(path, people[0]), 0.3) << "without them: straight through";
+
+  constexpr double kClearanceM = 0.8;
+  search.setPeople(people, kClearanceM);
+  ASSERT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(6.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kReachedGoal);
+  for (const MovingPerson& p : people) EXPECT_GE(closestToPersonM(path, p), kClearanceM - 0.02);
+  EXPECT_NEAR((path.stateAt(path.duration_s).p_W_m - Eigen::Vector3d(6.0, 0.0, 1.5)).norm(), 0.0,
+              params.goal_tolerance_m);
+
+  // Someone already inside the clearance at the start is the final check's (it forbids coming closer), not a
+  // blocked search; an empty list clears them.
+  const std::array<MovingPerson, 1> beside = {MovingPerson{{0.0, 0.5}, {0.0, 0.0}, 0.0}};
+  search.setPeople(beside, kClearanceM);
+  EXPECT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(6.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kReachedGoal);
+  search.setPeople({}, kClearanceM);
+  ASSERT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(6.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kReachedGoal);
+  EXPECT_LT(closestToPersonM(path, people[0]), 0.3);
+}
+
+TEST(KinodynamicSearch, GivenSomeoneWhoWillStandAtTheGoalThenThePathStopsShortWhereNobodyWalksIntoIt) {
+  // The path ends at rest (the planner brakes at its end): an end that someone walks into is no end. Someone
+  // walks to the goal and stands there; the search returns its best partial path, ending clear of them.
+  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(12.0, 12.0, 3.2), Eigen::Vector3d(3.0, 0.0, 1.6), {});
+  KinodynamicSearchParams params;
+  params.max_expansions = 3000;
+  params.max_nodes = 400000;
+  KinodynamicSearch search = makeSearch(params);
+  const PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(8.0, 0.0, 1.5); };
+  const std::array<MovingPerson, 1> arriving = {MovingPerson{{4.0, -2.0}, {0.0, 1.4}, 2.0 / 1.4}};
+  constexpr double kClearanceM = 0.8;
+  search.setPeople(arriving, kClearanceM);
+  SearchPath path;
+  ASSERT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(4.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kPartial);
+  ASSERT_FALSE(path.segments.empty());
+  EXPECT_GE(closestToPersonM(path, arriving[0]), kClearanceM - 0.02);
+  const Eigen::Vector3d end = path.stateAt(path.duration_s).p_W_m;
+  EXPECT_GE((end.head<2>() - arriving[0].at(1e9)).norm(), kClearanceM);
+  EXPECT_LT((end - Eigen::Vector3d(4.0, 0.0, 1.5)).norm(), 4.0 - kClearanceM + 0.3) << "towards the goal";
+}
+
 TEST(KinodynamicSearch, GivenASmallBudgetThenItReturnsTheBestPartialPathTowardsTheGoal) {
   const OcclusionFigure figure;
   KinodynamicSearchParams params;

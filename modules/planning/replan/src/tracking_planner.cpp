@@ -235,9 +235,9 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   const std::optional<PersonMotion> person = predictPerson(inputs);  // 1. Sect. V-A
   if (!person) return fail(PlanStatus::kNoTarget);
   report.predicted = person->prediction != nullptr;
-  // From here a failed cycle first asks whether the person is about to walk into a braking drone (7.).
+  // From here a failed cycle first asks whether someone is about to walk into a braking drone (7.).
   auto fail_or_evade = [&](PlanStatus status) {
-    if (person->live && evadePerson(start, grid, inputs.octree, *person, start_ns, out)) {
+    if (evadePeople(start, grid, inputs.octree, *person, start_ns, out)) {
       report.status = PlanStatus::kEvading;
       return report;
     }
@@ -266,7 +266,9 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   if (path_.status != SearchStatus::kReachedGoal && path_.status != SearchStatus::kPartial)
     return fail_or_evade(PlanStatus::kSearchFailed);
   if (path_.duration_s <= params_.min_piece_duration_s) {
-    report.status = PlanStatus::kAtGoal;  // nothing to fly: the current trajectory (or its hold) stands
+    // Nothing to fly: the current trajectory (or its hold) stands -- unless someone walks into it (7.).
+    report.status =
+        evadePeople(start, grid, inputs.octree, *person, start_ns, out) ? PlanStatus::kEvading : PlanStatus::kAtGoal;
     return report;
   }
 
@@ -290,25 +292,33 @@ PlanReport TrackingPlanner::plan(const PlanInputs& inputs, PolynomialTrajectory&
   return report;
 }
 
-double TrackingPlanner::minPersonDistanceM(const PolynomialTrajectory& trajectory, const PersonMotion& person,
-                                           rt::TimeNs start_ns) const {
+double TrackingPlanner::keepAwayDistanceM(const PolynomialTrajectory& trajectory, const PersonMotion& person,
+                                          rt::TimeNs start_ns) const {
+  const bool the_person = person.live && person.keep_away && params_.min_person_distance_m > 0.0;
+  const std::size_t others = params_.min_bystander_distance_m > 0.0 ? person.otherCount() : 0;
+  const double other_offset_m = params_.min_person_distance_m - params_.min_bystander_distance_m;
   double min_m = std::numeric_limits<double>::infinity();
   for (double t = 0.0; t <= params_.check.horizon_s; t += params_.check.sample_step_s) {
-    const Eigen::Vector3d d = trajectory.sample(t).p_W_m - person.positionAt(start_ns + rt::secondsToNs(t));
-    min_m = std::min(min_m, d.head<2>().norm());
+    const rt::TimeNs t_ns = start_ns + rt::secondsToNs(t);
+    const Eigen::Vector2d p = trajectory.sample(t).p_W_m.head<2>();
+    if (the_person) min_m = std::min(min_m, (p - person.positionAt(t_ns).head<2>()).norm());
+    for (std::size_t i = 0; i < others; ++i)
+      min_m = std::min(min_m, (p - person.otherAt(i, t_ns).head<2>()).norm() + other_offset_m);
   }
   return min_m;
 }
 
-bool TrackingPlanner::evadePerson(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
+bool TrackingPlanner::evadePeople(const StatePva& start, const mapping::LocalGrid& grid, const octomap::OcTree* octree,
                                   const PersonMotion& person, rt::TimeNs start_ns, PolynomialTrajectory& out) {
-  if (!(params_.min_person_distance_m > 0.0)) return false;
+  const bool the_person = person.live && person.keep_away && params_.min_person_distance_m > 0.0;
+  const bool others = params_.min_bystander_distance_m > 0.0 && person.otherCount() > 0;
+  if (!the_person && !others) return false;
   // Candidate 0 is the brake to rest; its distance decides whether evading is needed at all.
   const double brake_s = stopDurationS(start.col(1).norm(), params_.optimizer.max_acceleration_mps2);
   const Eigen::Vector3d brake_end_W_m = start.col(0) + start.col(1) * (brake_s / 2.0);
   if (!pieceToRest(start, brake_end_W_m, brake_s)) return false;
   out.assign(stop_spline_);
-  if (minPersonDistanceM(out, person, start_ns) >= params_.min_person_distance_m) return false;
+  if (keepAwayDistanceM(out, person, start_ns) >= params_.min_person_distance_m) return false;
 
   // Each candidate: a move of d metres (the tracking distance, where the goal would be held) to rest,
   // timed as makeMoveTrajectory at the optimiser's full limits, then slowed by the stretch its dynamic peaks
@@ -324,7 +334,7 @@ bool TrackingPlanner::evadePerson(const StatePva& start, const mapping::LocalGri
     double score_m = -1.0;
   };
   std::array<Candidate, kEvasionDirections + 1> candidates;
-  candidates[0] = {brake_end_W_m, brake_s, std::min(minPersonDistanceM(out, person, start_ns), d_m)};
+  candidates[0] = {brake_end_W_m, brake_s, std::min(keepAwayDistanceM(out, person, start_ns), d_m)};
   for (int k = 0; k < kEvasionDirections; ++k) {
     const double angle_rad = 2.0 * M_PI * k / kEvasionDirections;
     Candidate& c = candidates[static_cast<std::size_t>(k) + 1];
@@ -336,7 +346,7 @@ bool TrackingPlanner::evadePerson(const StatePva& start, const mapping::LocalGri
     c.duration_s *= dynamicStretchFactor(out, params_.check);
     if (!pieceToRest(start, c.end_W_m, c.duration_s)) continue;
     out.assign(stop_spline_);
-    c.score_m = std::min(minPersonDistanceM(out, person, start_ns), d_m);
+    c.score_m = std::min(keepAwayDistanceM(out, person, start_ns), d_m);
   }
   // Best first; then the full check, until one passes.
   std::array<int, kEvasionDirections + 1> order{};
@@ -438,6 +448,14 @@ Eigen::Vector3d TrackingPlanner::PersonMotion::positionAt(rt::TimeNs t_ns) const
   return p;
 }
 
+Eigen::Vector3d TrackingPlanner::PersonMotion::otherAt(std::size_t i, rt::TimeNs t_ns) const {
+  const estimation::OtherPerson& other = people->others[i];
+  const double ahead_s = std::clamp(rt::nsToSeconds(t_ns - people->stamp_ns), 0.0, horizon_s);
+  Eigen::Vector3d p = other.p_W_m + ahead_s * other.v_W_mps;
+  p.z() = sight_height_m;
+  return p;
+}
+
 Eigen::Vector3d TrackingPlanner::PersonMotion::velocityAt(rt::TimeNs t_ns) const {
   if (prediction != nullptr) return prediction->velocity(std::min(t_ns, prediction->end_ns));
   return estimate->v_WT_mps;
@@ -446,6 +464,7 @@ Eigen::Vector3d TrackingPlanner::PersonMotion::velocityAt(rt::TimeNs t_ns) const
 std::optional<TrackingPlanner::PersonMotion> TrackingPlanner::predictPerson(const PlanInputs& inputs) {
   PersonMotion person;
   person.estimate = inputs.target;
+  person.people = inputs.target;
   person.live = inputs.target != nullptr && inputs.target->initialised && !inputs.target->lost;
   person.horizon_s = params_.prediction.horizon_s;
   person.sight_height_m = params_.person_sight_height_m;
@@ -531,6 +550,21 @@ SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid,
   KinematicState search_goal = goal;
   const double margin_m = params_.search.primitive_duration_s * params_.search.max_velocity_mps;
   search_goal_clipped_ = clipGoalToWindow(grid, search_start.p_W_m, margin_m, search_goal);
+  // The other people, as the final check predicts them (PersonMotion::otherAt), from the search's start.
+  std::array<MovingPerson, kMaxSearchPeople> people{};
+  std::size_t people_count = 0;
+  if (params_.min_bystander_distance_m > 0.0) {
+    for (std::size_t i = 0; i < person.otherCount() && people_count < people.size(); ++i) {
+      const double since_s = rt::nsToSeconds(start_ns - person.people->stamp_ns);
+      people[people_count++] = {person.otherAt(i, start_ns).head<2>(), person.people->others[i].v_W_mps.head<2>(),
+                                std::max(0.0, person.horizon_s - since_s)};
+    }
+  }
+  // One grid cell wider than the check keeps them, as the map's inflation is one cell wider than the drone: the
+  // optimised trajectory leaves the path by a few centimetres, and at the check's own distance half of the plans
+  // past someone failed by that much (crowd seed 14: 0.75-0.80 m against 0.8 m).
+  search_.setPeople(std::span<const MovingPerson>(people.data(), people_count),
+                    params_.min_bystander_distance_m + grid.params().resolution_m);
   return search_.search(grid, search_start, search_goal, start_time_s, person_fn, path_);
 }
 
@@ -642,15 +676,29 @@ CheckResult TrackingPlanner::checkPlannedTrajectory(const PolynomialTrajectory& 
                                                     const mapping::LocalGrid& grid, const octomap::OcTree* octree,
                                                     const PersonMotion& person, rt::TimeNs start_ns) const {
   CheckResult check = checkTrajectory(trajectory, params_.check, grid, checker_, octree);
-  if (check.verdict != CheckVerdict::kOk || !(params_.min_person_distance_m > 0.0) || !person.keep_away) return check;
-  auto distance_at = [&](double t_s) {
-    const Eigen::Vector3d d = trajectory.sample(t_s).p_W_m - person.positionAt(start_ns + rt::secondsToNs(t_s));
-    return d.head<2>().norm();
-  };
-  const double limit_m = std::min(params_.min_person_distance_m, distance_at(0.0)) - 1e-6;
+  if (check.verdict != CheckVerdict::kOk) return check;
   const double end_s = std::min(trajectory.durationS(), params_.check.horizon_s);
-  for (double t = 0.0; t <= end_s; t += params_.check.sample_step_s) {
-    if (distance_at(t) < limit_m) return {CheckVerdict::kTooCloseToPerson, t};
+  // Never closer than min_distance_m to `path`, or than at the start if closer already (they came near).
+  auto keeps_away = [&](auto path, double min_distance_m) {
+    auto distance_at = [&](double t_s) {
+      const Eigen::Vector3d d = trajectory.sample(t_s).p_W_m - path(start_ns + rt::secondsToNs(t_s));
+      return d.head<2>().norm();
+    };
+    const double limit_m = std::min(min_distance_m, distance_at(0.0)) - 1e-6;
+    for (double t = 0.0; t <= end_s; t += params_.check.sample_step_s) {
+      if (distance_at(t) < limit_m) return std::optional<double>(t);
+    }
+    return std::optional<double>();
+  };
+  if (params_.min_person_distance_m > 0.0 && person.keep_away) {
+    const auto at = keeps_away([&](rt::TimeNs t_ns) { return person.positionAt(t_ns); }, params_.min_person_distance_m);
+    if (at) return {CheckVerdict::kTooCloseToPerson, *at};
+  }
+  if (!(params_.min_bystander_distance_m > 0.0)) return check;
+  for (std::size_t i = 0; i < person.otherCount(); ++i) {
+    const auto at =
+        keeps_away([&](rt::TimeNs t_ns) { return person.otherAt(i, t_ns); }, params_.min_bystander_distance_m);
+    if (at) return {CheckVerdict::kTooCloseToBystander, *at};
   }
   return check;
 }

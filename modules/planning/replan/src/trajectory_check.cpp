@@ -24,6 +24,8 @@ std::string_view toString(CheckVerdict verdict) {
       return "checker_error";
     case CheckVerdict::kTooCloseToPerson:
       return "too_close_to_person";
+    case CheckVerdict::kTooCloseToBystander:
+      return "too_close_to_bystander";
   }
   return "unknown";
 }

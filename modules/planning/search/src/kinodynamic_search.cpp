@@ -300,8 +300,36 @@ int* KinodynamicSearch::findSlot(std::int64_t key) {
   }
 }
 
+bool KinodynamicSearch::clearOfPeople(const Eigen::Vector3d& a, double ta_s, const Eigen::Vector3d& b,
+                                      double tb_s) const {
+  if (people_count_ == 0) return true;
+  // Points along the chord (position and time linear in between) no farther apart than a quarter of the
+  // clearance: a chord can be a whole primitive long at speed.
+  // ... and no more than kPeopleStepS apart in time: someone walks into a drone that hovers (a == b).
+  constexpr double kPeopleStepS = 0.05;
+  const int steps = std::max({1, static_cast<int>(std::ceil((b - a).head<2>().norm() / (0.25 * people_clearance_m_))),
+                              static_cast<int>(std::ceil((tb_s - ta_s) / kPeopleStepS))});
+  for (int k = 1; k <= steps; ++k) {
+    const double f = static_cast<double>(k) / steps;
+    const Eigen::Vector2d p = a.head<2>() + f * (b - a).head<2>();
+    const double t_s = ta_s + f * (tb_s - ta_s);
+    for (std::size_t i = 0; i < people_count_; ++i) {
+      if (avoided_[i] && (p - people_[i].at(t_s)).norm() < people_clearance_m_) return false;
+    }
+  }
+  return true;
+}
+
+bool KinodynamicSearch::endClearOfPeople(const Eigen::Vector3d& end, double t_s) const {
+  // The path ends at rest there (the planner appends a brake): held until everyone stands still.
+  double still_s = t_s;
+  for (std::size_t i = 0; i < people_count_; ++i) still_s = std::max(still_s, people_[i].moving_s);
+  return clearOfPeople(end, t_s, end, still_s);
+}
+
 bool KinodynamicSearch::primitiveFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p,
-                                      const Eigen::Vector3d& v, const Eigen::Vector3d& u, double duration_s) const {
+                                      const Eigen::Vector3d& v, const Eigen::Vector3d& u, double duration_s,
+                                      double t0_s) const {
   const Eigen::Vector3d end = p + duration_s * (v + 0.5 * duration_s * u);
   if (!pointFree(grid, end) || !inBand(end)) return false;  // cheap early reject
   const int chords = chordCount(u.norm(), duration_s);
@@ -310,7 +338,8 @@ bool KinodynamicSearch::primitiveFree(const mapping::LocalGrid& grid, const Eige
   for (int i = 1; i <= chords; ++i) {
     const double t = i * dt;
     const Eigen::Vector3d next = p + t * (v + 0.5 * t * u);
-    if (!inBand(next) || !chordFree(grid, previous, next)) return false;
+    if (!inBand(next) || !chordFree(grid, previous, next) || !clearOfPeople(previous, t0_s + t - dt, next, t0_s + t))
+      return false;
     previous = next;
   }
   return true;
@@ -342,8 +371,11 @@ bool KinodynamicSearch::oneShot(const mapping::LocalGrid& grid, const Node& from
   const int chords = chordCount(max_acceleration_mps2, t_end);
   Eigen::Vector3d previous = from.p;
   for (int i = 1; i <= chords; ++i) {
-    const Eigen::Vector3d next = positionOf(shot, t_end * i / chords);
-    if (!inBand(next) || !chordFree(grid, previous, next)) return false;
+    const double t = t_end * i / chords;
+    const Eigen::Vector3d next = positionOf(shot, t);
+    if (!inBand(next) || !chordFree(grid, previous, next) ||
+        !clearOfPeople(previous, from.t + t_end * (i - 1) / chords, next, from.t + t))
+      return false;
     previous = next;
   }
   cost = obvp.cost;
@@ -401,6 +433,8 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
   if (!pointFree(grid, start.p_W_m) || !withinLimits(start.v_W_mps, params_.max_velocity_mps)) {
     return finish(SearchStatus::kStartBlocked);
   }
+  for (std::size_t i = 0; i < people_count_; ++i)
+    avoided_[i] = (start.p_W_m.head<2>() - people_[i].p_W_m).norm() >= people_clearance_m_;
   search_min_z_m_ = std::min(min_z_m_, start.p_W_m.z());
   search_max_z_m_ = std::max(max_z_m_, start.p_W_m.z());
   // A goal velocity beyond the per-axis limit could never be matched (one-shot or tolerance): scaled into it,
@@ -467,7 +501,9 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
     current.closed = true;
     ++path.expansions;
     const int current_index = entry.node;
-    if (current.d < nodes_[static_cast<std::size_t>(best_partial)].d) best_partial = current_index;
+    // A partial path ends at rest where it stops too: only where nobody walks into it.
+    if (current.d < nodes_[static_cast<std::size_t>(best_partial)].d && endClearOfPeople(current.p, current.t))
+      best_partial = current_index;
 
     const double distance_m = (current.p - goal.p_W_m).norm();
     // The start is not a lattice node: the one-shot can reach the goal's exact state from it, so it is tried
@@ -475,16 +511,18 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
     // counts as arrived, and no plan is made until the goal has left the tolerances (0.58 s after a runner
     // set off in the forest, issue 21); the one-shot's duration says how far from the goal the start is.
     if (current_index == 0 && distance_m <= params_.one_shot_distance_m &&
-        oneShot(grid, current, goal, shot, shot_cost)) {
+        oneShot(grid, current, goal, shot, shot_cost) && endClearOfPeople(goal.p_W_m, current.t + shot.duration_s)) {
       writePath(current_index, &shot, shot_cost, path);
       return finish(SearchStatus::kReachedGoal);
     }
     if (distance_m <= params_.goal_tolerance_m &&
-        (current.v - goal.v_W_mps).cwiseAbs().maxCoeff() <= params_.goal_velocity_tolerance_mps) {
+        (current.v - goal.v_W_mps).cwiseAbs().maxCoeff() <= params_.goal_velocity_tolerance_mps &&
+        endClearOfPeople(current.p, current.t)) {
       writePath(current_index, nullptr, 0.0, path);
       return finish(SearchStatus::kReachedGoal);
     }
-    if (distance_m <= params_.one_shot_distance_m && oneShot(grid, current, goal, shot, shot_cost)) {
+    if (distance_m <= params_.one_shot_distance_m && oneShot(grid, current, goal, shot, shot_cost) &&
+        endClearOfPeople(goal.p_W_m, current.t + shot.duration_s)) {
       writePath(current_index, &shot, shot_cost, path);
       return finish(SearchStatus::kReachedGoal);
     }
@@ -504,7 +542,7 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
         const Node& existing = nodes_[static_cast<std::size_t>(*slot)];
         if (existing.closed || existing.g <= g_next) continue;
       }
-      if (!primitiveFree(grid, p, v, u, tau)) continue;
+      if (!primitiveFree(grid, p, v, u, tau, t)) continue;
       int index = *slot;
       if (index < 0) {
         if (used >= params_.max_nodes) {

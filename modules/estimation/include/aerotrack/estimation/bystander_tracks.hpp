@@ -46,6 +46,8 @@ class BystanderTracks {
   void drop(std::size_t i);
   /// Live tracks at t_ns.
   std::size_t liveCount(rt::TimeNs t_ns) const;
+  /// Writes the live tracks' states at t_ns into estimate.others (as many as fit) and their number.
+  void fillOthers(rt::TimeNs t_ns, TargetEstimate& estimate) const;
 
  private:
   struct Track {

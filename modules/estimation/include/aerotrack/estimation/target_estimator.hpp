@@ -107,6 +107,17 @@ const char* toString(MeasurementVerdict verdict);
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
+/// Another person near the followed one, as their own track estimates them (BystanderTracks): an obstacle
+/// that moves, which the planner keeps away from along its constant-velocity prediction (issue 21 item 5: the
+/// crowd's people walked into the drone's path faster than the map showed them there).
+struct OtherPerson {
+  Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_W_mps = Eigen::Vector3d::Zero();
+};
+
+/// The most other people an estimate carries (the target task tracks as many: target_task.hpp).
+inline constexpr std::size_t kMaxOtherPeople = 12;
+
 struct TargetEstimate {
   rt::TimeNs stamp_ns = 0;   ///< The time the estimate is for.
   bool initialised = false;  ///< False: no measurement yet; the rest is meaningless.
@@ -116,6 +127,9 @@ struct TargetEstimate {
   Matrix6d covariance = Matrix6d::Identity();  ///< Of [p_WT_m; v_WT_mps] (m^2, m^2/s, m^2/s^2).
   double manoeuvre_probability = 0.0;          ///< The IMM's weight on the manoeuvring model (0 when off).
   rt::TimeNs last_accepted_ns = 0;             ///< Capture time of the newest accepted measurement.
+  /// The other people tracked and not lost, at stamp_ns (the first other_count; filled by the target task).
+  std::array<OtherPerson, kMaxOtherPeople> others{};
+  std::size_t other_count = 0;
 };
 
 /// Thread safety: none (one owner). Allocation: the buffer, once, in create(); add() and

@@ -56,7 +56,7 @@ struct TargetTaskParams {
 };
 
 /// The most other people tracked at once (choose_by_estimate): MoveNet reports six a frame.
-inline constexpr std::size_t kMaxBystanderTracks = 12;
+inline constexpr std::size_t kMaxBystanderTracks = kMaxOtherPeople;
 
 /// Reads the `estimation:` config section except `localization_params` (a file the app loads):
 /// gimbal_camera extrinsics, measurement noise, estimator. Throws rt::ConfigError naming the key.

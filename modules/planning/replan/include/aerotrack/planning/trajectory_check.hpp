@@ -72,10 +72,11 @@ enum class CheckVerdict : std::uint8_t {
   kGridBlocked,
   kCollision,
   kCheckerError,
-  kTooCloseToPerson,  ///< Checked by the planner (it knows the person's predicted path).
+  kTooCloseToPerson,     ///< Checked by the planner (it knows the person's predicted path).
+  kTooCloseToBystander,  ///< Checked by the planner: another person's constant-velocity path.
 };
 std::string_view toString(CheckVerdict verdict);
-inline constexpr int kCheckVerdictCount = 8;
+inline constexpr int kCheckVerdictCount = 9;
 /// Velocity, acceleration or jerk: a verdict a slower timing of the same path can cure (the others cannot).
 constexpr bool isDynamicLimit(CheckVerdict verdict) {
   return verdict == CheckVerdict::kVelocity || verdict == CheckVerdict::kAcceleration || verdict == CheckVerdict::kJerk;

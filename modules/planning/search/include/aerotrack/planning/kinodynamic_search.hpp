@@ -19,9 +19,13 @@
 // partial path).
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -166,6 +170,17 @@ struct SearchPath {
   Eigen::Vector3d accelerationAt(double t_s) const;
 };
 
+/// Someone other than the followed person, as the search keeps clear of them (issue 21 item 5): at p_W_m when the
+/// search starts, walking at v_W_mps for moving_s seconds, then standing (horizontal, W).
+struct MovingPerson {
+  Eigen::Vector2d p_W_m = Eigen::Vector2d::Zero();
+  Eigen::Vector2d v_W_mps = Eigen::Vector2d::Zero();
+  double moving_s = 0.0;
+  Eigen::Vector2d at(double t_s) const { return p_W_m + std::clamp(t_s, 0.0, moving_s) * v_W_mps; }
+};
+/// The most people a search keeps clear of (the target task tracks 12 others).
+inline constexpr std::size_t kMaxSearchPeople = 16;
+
 /// The search, with its scratch memory (node pool, hash table, open list) allocated once in create() and
 /// reused by every search(). Not thread-safe: one instance per thread. Copyable and movable.
 class KinodynamicSearch {
@@ -184,6 +199,16 @@ class KinodynamicSearch {
   void setAltitudeBand(double min_z_m, double max_z_m) {
     min_z_m_ = min_z_m;
     max_z_m_ = max_z_m;
+  }
+  /// Keeps every path horizontally clearance_m from each of `people` (the first kMaxSearchPeople) at the time it
+  /// passes there, as the final check will; someone already that close to the start is left to the check
+  /// (which forbids coming closer). Why (issue 21 item 5): the final check alone refused every plan that
+  /// passed near a walker, and the drone fell behind the person in the crowd; searched around, it follows
+  /// on. Holds until set again (an empty span clears it); no allocation.
+  void setPeople(std::span<const MovingPerson> people, double clearance_m) {
+    people_count_ = std::min(people.size(), people_.size());
+    std::copy_n(people.begin(), people_count_, people_.begin());
+    people_clearance_m_ = clearance_m;
   }
 
   /// Searches from start to goal in `grid` (blocked = LocalGrid::isOccupied, which applies the inflation
@@ -226,7 +251,11 @@ class KinodynamicSearch {
   std::int64_t keyOf(const Eigen::Vector3d& p, const Eigen::Vector3d& v) const;
   int* findSlot(std::int64_t key);  // the slot holding key's node, or the empty slot where it goes
   bool primitiveFree(const mapping::LocalGrid& grid, const Eigen::Vector3d& p, const Eigen::Vector3d& v,
-                     const Eigen::Vector3d& u, double duration_s) const;
+                     const Eigen::Vector3d& u, double duration_s, double t0_s) const;
+  /// The chord from a (reached ta_s after the start) to b (tb_s) keeps clear of the people this search avoids.
+  bool clearOfPeople(const Eigen::Vector3d& a, double ta_s, const Eigen::Vector3d& b, double tb_s) const;
+  /// A path ending at `end` at t_s, held there, keeps clear of them until they all stand still.
+  bool endClearOfPeople(const Eigen::Vector3d& end, double t_s) const;
   bool oneShot(const mapping::LocalGrid& grid, const Node& from, const KinematicState& goal, PathSegment& shot,
                double& cost) const;
   void writePath(int end_node, const PathSegment* shot, double shot_cost, SearchPath& path);
@@ -237,6 +266,10 @@ class KinodynamicSearch {
   double search_min_z_m_ = 0.0;  // per search: the band widened to the start's height
   double search_max_z_m_ = 0.0;
   bool inBand(const Eigen::Vector3d& p) const { return p.z() >= search_min_z_m_ && p.z() <= search_max_z_m_; }
+  std::array<MovingPerson, kMaxSearchPeople> people_{};  // setPeople
+  std::size_t people_count_ = 0;
+  double people_clearance_m_ = 0.0;
+  std::array<bool, kMaxSearchPeople> avoided_{};  // per search: not already within the clearance of the start
   std::vector<Eigen::Vector3d> inputs_;
   std::vector<Node> nodes_;
   std::vector<int> table_;                  // node index per slot
