@@ -148,15 +148,18 @@ TEST(Bystanders, MillingMembersStayOffThePath) {
       EXPECT_GE(std::abs(sim->personStateAt(id, simNs(t_s)).p_W_m.y()), 1.0 - 0.3) << id << " at " << t_s;
 }
 
-TEST(Bystanders, RandomWalkersStayInTheirRegionAndAwayFromTheDronesStart) {
+TEST(Bystanders, RandomWalkersStayInTheirRegionAndAwayFromTheDronesAndTheTargetsStart) {
   const auto sim = crowdSim(crowdYaml(
       "bystanders:\n  random_walkers: {count: 8, region_min_m: [-8.0, -8.0], region_max_m: [20.0, 8.0], legs: 5}\n"));
   ASSERT_EQ(sim->personCount(), 9U);
   const Eigen::Vector2d drone_start = sim->scenario().spec.drone.start_m.head<2>();
+  const Eigen::Vector2d target_start = sim->personStateAt(0, simNs(0.0)).p_W_m.head<2>();
   for (std::size_t id = 1; id < sim->personCount(); ++id) {
     for (double t_s = 0.0; t_s < 80.0; t_s += 0.2) {
       const Eigen::Vector2d p = sim->personStateAt(id, simNs(t_s)).p_W_m.head<2>();
       EXPECT_GT((p - drone_start).norm(), kDroneStartKeepOutM - 0.3) << id << " at " << t_s;
+      // Nobody walks through the target where they stand (the legs keep the body's radius off the disc).
+      EXPECT_GT((p - target_start).norm(), kTargetStartKeepOutM - 0.3) << id << " at " << t_s;
       EXPECT_TRUE(p.x() >= -7.0 && p.x() <= 19.0 && p.y() >= -7.0 && p.y() <= 7.0) << id << " at " << t_s;
     }
   }

@@ -255,7 +255,7 @@ struct Context {
   double target_delay_s;
   const std::vector<PathPoint>& target_path;
   const ObstacleWorld& world;
-  const ObstacleWorld& walk_world;  ///< world and a keep-out disc around the drone's start.
+  const ObstacleWorld& walk_world;  ///< world and keep-out discs around the drone's and the target's start.
   std::mt19937_64& rng;
   const Clothing& target_clothing;
   /// The target at sim time t_s (seconds since the start).
@@ -506,6 +506,7 @@ rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spe
   if (!world) return rt::Error{"bystanders: " + world.error().message};
   std::vector<Cylinder> with_keep_out = cylinders;
   with_keep_out.push_back(Cylinder{drone_start_m, kDroneStartKeepOutM, 0.0, 3.0});
+  with_keep_out.push_back(Cylinder{target->state(0.0).p_W_m.head<2>(), kTargetStartKeepOutM, 0.0, 3.0});
   auto walk_world = ObstacleWorld::create(boxes, with_keep_out);
   if (!walk_world) return rt::Error{"bystanders: " + walk_world.error().message};
   const Context ctx{*target, target_start_delay_s, target_path, *world, *walk_world, rng, inst.target_clothing};

@@ -43,6 +43,10 @@ using AppearanceSignature = std::array<float, kAppearanceSignatureBins>;
 
 /// Random walkers and group members keep this far from the drone's start point.
 inline constexpr double kDroneStartKeepOutM = 2.0;
+/// ... and random walks this far from where the target stands before they set off: two bodies' radii and half a
+/// metre between them (crowd seed 16 started a walker 0.26 m from the target, inside their body, and the
+/// association could not tell the two apart from the first frame).
+inline constexpr double kTargetStartKeepOutM = 1.0;
 
 /// A person's body as an obstacle and occluder: a vertical cylinder of their height. 0.25 m covers
 /// the shoulders (0.259 H = 0.45 m wide at H = 1.75 m, Drillis & Contini) and the swinging arms.
