@@ -17,8 +17,7 @@ using test::defaultParams;
 using test::makePlanner;
 
 mapping::LocalGrid openGround() {
-  return test::makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(0, 0, 1.5),
-                           {{{-10, -10, -0.2}, {10, 10, 0.0}}});
+  return test::makeBoxGrid(Eigen::Vector3d(20, 20, 5), Eigen::Vector3d(0, 0, 1.5), {{{-10, -10, -0.2}, {10, 10, 0.0}}});
 }
 
 // The followed person standing at (x_m, 0), with `others` around them.
@@ -32,18 +31,10 @@ test::PlanCase personAt(double x_m, std::initializer_list<estimation::OtherPerso
   return c;
 }
 
-// The smallest horizontal distance between `trajectory` (held at its end) and `other`'s constant-velocity path
-// (held after prediction.horizon_s, as the planner predicts it), over the check's horizon.
+// The closest `trajectory` comes to `other` on the path the planner predicts for them.
 double closestApproachM(const PolynomialTrajectory& trajectory, const estimation::OtherPerson& other,
                         rt::TimeNs start_ns, const TrackingPlannerParams& params) {
-  double min_m = INFINITY;
-  for (double t = 0.0; t <= params.check.horizon_s; t += 0.01) {
-    const double ahead_s = std::min(t + rt::nsToSeconds(start_ns), params.prediction.horizon_s);
-    const Eigen::Vector3d p = other.p_W_m + ahead_s * other.v_W_mps;
-    const Eigen::Vector3d drone = trajectory.durationS() > 0.0 ? trajectory.sample(t).p_W_m : Eigen::Vector3d::Zero();
-    min_m = std::min(min_m, (drone - p).head<2>().norm());
-  }
-  return min_m;
+  return test::closestApproachM(trajectory, other.p_W_m, other.v_W_mps, start_ns, params);
 }
 
 TEST(Bystanders, SomeoneWalkingAtADroneHoveringAtItsGoalIsSteppedAwayFrom) {

@@ -35,17 +35,10 @@ estimation::TargetEstimate walkerAt(double x0_m, double y_m, double speed_mps) {
   return e;
 }
 
-// The smallest horizontal distance between the flown trajectory (held at its end) and the walker, whose
-// constant-velocity path the planner extrapolates for prediction.horizon_s and then holds.
+// The closest the flown trajectory comes to the walker on their predicted path.
 double closestApproachM(const PolynomialTrajectory& trajectory, const estimation::TargetEstimate& walker,
                         rt::TimeNs start_ns, const TrackingPlannerParams& params) {
-  double min_m = INFINITY;
-  for (double t = 0.0; t <= params.check.horizon_s; t += 0.01) {
-    const double ahead_s = std::min(t + rt::nsToSeconds(start_ns), params.prediction.horizon_s);
-    const Eigen::Vector3d person = walker.p_WT_m + ahead_s * walker.v_WT_mps;
-    min_m = std::min(min_m, (trajectory.sample(t).p_W_m - person).head<2>().norm());
-  }
-  return min_m;
+  return test::closestApproachM(trajectory, walker.p_WT_m, walker.v_WT_mps, start_ns, params);
 }
 
 using EvasionCase = test::PlanCase;

@@ -255,14 +255,25 @@ double closestToPersonM(const SearchPath& path, const MovingPerson& person) {
   return min_m;
 }
 
+// An open 12 m grid around the way from the origin to 6 m ahead; the followed person stands 8 m ahead.
+struct OpenPlaza {
+  mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(12.0, 12.0, 3.2), Eigen::Vector3d(3.0, 0.0, 1.6), {});
+  PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(8.0, 0.0, 1.5); };
+  static KinodynamicSearchParams params(int max_expansions) {
+    KinodynamicSearchParams p;
+    p.max_expansions = max_expansions;
+    p.max_nodes = 400000;
+    return p;
+  }
+};
+
 TEST(KinodynamicSearch, GivenPeopleToKeepClearOfThenThePathPassesThemAtTheClearanceWhenItGetsThere) {
-  // An open grid; the goal 6 m ahead. Someone stands on the straight way; someone else crosses it at 1.4 m/s.
-  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(12.0, 12.0, 3.2), Eigen::Vector3d(3.0, 0.0, 1.6), {});
-  KinodynamicSearchParams params;
-  params.max_expansions = 20000;
-  params.max_nodes = 400000;
+  // The goal 6 m ahead. Someone stands on the straight way; someone else crosses it at 1.4 m/s.
+  const OpenPlaza plaza;
+  const mapping::LocalGrid& grid = plaza.grid;
+  const PersonPositionFn& person = plaza.person;
+  const KinodynamicSearchParams params = OpenPlaza::params(20000);
   KinodynamicSearch search = makeSearch(params);
-  const PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(8.0, 0.0, 1.5); };
   const std::array<MovingPerson, 2> people = {MovingPerson{{2.0, 0.0}, {0.0, 0.0}, 0.0},
                                               MovingPerson{{4.5, -3.0}, {0.0, 1.4}, 5.0}};
   SearchPath path;
@@ -289,12 +300,10 @@ TEST(KinodynamicSearch, GivenPeopleToKeepClearOfThenThePathPassesThemAtTheCleara
 TEST(KinodynamicSearch, GivenSomeoneWhoWillStandAtTheGoalThenThePathStopsShortWhereNobodyWalksIntoIt) {
   // The path ends at rest (the planner brakes at its end): an end that someone walks into is no end. Someone
   // walks to the goal and stands there; the search returns its best partial path, ending clear of them.
-  const mapping::LocalGrid grid = makeBoxGrid(Eigen::Vector3d(12.0, 12.0, 3.2), Eigen::Vector3d(3.0, 0.0, 1.6), {});
-  KinodynamicSearchParams params;
-  params.max_expansions = 3000;
-  params.max_nodes = 400000;
-  KinodynamicSearch search = makeSearch(params);
-  const PersonPositionFn person = [](double /*t_s*/) { return Eigen::Vector3d(8.0, 0.0, 1.5); };
+  const OpenPlaza plaza;
+  const mapping::LocalGrid& grid = plaza.grid;
+  const PersonPositionFn& person = plaza.person;
+  KinodynamicSearch search = makeSearch(OpenPlaza::params(3000));
   const std::array<MovingPerson, 1> arriving = {MovingPerson{{4.0, -2.0}, {0.0, 1.4}, 2.0 / 1.4}};
   constexpr double kClearanceM = 0.8;
   search.setPeople(arriving, kClearanceM);

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <limits>
 #include <memory>
 #include <utility>
 
@@ -26,6 +28,22 @@ inline TrackingPlanner makePlanner(const TrackingPlannerParams& params = default
   auto planner = TrackingPlanner::create(params);
   EXPECT_TRUE(planner.has_value()) << (planner ? "" : planner.error().message);
   return std::move(planner).value();
+}
+
+/// The smallest horizontal distance between `trajectory` (held at its end; empty: the origin) and someone at
+/// p_W_m walking at v_W_mps when the cycle runs (t = 0), extrapolated as the planner does (constant velocity for
+/// prediction.horizon_s, then held), over the check's horizon from start_ns.
+inline double closestApproachM(const PolynomialTrajectory& trajectory, const Eigen::Vector3d& p_W_m,
+                               const Eigen::Vector3d& v_W_mps, rt::TimeNs start_ns,
+                               const TrackingPlannerParams& params) {
+  double min_m = std::numeric_limits<double>::infinity();
+  for (double t = 0.0; t <= params.check.horizon_s; t += 0.01) {
+    const double ahead_s = std::min(t + rt::nsToSeconds(start_ns), params.prediction.horizon_s);
+    const Eigen::Vector3d person = p_W_m + ahead_s * v_W_mps;
+    const Eigen::Vector3d drone = trajectory.durationS() > 0.0 ? trajectory.sample(t).p_W_m : Eigen::Vector3d::Zero();
+    min_m = std::min(min_m, (drone - person).head<2>().norm());
+  }
+  return min_m;
 }
 
 /// A start state at rest at p.
