@@ -295,6 +295,9 @@ TEST(KinodynamicSearch, GivenPeopleToKeepClearOfThenThePathPassesThemAtTheCleara
   search.setPeople({}, kClearanceM);
   ASSERT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(6.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kReachedGoal);
   EXPECT_LT(closestToPersonM(path, people[0]), 0.3);
+  search.setPeople(people, 0.0);  // no clearance to keep: the same
+  ASSERT_EQ(search.search(grid, at(0.0, 0.0, 1.5), at(6.0, 0.0, 1.5), 0.0, person, path), SearchStatus::kReachedGoal);
+  EXPECT_LT(closestToPersonM(path, people[0]), 0.3);
 }
 
 TEST(KinodynamicSearch, GivenSomeoneWhoWillStandAtTheGoalThenThePathStopsShortWhereNobodyWalksIntoIt) {

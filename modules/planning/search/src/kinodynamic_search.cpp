@@ -302,7 +302,7 @@ int* KinodynamicSearch::findSlot(std::int64_t key) {
 
 bool KinodynamicSearch::clearOfPeople(const Eigen::Vector3d& a, double ta_s, const Eigen::Vector3d& b,
                                       double tb_s) const {
-  if (people_count_ == 0) return true;
+  if (people_count_ == 0 || !(people_clearance_m_ > 0.0)) return true;  // none, or no clearance to keep
   // Points along the chord (position and time linear in between) no farther apart than a quarter of the
   // clearance: a chord can be a whole primitive long at speed.
   // ... and no more than kPeopleStepS apart in time: someone walks into a drone that hovers (a == b).

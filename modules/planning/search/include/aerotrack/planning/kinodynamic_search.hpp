@@ -204,7 +204,7 @@ class KinodynamicSearch {
   /// passes there, as the final check will; someone already that close to the start is left to the check
   /// (which forbids coming closer). Why (issue 21 item 5): the final check alone refused every plan that
   /// passed near a walker, and the drone fell behind the person in the crowd; searched around, it follows
-  /// on. Holds until set again (an empty span clears it); no allocation.
+  /// on. Holds until set again (an empty span, or a clearance not above 0, clears it); no allocation.
   void setPeople(std::span<const MovingPerson> people, double clearance_m) {
     people_count_ = std::min(people.size(), people_.size());
     std::copy_n(people.begin(), people_count_, people_.begin());
