@@ -72,8 +72,7 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
   const Eigen::Matrix3d H = levelHomography(*T_WC, frame.intrinsics);
   std::array<hal::Keypoint2D, hal::kNumKeypoints> level = person.keypoints;
   for (const hal::CocoKeypoint k : {hal::CocoKeypoint::kLeftShoulder, hal::CocoKeypoint::kRightShoulder,
-                                    hal::CocoKeypoint::kLeftHip, hal::CocoKeypoint::kRightHip, hal::CocoKeypoint::kNose,
-                                    hal::CocoKeypoint::kLeftAnkle, hal::CocoKeypoint::kRightAnkle}) {
+                                    hal::CocoKeypoint::kLeftHip, hal::CocoKeypoint::kRightHip}) {
     hal::Keypoint2D& kp = level[hal::index(k)];
     const Eigen::Vector3d h = H * Eigen::Vector3d(kp.u_px, kp.v_px, 1.0);
     if (!(h.z() > 0.0)) return c;  // behind the level camera: no measurement
@@ -91,7 +90,7 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
       c.measurement->std_xy_m = measurementStdM(p_C_m);
     }
   } else if (params_.bearing_fallback) {
-    c.measurement = bearingMeasurement(frame, c.torso, bodyScale(person.keypoints, level, frame.intrinsics), *T_WC);
+    c.measurement = bearingMeasurement(frame, c.torso, *T_WC);
   }
   return c;
 }
@@ -249,26 +248,8 @@ bool TargetTask::process(const Candidate& c) {
   return false;
 }
 
-TargetTask::BodyScale TargetTask::bodyScale(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& judged,
-                                            const std::array<hal::Keypoint2D, hal::kNumKeypoints>& level,
-                                            const hal::CameraIntrinsics& intrinsics) const {
-  using K = hal::CocoKeypoint;
-  const auto reported = [&](K k, double min_score) { return judged[hal::index(k)].score >= min_score; };
-  const auto at = [&](K k) { return Eigen::Vector2d(level[hal::index(k)].u_px, level[hal::index(k)].v_px); };
-  BodyScale b;
-  b.nose_to_ankle_px = perception::noseToAnklePx(judged, level, intrinsics.width_px, intrinsics.height_px,
-                                                 params_.torso.edge_guess_max_score, params_.torso.border_margin_px);
-  const double min_score = params_.torso.min_joint_score;
-  if (reported(K::kNose, min_score) && reported(K::kLeftShoulder, min_score) && reported(K::kRightShoulder, min_score))
-    b.nose_above_neck_px = 0.5 * (at(K::kLeftShoulder) + at(K::kRightShoulder)).y() - at(K::kNose).y();
-  b.shoulders_px = (at(K::kLeftShoulder) - at(K::kRightShoulder)).norm();
-  b.hips_px = (at(K::kLeftHip) - at(K::kRightHip)).norm();
-  return b;
-}
-
 std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::DetectionFrame& frame,
                                                                 const perception::TorsoFeatures& torso,
-                                                                const BodyScale& scale,
                                                                 const Eigen::Isometry3d& T_WC) const {
   if (!torso.bearing_ok) return std::nullopt;
   const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
@@ -282,32 +263,6 @@ std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::Detec
   // Nearer than this the person is under the camera, where u says little of the bearing.
   constexpr double kMinDistanceM = 0.5;
   if (!(x_m > kMinDistanceM)) return std::nullopt;
-  // Someone twice as far, or half as near, as the estimate is someone else on the same line of sight (crowd
-  // seeds 5 and 15: the look-alike 8-16 m behind the hidden person took their bearing for 0.2-0.5 s). Each
-  // cue bounds the distance at statures of 1.5-1.95 m (Drillis & Contini's proportions) and a keypoint's
-  // error of kKeypointErrorPx; a bound beyond the factor rejects the bearing.
-  constexpr double kMaxRangeRatio = 2.0;
-  constexpr double kKeypointErrorPx = 1.5;
-  constexpr double kMinStatureM = 1.5;
-  constexpr double kMaxStatureM = 1.95;
-  const double f_px = frame.intrinsics.fy_px;
-  const auto outside = [&](double near_m, double far_m) {
-    return near_m > kMaxRangeRatio * x_m || far_m * kMaxRangeRatio < x_m;
-  };
-  const auto from_height = [&](double extent_px, double fraction) {  // a vertical extent of `fraction` statures
-    return outside(f_px * fraction * kMinStatureM / (extent_px + kKeypointErrorPx),
-                   f_px * fraction * kMaxStatureM / std::max(extent_px - kKeypointErrorPx, 0.5));
-  };
-  // The nose 0.883 statures above the ankles; 0.104 above the shoulders' midpoint (vertical: whichever way
-  // the person faces).
-  if (scale.nose_to_ankle_px && from_height(*scale.nose_to_ankle_px, 0.883)) return std::nullopt;
-  if (scale.nose_above_neck_px && from_height(*scale.nose_above_neck_px, 0.104)) return std::nullopt;
-  // A width only bounds the distance from above (a person turned sideways is narrow): the bearing's pair is at
-  // most 0.259 statures wide (shoulders) or 0.19 (hip joints). (Not the unreliable torso's length: its hips
-  // may be guesses, anywhere.)
-  const double pair_px = torso.bearing_from_shoulders ? scale.shoulders_px : scale.hips_px;
-  const double pair_fraction = torso.bearing_from_shoulders ? 0.259 : 0.19;
-  if (outside(0.0, f_px * pair_fraction * kMaxStatureM / std::max(pair_px, 1e-9))) return std::nullopt;
   // The line of sight the regression gives u at the prior's forward distance, and on it the point at the
   // prior's range: the innovation then lies across the line (to first order the EKF update of a measured
   // bearing), so the range the filter carries is kept, not pulled.

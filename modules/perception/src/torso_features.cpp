@@ -61,25 +61,6 @@ TorsoFeatures remeasured(const TorsoFeatures& verdicts, const std::array<hal::Ke
   return f;
 }
 
-std::optional<double> noseToAnklePx(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& judged,
-                                    const std::array<hal::Keypoint2D, hal::kNumKeypoints>& measured, int width_px,
-                                    int height_px, double min_score, double margin_px) {
-  const auto whole = [&](CocoKeypoint k) {
-    const hal::Keypoint2D& kp = judged[index(k)];
-    return kp.score >= min_score && kp.u_px >= margin_px && kp.u_px <= width_px - margin_px && kp.v_px >= margin_px &&
-           kp.v_px <= height_px - margin_px;
-  };
-  if (!whole(CocoKeypoint::kNose)) return std::nullopt;
-  std::optional<double> ankle_v_px;
-  for (const CocoKeypoint k : {CocoKeypoint::kLeftAnkle, CocoKeypoint::kRightAnkle}) {
-    if (whole(k)) ankle_v_px = std::max(ankle_v_px.value_or(-1e300), measured[index(k)].v_px);
-  }
-  if (!ankle_v_px) return std::nullopt;
-  const double extent_px = *ankle_v_px - measured[index(CocoKeypoint::kNose)].v_px;
-  if (!(extent_px > 0.0)) return std::nullopt;
-  return extent_px;
-}
-
 TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& keypoints, int width_px,
                             int height_px, const TorsoFeatureParams& params) {
   const hal::Keypoint2D& ls = keypoints[index(CocoKeypoint::kLeftShoulder)];

@@ -142,28 +142,6 @@ TEST(TorsoFeatures, GivenKeypointsMovedElsewhere_WhenRemeasured_ThenTheVerdictsS
   EXPECT_DOUBLE_EQ(f.bearing_u_px, 360.0);  // the moved shoulders' midpoint
 }
 
-TEST(NoseToAnkle, GivenAWholeBody_ThenTheExtentIsMeasuredInTheMovedImageAndOnlyWhereTheJointsAreWhole) {
-  // Nose 1.4 torsos above the hips, ankles 1.6 below: 3 torsos, 240 px at an 80 px torso.
-  const Keypoints k = standingPerson(300.0, 250.0, 80.0, 0.9);
-  EXPECT_DOUBLE_EQ(*noseToAnklePx(k, k, 640, 480, 0.5, 4.0), 240.0);
-  // Measured where the joints were moved to (a level camera's image), judged where the network saw them.
-  Keypoints moved = k;
-  moved[index(CocoKeypoint::kLeftAnkle)].v_px += 10.0;
-  EXPECT_DOUBLE_EQ(*noseToAnklePx(k, moved, 640, 480, 0.5, 4.0), 250.0);
-  // One ankle a guess: the other still spans the body; both, or the nose: nothing.
-  Keypoints one = k;
-  one[index(CocoKeypoint::kLeftAnkle)].score = 0.4;
-  EXPECT_DOUBLE_EQ(*noseToAnklePx(one, one, 640, 480, 0.5, 4.0), 240.0);
-  one[index(CocoKeypoint::kRightAnkle)].score = 0.0;
-  EXPECT_FALSE(noseToAnklePx(one, one, 640, 480, 0.5, 4.0).has_value());
-  Keypoints no_nose = k;
-  no_nose[index(CocoKeypoint::kNose)].score = 0.3;
-  EXPECT_FALSE(noseToAnklePx(no_nose, no_nose, 640, 480, 0.5, 4.0).has_value());
-  // Feet on the bottom edge (cut off by the frame, clamped there): not a whole body.
-  const Keypoints cut = standingPerson(300.0, 480.0 - 1.6 * 80.0 + 2.0, 80.0, 0.9);
-  EXPECT_FALSE(noseToAnklePx(cut, cut, 640, 480, 0.5, 4.0).has_value());
-}
-
 /// The hips (or shoulders) of `k` given a guess's score, as MoveNet scores the joints of a cut-off body.
 Keypoints guessed(Keypoints k, CocoKeypoint a, CocoKeypoint b) {
   k[index(a)].score = 0.4;

@@ -120,22 +120,10 @@ class TargetTask final : public rt::Task {
   Eigen::Vector3d localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
                            Eigen::Vector3d& p_C_m) const;
   double measurementStdM(const Eigen::Vector3d& p_C_m) const;
-  /// The image extents that bound a person's distance, in the level image (`level`), each only where `judged`
-  /// (the network's image) reports the joints behind it.
-  struct BodyScale {
-    std::optional<double> nose_to_ankle_px;    ///< perception::noseToAnklePx.
-    std::optional<double> nose_above_neck_px;  ///< Nose above the shoulders' midpoint (all min_joint_score).
-    double shoulders_px = 0.0;                 ///< Shoulder to shoulder.
-    double hips_px = 0.0;                      ///< Hip joint to hip joint.
-  };
-  BodyScale bodyScale(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& judged,
-                      const std::array<hal::Keypoint2D, hal::kNumKeypoints>& level,
-                      const hal::CameraIntrinsics& intrinsics) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
-  /// behind or beside the camera, or someone whose body's `scale` puts them at less than half or more than
-  /// twice the estimate's distance).
+  /// behind or beside the camera).
   std::optional<TargetMeasurement> bearingMeasurement(const hal::DetectionFrame& frame,
-                                                      const perception::TorsoFeatures& torso, const BodyScale& scale,
+                                                      const perception::TorsoFeatures& torso,
                                                       const Eigen::Isometry3d& T_WC) const;
 
   TargetTaskParams params_;

@@ -13,7 +13,6 @@
 #pragma once
 
 #include <array>
-#include <optional>
 #include <string_view>
 
 #include "aerotrack/hal/types.hpp"
@@ -60,15 +59,6 @@ TorsoFeatures torsoFeatures(const std::array<hal::Keypoint2D, hal::kNumKeypoints
 /// from) taken from `moved`, the same keypoints moved to other pixels (a level camera's image, issue 22 item 3);
 /// the verdicts (reliable, reason, culprit, bearing_ok), judged in the image the network saw, are kept. Pure.
 TorsoFeatures remeasured(const TorsoFeatures& verdicts, const std::array<hal::Keypoint2D, hal::kNumKeypoints>& moved);
-
-/// The vertical extent (px) from the nose to the lower ankle in `measured` (the same keypoints moved to a level
-/// camera's image), when in `judged` (the image the network saw) the nose and that ankle are scored at least
-/// min_score and lie at least margin_px inside the image; nothing otherwise. A whole standing body's nose is
-/// 0.883 of its stature above its ankles (Drillis & Contini), so the extent gives the person's distance to within
-/// their stature -- a check on a bearing-only measurement, which carries no distance (issue 22 item 2). Pure.
-std::optional<double> noseToAnklePx(const std::array<hal::Keypoint2D, hal::kNumKeypoints>& judged,
-                                    const std::array<hal::Keypoint2D, hal::kNumKeypoints>& measured, int width_px,
-                                    int height_px, double min_score, double margin_px);
 
 /// COCO name of a joint ("left_hip"), for reasons printed to people.
 std::string_view keypointName(hal::CocoKeypoint k);
