@@ -553,9 +553,9 @@ SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid,
   // The other people, as the final check predicts them (PersonMotion::otherAt), from the search's start.
   std::array<MovingPerson, kMaxSearchPeople> people{};
   std::size_t people_count = 0;
-  if (params_.min_bystander_distance_m > 0.0) {
+  if (params_.min_bystander_distance_m > 0.0 && person.otherCount() > 0) {
+    const double since_s = rt::nsToSeconds(start_ns - person.people->stamp_ns);
     for (std::size_t i = 0; i < person.otherCount() && people_count < people.size(); ++i) {
-      const double since_s = rt::nsToSeconds(start_ns - person.people->stamp_ns);
       people[people_count++] = {person.otherAt(i, start_ns).head<2>(), person.people->others[i].v_W_mps.head<2>(),
                                 std::max(0.0, person.horizon_s - since_s)};
     }

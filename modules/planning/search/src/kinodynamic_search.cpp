@@ -304,8 +304,8 @@ bool KinodynamicSearch::clearOfPeople(const Eigen::Vector3d& a, double ta_s, con
                                       double tb_s) const {
   if (people_count_ == 0 || !(people_clearance_m_ > 0.0)) return true;  // none, or no clearance to keep
   // Points along the chord (position and time linear in between) no farther apart than a quarter of the
-  // clearance: a chord can be a whole primitive long at speed.
-  // ... and no more than kPeopleStepS apart in time: someone walks into a drone that hovers (a == b).
+  // clearance (a chord can be a whole primitive long at speed) nor kPeopleStepS in time (someone walks into a
+  // drone that hovers: a == b).
   constexpr double kPeopleStepS = 0.05;
   const int steps = std::max({1, static_cast<int>(std::ceil((b - a).head<2>().norm() / (0.25 * people_clearance_m_))),
                               static_cast<int>(std::ceil((tb_s - ta_s) / kPeopleStepS))});
