@@ -42,14 +42,16 @@ class KeypointObserver final : public ViewObserver {
   hal::sim::KeypointCameraParams camera_;
 };
 
-/// A rendered image through the real detector (the most confident person).
+/// A rendered image of one of the cast's people through the real detector (the most confident person).
 class ImageObserver final : public ViewObserver {
  public:
   ImageObserver(hal::sim::SceneRenderer renderer, hal::sim::ObstacleWorld world, perception::Detector detector)
       : renderer_(std::move(renderer)), world_(std::move(world)), detector_(std::move(detector)) {}
   rt::Expected<std::optional<hal::PersonDetection>> observe(const hal::sim::CalibrationView& view,
-                                                            std::mt19937_64& /*rng*/) override {
-    renderer_.render(world_, view.T_WC, &view.person, image_, scratch_);
+                                                            std::mt19937_64& rng) override {
+    // Each view shows one person of the cast, drawn at random: the fit sees every look.
+    const std::size_t who = static_cast<std::size_t>(rng() % renderer_.castSize());
+    renderer_.render(world_, view.T_WC, &view.person, image_, scratch_, who);
     auto out = detector_.detectFrame(image_, detector_.params().tracking_model);
     if (!out) return out.error();
     if (out->count == 0) return std::optional<hal::PersonDetection>();
@@ -92,7 +94,7 @@ int datasetCommand(const ParsedArgs& args) {
   } else {
     hal::sim::SceneRenderParams render_params;
     render_params.intrinsics = intrinsics;
-    auto renderer = hal::sim::SceneRenderer::create(render_params, spec.gimbal_camera.person_sprite);
+    auto renderer = hal::sim::SceneRenderer::create(render_params, spec.gimbal_camera.cast);
     if (!renderer) return failCommand("dataset", renderer.error().message);
     auto world = hal::sim::ObstacleWorld::create({}, {});
     if (!world) return failCommand("dataset", world.error().message);

@@ -79,19 +79,23 @@ ImageFrameHandle SimGimbalCamera::grab(TimeNs now_ns) {
   frame->stamp_ns = newest->stamp_ns;
   frame->sequence = newest->sequence;
   frame->intrinsics = renderer->params().intrinsics;
-  if (newest->bystander_count == 0) {
-    renderer->render(sim_->obstacles(), newest->T_WC, occluded ? nullptr : &newest->person, frame->bgr, scratch_);
-  } else {  // Bystanders in their own clothes (look-alikes in the target's photo's).
-    std::array<RenderedPerson, kMaxExposureBystanders + 1> persons{};
-    persons[0].state = occluded ? nullptr : &newest->person;
-    for (std::size_t i = 0; i < newest->bystander_count; ++i) {
-      const Bystander& b = sim_->scenario().bystanders.people[newest->bystander_ids[i] - 1];
-      persons[i + 1] = RenderedPerson{&newest->bystanders[i], !b.look_alike, clothingBgr(b.clothing)};
-    }
-    renderer->render(sim_->obstacles(), newest->T_WC,
-                     std::span<const RenderedPerson>(persons.data(), newest->bystander_count + 1), frame->bgr,
-                     scratch_);
+  // The target wears the scenario's person of the cast; a look-alike the same; every other bystander
+  // another person of the cast (by their id), or, with a cast of one, the same photo recoloured.
+  const std::size_t target = sim_->scenario().spec.gimbal_camera.target_person;
+  const std::size_t cast_size = renderer->castSize();
+  std::array<RenderedPerson, kMaxExposureBystanders + 1> persons{};
+  persons[0] = RenderedPerson{occluded ? nullptr : &newest->person, target};
+  for (std::size_t i = 0; i < newest->bystander_count; ++i) {
+    const std::size_t id = newest->bystander_ids[i];
+    const Bystander& b = sim_->scenario().bystanders.people[id - 1];
+    RenderedPerson& look = persons[i + 1];
+    look.state = &newest->bystanders[i];
+    look.person = castPersonFor(id, b.look_alike, target, cast_size);
+    look.recolour = !b.look_alike && cast_size == 1;
+    look.clothing_bgr = clothingBgr(b.clothing);
   }
+  renderer->render(sim_->obstacles(), newest->T_WC,
+                   std::span<const RenderedPerson>(persons.data(), newest->bystander_count + 1), frame->bgr, scratch_);
   last_stamp_ns_ = newest->stamp_ns;
   return frame;
 }

@@ -52,7 +52,7 @@ rt::Expected<std::unique_ptr<Simulation>> Simulation::create(const ScenarioInsta
   if (s.gimbal_camera.mode == GimbalCameraMode::kImage) {
     SceneRenderParams render_params;
     render_params.intrinsics = s.gimbal_camera.camera.intrinsics;
-    auto created = SceneRenderer::create(render_params, s.gimbal_camera.person_sprite);
+    auto created = SceneRenderer::create(render_params, s.gimbal_camera.cast);
     if (!created) return rt::Error{s.source + ": sensors.gimbal_camera: " + created.error().message};
     renderer = std::move(created.value());
   }

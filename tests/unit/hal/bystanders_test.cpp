@@ -408,10 +408,9 @@ TEST(Bystanders, AListedPathThroughAGeneratedTreeIsAnErrorOfThatSeed) {
       << inst.error().message;
 }
 
-TEST(Bystanders, ImageModeDrawsANearerBystanderOverTheTargetInItsOwnClothes) {
-  if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) {
-    GTEST_SKIP() << PersonSpriteSpec{}.image_path << " is missing: install the Debian package opencv-doc";
-  }
+// The image-mode frame of a bystander 3 m ahead of a target 6 m ahead (both standing), and the
+// simulation; cast_of_one: the cast is cut to the target's photo alone.
+std::pair<ImageFrameHandle, std::shared_ptr<Simulation>> nearBystanderFrame(bool cast_of_one) {
   // Given the target standing 6 m ahead and a bystander in green 3 m ahead, on the same line
   const std::string text = crowdYaml(
       "sensors:\n  gimbal_camera:\n    mode: image\n    rate_hz: 10\n    latency_s: 0.04\n"
@@ -421,30 +420,70 @@ TEST(Bystanders, ImageModeDrawsANearerBystanderOverTheTargetInItsOwnClothes) {
       false, 6.0);
   SimulationOptions options;
   options.render_depth = false;
+  ScenarioInstance inst = crowdInstance(text);
+  if (cast_of_one) inst.spec.gimbal_camera.cast.people.resize(1);
   std::shared_ptr<Simulation> sim =
-      aerotrack::test::require(Simulation::create(crowdInstance(text), options, 0), "Simulation::create");
+      aerotrack::test::require(Simulation::create(std::move(inst), options, 0), "Simulation::create");
   SimGimbalCamera camera(sim);
   ImageFrameHandle frame;
   for (rt::TimeNs t = 0; t <= rt::secondsToNs(0.3) && !frame; t += 5'000'000) {
     sim->step(t);
     frame = camera.grab(t);
   }
-  ASSERT_TRUE(frame);
-  // Then the bystander's torso (its mid-shoulders and mid-hips' midpoint, projected) is green: the
-  // recoloured bystander is drawn over the target's photo behind it
-  const PersonState by = sim->personStateAt(1, frame->stamp_ns);
+  return {std::move(frame), sim};
+}
+
+/// Mean colour of the 5 x 5 pixels around the projected torso centre of person `id`.
+cv::Vec3d torsoColour(const cv::Mat& bgr, const Simulation& sim, std::size_t id, rt::TimeNs stamp_ns,
+                      const CameraIntrinsics& intrinsics) {
+  const PersonState by = sim.personStateAt(id, stamp_ns);
   const Eigen::Vector3d torso_W =
       0.25 *
       (by.keypoints_W_m[index(CocoKeypoint::kLeftShoulder)] + by.keypoints_W_m[index(CocoKeypoint::kRightShoulder)] +
        by.keypoints_W_m[index(CocoKeypoint::kLeftHip)] + by.keypoints_W_m[index(CocoKeypoint::kRightHip)]);
-  const auto uv = project(sim->truth().T_WC.inverse() * torso_W, frame->intrinsics);
-  ASSERT_TRUE(uv);
+  const auto uv = project(sim.truth().T_WC.inverse() * torso_W, intrinsics);
   cv::Vec3d mean(0, 0, 0);
+  if (!uv) return mean;
   for (int dv = -2; dv <= 2; ++dv)
     for (int du = -2; du <= 2; ++du) {
-      const cv::Vec3b px = frame->bgr.at<cv::Vec3b>(static_cast<int>(uv->y()) + dv, static_cast<int>(uv->x()) + du);
+      const cv::Vec3b px = bgr.at<cv::Vec3b>(static_cast<int>(uv->y()) + dv, static_cast<int>(uv->x()) + du);
       for (int ch = 0; ch < 3; ++ch) mean[ch] += px[ch] / 25.0;
     }
+  return mean;
+}
+
+bool castInstalled() {
+  for (const PersonSpriteSpec& p : defaultCast().people) {
+    if (!std::filesystem::exists(p.image_path)) return false;
+  }
+  return true;
+}
+
+TEST(Bystanders, ImageModeDrawsANearerBystanderOverTheTargetAsAnotherPersonOfTheCast) {
+  if (!castInstalled()) GTEST_SKIP() << "opencv-doc's sample data is missing: install the Debian package opencv-doc";
+  // Given the default cast, the target standing 6 m ahead and a bystander 3 m ahead on the same line
+  const auto [frame, sim] = nearBystanderFrame(false);
+  ASSERT_TRUE(frame);
+  // When the bystander's person of the cast is drawn alone from the same pose
+  const SceneRenderer& renderer = *sim->renderer();
+  const std::size_t who = castPersonFor(1, false, 0, renderer.castSize());
+  ASSERT_NE(who, 0U);
+  const PersonState by = sim->personStateAt(1, frame->stamp_ns);
+  cv::Mat alone;
+  RenderScratch scratch;
+  renderer.render(sim->obstacles(), sim->truth().T_WC, &by, alone, scratch, who);
+  // Then the frame shows that person at the bystander's torso, over the target behind them
+  const cv::Vec3d in_frame = torsoColour(frame->bgr, *sim, 1, frame->stamp_ns, frame->intrinsics);
+  const cv::Vec3d expected = torsoColour(alone, *sim, 1, frame->stamp_ns, frame->intrinsics);
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(in_frame[ch], expected[ch], 1.0) << ch;
+}
+
+TEST(Bystanders, WithACastOfOneABystanderWearsTheTargetsPhotoInItsOwnClothes) {
+  if (!castInstalled()) GTEST_SKIP() << "opencv-doc's sample data is missing: install the Debian package opencv-doc";
+  const auto [frame, sim] = nearBystanderFrame(true);
+  ASSERT_TRUE(frame);
+  // Then the bystander's torso is green: the recoloured bystander is drawn over the target's photo
+  const cv::Vec3d mean = torsoColour(frame->bgr, *sim, 1, frame->stamp_ns, frame->intrinsics);
   EXPECT_GT(mean[1], 1.3 * mean[0]) << mean[0] << " " << mean[1] << " " << mean[2];
   EXPECT_GT(mean[1], 1.3 * mean[2]) << mean[0] << " " << mean[1] << " " << mean[2];
 }

@@ -15,9 +15,7 @@
 namespace aerotrack::hal::sim {
 namespace {
 
-constexpr double kNearM = 0.05;         // Obstacle parts nearer than this (camera z) are clipped.
-constexpr double kSpriteNearM = 0.1;    // The person is drawn only if this far in front.
-constexpr double kMirrorLateral = 0.3;  // |sideways component| of the facing direction that mirrors.
+constexpr double kNearM = 0.05;  // Obstacle parts nearer than this (camera z) are clipped.
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr double kNoHit = std::numeric_limits<double>::infinity();
 constexpr int kGroundSize = 512;        // texels along each side of the ground texture's period
@@ -63,27 +61,6 @@ void store(cv::Vec3b& px, const Colour& c) {
   px[2] = toByte(c[2]);
 }
 
-/// Image right for an image "down" direction (u right, v down): down (0, 1) gives right (1, 0).
-Eigen::Vector2d rightOf(const Eigen::Vector2d& down) {
-  return {down.y(), -down.x()};
-}
-
-/// Bilinear sample of a premultiplied BGRA float image at continuous pixel coordinates (pixel
-/// centres at i + 0.5); transparent outside.
-cv::Vec4f sample(const cv::Mat& img, double x, double y) {
-  const double fx = x - 0.5, fy = y - 0.5;
-  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
-  const float ax = static_cast<float>(fx - x0), ay = static_cast<float>(fy - y0);
-  cv::Vec4f out(0.0F, 0.0F, 0.0F, 0.0F);
-  const std::array<float, 4> w = {(1.0F - ax) * (1.0F - ay), ax * (1.0F - ay), (1.0F - ax) * ay, ax * ay};
-  for (int n = 0; n < 4; ++n) {
-    const int xi = x0 + (n & 1), yi = y0 + (n >> 1);
-    if (xi < 0 || yi < 0 || xi >= img.cols || yi >= img.rows) continue;
-    out += w[static_cast<std::size_t>(n)] * img.at<cv::Vec4f>(yi, xi);
-  }
-  return out;
-}
-
 }  // namespace
 
 rt::Status validate(const SceneRenderParams& p) {
@@ -103,9 +80,9 @@ rt::Status validate(const SceneRenderParams& p) {
   return rt::ok();
 }
 
-rt::Expected<SceneRenderer> SceneRenderer::create(const SceneRenderParams& params, const PersonSpriteSpec& sprite) {
+rt::Expected<SceneRenderer> SceneRenderer::create(const SceneRenderParams& params, const PersonCastSpec& cast) {
   if (auto status = validate(params); !status) return status.error();
-  auto loaded = PersonSprite::load(sprite);
+  auto loaded = loadCast(cast);
   if (!loaded) return loaded.error();
   // The ground texture: 1.6 m tiles, 0.2 m cells and 0.05 m texels of hashed brightness, periodic.
   auto ground = std::make_shared<GroundTexture>();
@@ -134,11 +111,11 @@ rt::Expected<SceneRenderer> SceneRenderer::create(const SceneRenderParams& param
     }
     level = std::move(down);
   }
-  return SceneRenderer(params, std::make_shared<const PersonSprite>(std::move(loaded.value())), std::move(ground));
+  return SceneRenderer(params, std::move(loaded.value()), std::move(ground));
 }
 
 void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const PersonState* person,
-                           cv::Mat& bgr, RenderScratch& scratch) const {
+                           cv::Mat& bgr, RenderScratch& scratch, std::size_t cast_index) const {
   const CameraIntrinsics& k = params_.intrinsics;
   bgr.create(k.height_px, k.width_px, CV_8UC3);
   scratch.depth_m.create(k.height_px, k.width_px, CV_32FC1);
@@ -147,9 +124,9 @@ void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& 
   scratch.obstacle_id.setTo(cv::Scalar(-1));
   rasterObstacles(world, T_WC, scratch);
   shade(world, T_WC, scratch, bgr);
-  if (person != nullptr) {
-    const SpritePlacement placement = placeSprite(*person, T_WC);
-    if (placement.visible) drawPerson(placement, bgr, scratch.depth_m, RenderedPerson{person});
+  if (person != nullptr && cast_index < sprites_.size()) {
+    const SpritePlacement placement = placeSprite(*person, T_WC, cast_index);
+    if (placement.visible) drawPerson(placement, bgr, scratch.depth_m, RenderedPerson{person, cast_index});
   }
 }
 
@@ -162,7 +139,8 @@ void SceneRenderer::render(const ObstacleWorld& world, const Eigen::Isometry3d& 
   std::size_t count = 0;
   for (std::size_t i = 0; i < persons.size() && count < kMaxDrawn; ++i) {
     if (persons[i].state == nullptr) continue;
-    placements[count] = placeSprite(*persons[i].state, T_WC);
+    if (persons[i].person >= sprites_.size()) continue;
+    placements[count] = placeSprite(*persons[i].state, T_WC, persons[i].person);
     if (!placements[count].visible) continue;
     order[count] = i;
     ++count;
@@ -333,110 +311,6 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
         continue;
       }
       store(row[u], colour);
-    }
-  }
-}
-
-SpritePlacement SceneRenderer::placeSprite(const PersonState& person, const Eigen::Isometry3d& T_WC) const {
-  SpritePlacement out;
-  const CameraIntrinsics& k = params_.intrinsics;
-  const Eigen::Isometry3d T_CW = T_WC.inverse(Eigen::Isometry);
-  const auto& kp = person.keypoints_W_m;
-  const Eigen::Vector3d neck_C =
-      T_CW * (0.5 * (kp[index(CocoKeypoint::kLeftShoulder)] + kp[index(CocoKeypoint::kRightShoulder)]));
-  const Eigen::Vector3d hip_C = T_CW * (0.5 * (kp[index(CocoKeypoint::kLeftHip)] + kp[index(CocoKeypoint::kRightHip)]));
-  const Eigen::Vector3d ground_C = T_CW * person.p_W_m;
-  if (neck_C.z() < kSpriteNearM || hip_C.z() < kSpriteNearM || ground_C.z() < kSpriteNearM) return out;
-  const auto proj = [&](const Eigen::Vector3d& p_C) {
-    return Eigen::Vector2d(k.cx_px + k.fx_px * p_C.x() / p_C.z(), k.cy_px + k.fy_px * p_C.y() / p_C.z());
-  };
-  out.neck_px = proj(neck_C);
-  out.mid_hip_px = proj(hip_C);
-  const Eigen::Vector2d torso_px = out.mid_hip_px - out.neck_px;
-  const PersonSprite& s = *sprite_;
-  const Eigen::Vector2d sprite_torso = s.midHipPx() - s.neckPx();
-  if (torso_px.norm() < 1e-3) return out;
-  out.down = torso_px.normalized();
-  out.scale = torso_px.norm() / sprite_torso.norm();
-  const Eigen::Vector2d d_s = sprite_torso.normalized();
-  const Eigen::Vector2d r_s = rightOf(d_s);
-  const double sprite_leg = (s.solesPx() - s.midHipPx()).dot(d_s);
-  const double leg = (proj(ground_C) - out.mid_hip_px).dot(out.down);
-  out.leg_scale = std::clamp(leg / sprite_leg, 0.5 * out.scale, 2.5 * out.scale);
-  out.soles_px = out.mid_hip_px + out.leg_scale * sprite_leg * out.down;
-  out.depth_m = hip_C.z();
-  // Mirror when the person walks clearly towards the image side the photo's person does not face.
-  const Eigen::Vector3d facing_C =
-      T_CW.linear() * Eigen::Vector3d(std::cos(person.heading_rad), std::sin(person.heading_rad), 0.0);
-  out.mirrored = s.turnedRight() ? facing_C.x() < -kMirrorLateral : facing_C.x() > kMirrorLateral;
-  // Image bounds of the silhouette: its (a, b) box in the sprite's torso frame, mapped piecewise.
-  const Eigen::Vector4d& sb = s.silhouetteBoundsPx();
-  double a_min = std::numeric_limits<double>::infinity(), a_max = -a_min, b_min = a_min, b_max = -a_min;
-  for (const Eigen::Vector2d& c : {Eigen::Vector2d(sb[0], sb[1]), Eigen::Vector2d(sb[2], sb[1]),
-                                   Eigen::Vector2d(sb[0], sb[3]), Eigen::Vector2d(sb[2], sb[3])}) {
-    const double a = (c - s.midHipPx()).dot(r_s), b = (c - s.midHipPx()).dot(d_s);
-    a_min = std::min(a_min, a), a_max = std::max(a_max, a), b_min = std::min(b_min, b), b_max = std::max(b_max, b);
-  }
-  const Eigen::Vector2d r_i = rightOf(out.down) * (out.mirrored ? -1.0 : 1.0);
-  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min, v_min = u_min, v_max = -u_min;
-  for (const double a : {a_min, a_max}) {
-    for (const double b : {b_min, 0.0, b_max}) {
-      const Eigen::Vector2d p =
-          out.mid_hip_px + out.scale * a * r_i + (b <= 0.0 ? out.scale : out.leg_scale) * b * out.down;
-      u_min = std::min(u_min, p.x()), u_max = std::max(u_max, p.x());
-      v_min = std::min(v_min, p.y()), v_max = std::max(v_max, p.y());
-    }
-  }
-  out.bounds_px = Eigen::Vector4d(u_min, v_min, u_max, v_max);
-  out.visible = true;
-  return out;
-}
-
-void SceneRenderer::drawPerson(const SpritePlacement& pl, cv::Mat& bgr, const cv::Mat& depth_m,
-                               const RenderedPerson& look) const {
-  const CameraIntrinsics& k = params_.intrinsics;
-  const PersonSprite& s = *sprite_;
-  const int u0 = std::max(0, static_cast<int>(std::floor(pl.bounds_px[0])) - 1);
-  const int v0 = std::max(0, static_cast<int>(std::floor(pl.bounds_px[1])) - 1);
-  const int u1 = std::min(k.width_px - 1, static_cast<int>(std::ceil(pl.bounds_px[2])) + 1);
-  const int v1 = std::min(k.height_px - 1, static_cast<int>(std::ceil(pl.bounds_px[3])) + 1);
-  if (u0 > u1 || v0 > v1) return;
-  // Pyramid level: the finest whose pixels are at least as large as an image pixel's footprint / 2.
-  const double minification = 1.0 / std::min(pl.scale, pl.leg_scale);
-  const int level = std::clamp(static_cast<int>(std::floor(std::log2(std::max(minification, 1.0)))), 0,
-                               static_cast<int>(s.levels().size()) - 1);
-  const cv::Mat& img = s.levels()[static_cast<std::size_t>(level)];
-  const double level_scale = std::ldexp(1.0, -level);
-  const Eigen::Vector2d d_s = (s.midHipPx() - s.neckPx()).normalized();
-  const Eigen::Vector2d r_s = rightOf(d_s);
-  const Eigen::Vector2d r_i = rightOf(pl.down);
-  const double mirror = pl.mirrored ? -1.0 : 1.0;
-  const float depth = static_cast<float>(pl.depth_m);
-  // Recolouring: below the neck (sprite px along the torso axis from the mid-hip; a little under the
-  // neck keeps the chin), luminance times the clothing colour, which a gain of 1.6 brings back to
-  // about the photo's brightness.
-  const double clothes_from_b = -0.9 * (s.midHipPx() - s.neckPx()).norm();
-  for (int v = v0; v <= v1; ++v) {
-    cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
-    const float* depth_row = depth_m.ptr<float>(v);
-    for (int u = u0; u <= u1; ++u) {
-      if (depth_row[u] <= depth) continue;  // an obstacle is in front
-      const Eigen::Vector2d rel = Eigen::Vector2d(u + 0.5, v + 0.5) - pl.mid_hip_px;
-      const double a = mirror * rel.dot(r_i) / pl.scale;
-      const double along = rel.dot(pl.down);
-      const double b = along <= 0.0 ? along / pl.scale : along / pl.leg_scale;
-      const Eigen::Vector2d q = (s.midHipPx() + a * r_s + b * d_s) * level_scale;
-      cv::Vec4f c = sample(img, q.x(), q.y());
-      if (c[3] <= 1e-3F) continue;
-      if (look.recolour && b > clothes_from_b) {
-        const float luminance = 0.114F * c[0] + 0.587F * c[1] + 0.299F * c[2];
-        for (int ch = 0; ch < 3; ++ch) c[ch] = std::min(c[3], 1.6F * luminance * look.clothing_bgr[ch]);
-      }
-      cv::Vec3b& px = row[u];
-      for (int ch = 0; ch < 3; ++ch) {
-        const float value = 255.0F * c[ch] + (1.0F - c[3]) * static_cast<float>(px[ch]);
-        px[ch] = toByte(static_cast<double>(value));
-      }
     }
   }
 }

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   }
   hal::sim::SceneRenderParams params;
   params.intrinsics = trial->spec.gimbal_camera.camera.intrinsics;
-  auto renderer = hal::sim::SceneRenderer::create(params, trial->spec.gimbal_camera.person_sprite);
+  auto renderer = hal::sim::SceneRenderer::create(params, trial->spec.gimbal_camera.cast);
   if (!renderer) {
     std::fprintf(stderr, "render_frames: %s\n", renderer.error().message.c_str());
     return 1;
@@ -70,13 +70,16 @@ int main(int argc, char** argv) {
     const auto& truth = (*sim)->truth();
     const Eigen::Isometry3d T_WC = (*sim)->cameraPose(truth.drone, truth.gimbal_angle_rad);
     const hal::sim::PersonState person = (*sim)->personAt(t);
-    // Everyone: the target and the bystanders in their own clothes (look-alikes in the target's).
+    // Everyone: the target and the bystanders, each wearing their person of the cast.
     std::vector<hal::sim::PersonState> states;
     for (std::size_t id = 0; id < (*sim)->personCount(); ++id) states.push_back((*sim)->personStateAt(id, t));
     std::vector<hal::sim::RenderedPerson> everyone;
+    const std::size_t target = trial->spec.gimbal_camera.target_person;
     for (std::size_t id = 0; id < states.size(); ++id) {
       const hal::sim::Bystander* b = id == 0 ? nullptr : &trial->bystanders.people[id - 1];
-      everyone.push_back({&states[id], b != nullptr && !b->look_alike,
+      const bool look_alike = b != nullptr && b->look_alike;
+      everyone.push_back({&states[id], hal::sim::castPersonFor(id, look_alike, target, renderer->castSize()),
+                          b != nullptr && !look_alike && renderer->castSize() == 1,
                           b != nullptr ? hal::sim::clothingBgr(b->clothing) : Eigen::Vector3f::Ones()});
     }
     const auto begin = std::chrono::steady_clock::now();
@@ -86,7 +89,7 @@ int main(int argc, char** argv) {
     std::snprintf(name, sizeof(name), "/frame_%02d.png", frame);
     cv::imwrite(out_dir + name, bgr);
     // A copy with the projected keypoints (green) and the sprite's torso placement (red).
-    const hal::sim::SpritePlacement pl = renderer->placeSprite(person, T_WC);
+    const hal::sim::SpritePlacement pl = renderer->placeSprite(person, T_WC, target);
     const auto uv = [&](const Eigen::Vector3d& p_W) {
       const auto q = hal::sim::project(T_WC.inverse() * p_W, params.intrinsics);
       return q ? cv::Point(static_cast<int>(q->x()), static_cast<int>(q->y())) : cv::Point(-100, -100);

@@ -2,10 +2,13 @@
 // (rt::ConfigNode); optional sections keep the defaults written in scenario.hpp.
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "aerotrack/hal/sim/scenario.hpp"
+
+#include "aerotrack/hal/sim/cast_file.hpp"
 #include "aerotrack/rt/config_node.hpp"
 
 namespace aerotrack::hal::sim {
@@ -179,34 +182,6 @@ void parsePerson(const ConfigNode& n, ScenarioSpec& s) {
   n.finish();
 }
 
-/// sensors.gimbal_camera.person_sprite: every key required (the defaults are in person_sprite.hpp).
-PersonSpriteSpec parsePersonSprite(const ConfigNode& n) {
-  PersonSpriteSpec p;
-  p.image_path = n.getString("image");
-  const auto crop = n.getDoubleList("crop_px", 4, 0.0, 1e5);
-  for (std::size_t i = 0; i < 4; ++i) {
-    if (crop[i] != std::floor(crop[i])) n.fail("crop_px", "expected whole pixels [x, y, width, height]");
-    p.crop_px[i] = static_cast<int>(crop[i]);
-  }
-  p.neck_px = vec2(n, "neck_px", 0.0, 1e5);
-  p.mid_hip_px = vec2(n, "mid_hip_px", 0.0, 1e5);
-  p.soles_px = vec2(n, "soles_px", 0.0, 1e5);
-  p.turned_right = n.getBool("turned_right");
-  const auto strokes = [&](const std::string& key) {
-    std::vector<std::array<double, 4>> out;
-    for (const auto& row : n.getDoubleRows(key, 4, 0.0, 1e5)) out.push_back({row[0], row[1], row[2], row[3]});
-    return out;
-  };
-  p.foreground_strokes_px = strokes("foreground_strokes_px");
-  p.background_strokes_px = strokes("background_strokes_px");
-  p.foreground_stroke_width_px = n.getDoubleOr("foreground_stroke_width_px", p.foreground_stroke_width_px, 1.0, 50.0);
-  p.background_stroke_width_px = n.getDoubleOr("background_stroke_width_px", p.background_stroke_width_px, 1.0, 50.0);
-  p.grabcut_iterations = n.getIntOr("grabcut_iterations", p.grabcut_iterations, 1, 20);
-  if (const rt::Status status = validate(p); !status) n.fail("crop_px", status.error().message);
-  n.finish();
-  return p;
-}
-
 /// sensors.odometry.drift: every key optional (default 0: no drift).
 OdometryDriftSpec parseOdometryDrift(const ConfigNode& n) {
   OdometryDriftSpec d;
@@ -258,7 +233,22 @@ void parseSensors(const ConfigNode& n, ScenarioSpec& s) {
       g.mode = c.getEnum("mode", {"keypoints", "image"}) == "image" ? GimbalCameraMode::kImage
                                                                     : GimbalCameraMode::kKeypoints;
     }
-    if (c.has("person_sprite")) g.person_sprite = parsePersonSprite(c.child("person_sprite"));
+    // Optional: the people image mode draws (a cast file, relative to the scenario's folder) and the
+    // target among them (default: the cast's first).
+    if (c.has("people")) {
+      const std::string file = c.getString("people");
+      const std::filesystem::path path = std::filesystem::path(file).is_absolute()
+                                             ? std::filesystem::path(file)
+                                             : std::filesystem::path(s.source).parent_path() / file;
+      auto cast = loadCastFile(path.lexically_normal().string());
+      if (!cast) c.fail("people", cast.error().message);
+      g.cast = std::move(cast.value());
+    }
+    if (c.has("target_person")) {
+      const auto found = findPerson(g.cast, c.getString("target_person"));
+      if (!found) c.fail("target_person", found.error().message);
+      g.target_person = found.value();
+    }
     g.rate_hz = c.getDouble("rate_hz", 1.0, 240.0);
     g.latency_s = c.getDouble("latency_s", 0.0, 1.0);
     g.mount_B_m = vec3Or(c, "mount_m", g.mount_B_m);

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -72,40 +75,75 @@ TEST(ImageModeConfig, ModeDefaultsToKeypointsAndIsReadStrictly) {
   EXPECT_NE(bad.error().message.find("sensors.gimbal_camera.mode"), std::string::npos) << bad.error().message;
 }
 
-TEST(ImageModeConfig, APersonSpriteBlockIsReadStrictly) {
-  const std::string sprite = R"(    person_sprite:
-      image: /somewhere/photo.png
-      crop_px: [10, 20, 100, 300]
-      neck_px: [50, 60]
-      mid_hip_px: [52, 150]
-      soles_px: [55, 300]
-      turned_right: false
-      foreground_strokes_px: [[50, 60, 52, 150]]
-      background_strokes_px: []
-)";
-  const auto spec =
-      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys + sprite), "e.yaml");
-  ASSERT_TRUE(spec.has_value()) << spec.error().message;
-  const PersonSpriteSpec& s = spec->gimbal_camera.person_sprite;
-  EXPECT_EQ(s.image_path, "/somewhere/photo.png");
-  EXPECT_EQ(s.crop_px[3], 300);
-  EXPECT_EQ(s.mid_hip_px, Eigen::Vector2d(52, 150));
-  EXPECT_FALSE(s.turned_right);
-  EXPECT_EQ(s.foreground_strokes_px.size(), 1U);
-  EXPECT_TRUE(s.background_strokes_px.empty());
+// A cast file of two people (the default cast's first two) written to the test's temporary folder.
+std::string writeCastFile(const std::string& name, const std::string& extra = "") {
+  const PersonCastSpec cast = defaultCast();
+  std::ostringstream out;
+  out << "people:\n";
+  for (std::size_t i = 0; i < 2; ++i) {
+    const PersonSpriteSpec& p = cast.people[i];
+    out << "  - name: " << (i == 0 ? "a" : "b") << "\n    image: " << p.image_path << "\n";
+    if (p.frame >= 0) out << "    frame: " << p.frame << "\n";
+    out << "    view: " << toString(p.view) << "\n    crop_px: [" << p.crop_px[0] << ", " << p.crop_px[1] << ", "
+        << p.crop_px[2] << ", " << p.crop_px[3] << "]\n    keypoints_px: [";
+    for (std::size_t k = 0; k < kNumKeypoints; ++k)
+      out << (k ? ", " : "") << "[" << p.keypoints_px[k].x() << ", " << p.keypoints_px[k].y() << "]";
+    out << "]\n";
+  }
+  out << extra;
+  const std::string path = testing::TempDir() + "/" + name;
+  std::ofstream(path) << out.str();
+  return path;
+}
 
-  const auto misplaced =
-      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n" + kCameraKeys +
-                                     "    person_sprite:\n      image: x.png\n      crop_px: [0, 0, 10, 10]\n"),
-                        "f.yaml");
-  EXPECT_FALSE(misplaced.has_value());
+TEST(ImageModeConfig, ACastFileAndTheTargetPersonAreReadStrictly) {
+  // Given a cast file of two people, and scenarios naming it and their target
+  const std::string path = writeCastFile("cast_ok.yaml");
+  const auto with = [&](const std::string& keys) {
+    return parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys + keys),
+                             "e.yaml");
+  };
+  const auto spec = with("    people: " + path + "\n    target_person: b\n");
+
+  // Then the cast is read and the target is the person named
+  ASSERT_TRUE(spec.has_value()) << spec.error().message;
+  ASSERT_EQ(spec->gimbal_camera.cast.people.size(), 2U);
+  EXPECT_EQ(spec->gimbal_camera.cast.people[1].name, "b");
+  EXPECT_EQ(spec->gimbal_camera.cast.people[1].frame, defaultCast().people[1].frame);
+  EXPECT_EQ(spec->gimbal_camera.target_person, 1U);
+  // ... and without the keys, the default cast's first person is the target
+  const auto plain = with("");
+  ASSERT_TRUE(plain.has_value());
+  EXPECT_EQ(plain->gimbal_camera.cast.people.size(), defaultCast().people.size());
+  EXPECT_EQ(plain->gimbal_camera.target_person, 0U);
+
+  // And a missing file, an unknown person, a misspelt key, a keypoint outside the crop and an empty
+  // cast are one-line errors naming the key
+  const auto expectError = [&](const std::string& keys, const std::string& needle) {
+    const auto bad = with(keys);
+    ASSERT_FALSE(bad.has_value()) << keys;
+    EXPECT_NE(bad.error().message.find(needle), std::string::npos) << bad.error().message;
+    EXPECT_EQ(bad.error().message.find('\n'), std::string::npos) << bad.error().message;
+  };
+  expectError("    people: /nonexistent/cast.yaml\n", "sensors.gimbal_camera.people");
+  expectError("    people: " + path + "\n    target_person: c\n", "no person named c");
+  expectError("    people: " + writeCastFile("cast_typo.yaml", "    veiw: front\n") + "\n", "veiw");
+  std::ostringstream read;
+  read << std::ifstream(path).rdbuf();
+  const std::string text = read.str();
+  const std::string far = testing::TempDir() + "/cast_far.yaml";
+  std::ofstream(far) << std::regex_replace(text, std::regex(R"(\[95, 115\])"), "[9500, 115]");
+  expectError("    people: " + far + "\n", "keypoint 0 lies outside crop_px");
+  const std::string empty = testing::TempDir() + "/cast_empty.yaml";
+  std::ofstream(empty) << "people: []\n";
+  expectError("    people: " + empty + "\n", "the cast is empty");
 }
 
 TEST(ImageMode, AMissingPhotoFailsTheSimulationsCreation) {
   // Given an image-mode scenario whose sprite photo is missing
   auto spec = parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "g.yaml");
   ASSERT_TRUE(spec.has_value());
-  spec->gimbal_camera.person_sprite.image_path = "/nonexistent/sprite.png";
+  spec->gimbal_camera.cast.people[0].image_path = "/nonexistent/sprite.png";
   auto trial = instantiate(*spec, 1);
   ASSERT_TRUE(trial.has_value());
 
@@ -117,8 +155,8 @@ TEST(ImageMode, AMissingPhotoFailsTheSimulationsCreation) {
 }
 
 TEST(ImageMode, GrabDeliversFramesAtTheCameraRateStampedAtExposure) {
-  if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) {
-    GTEST_SKIP() << PersonSpriteSpec{}.image_path << " is missing: install the Debian package opencv-doc";
+  for (const PersonSpriteSpec& p : defaultCast().people) {
+    if (!std::filesystem::exists(p.image_path)) GTEST_SKIP() << p.image_path << " is missing: install opencv-doc";
   }
   // Given an image-mode camera at 10 Hz, 320 x 240, and its device polled at 200 Hz for 1.5 s
   const auto spec =

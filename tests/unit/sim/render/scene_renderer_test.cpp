@@ -1,8 +1,10 @@
-// Tests of the image-mode renderer (hal/sim/render/scene_renderer.hpp): the person sprite lands on the
-// projected torso of the keypoints, obstacles hide it pixel by pixel, nothing behind the camera is
-// drawn, rendering is deterministic, and a missing or corrupt photo is an error at construction.
+// Tests of the image-mode renderer (hal/sim/render/scene_renderer.hpp): every body part of every person
+// of the cast lands on its projected bone, arms and legs move with the gait, a person walking away
+// shows their back, obstacles hide people pixel by pixel, nothing behind the camera is drawn,
+// rendering is deterministic, and a missing or corrupt photo is an error at construction.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -60,22 +62,40 @@ cv::Mat changed(const cv::Mat& a, const cv::Mat& b, float threshold = 0.0F) {
   return sum > threshold;
 }
 
+bool castInstalled() {
+  for (const PersonSpriteSpec& p : defaultCast().people) {
+    if (!std::filesystem::exists(p.image_path)) return false;
+  }
+  return true;
+}
+
+// A person walking at 1.4 m/s through (x, 0) heading `heading_rad`, `phase_s` after passing it.
+PersonState walkingThrough(double x_m, double heading_rad, double phase_s) {
+  const Eigen::Vector2d dir(std::cos(heading_rad), std::sin(heading_rad));
+  const Eigen::Vector2d start = Eigen::Vector2d(x_m, 0.0) - 5.0 * dir;
+  const WalkingPerson walker = aerotrack::test::require(
+      WalkingPerson::create({}, {{start, 1.4}, {start + 10.0 * dir, 1.4}}), "WalkingPerson::create");
+  return walker.state(5.0 / 1.4 + phase_s);
+}
+
+Eigen::Vector2d applied(const Eigen::Matrix3d& H, const Eigen::Vector2d& p) {
+  const Eigen::Vector3d q = H * Eigen::Vector3d(p.x(), p.y(), 1.0);
+  return q.head<2>() / q.z();
+}
+
 class SceneRendererTest : public testing::Test {
  protected:
   // One renderer for the suite: loading segments the photo (a fraction of a second).
   static void SetUpTestSuite() {
-    if (!std::filesystem::exists(PersonSpriteSpec{}.image_path)) return;
-    auto created = SceneRenderer::create({}, PersonSpriteSpec{});
+    if (!castInstalled()) return;
+    auto created = SceneRenderer::create({}, defaultCast());
     if (created) shared_ = std::make_unique<SceneRenderer>(std::move(created.value()));
   }
   static void TearDownTestSuite() { shared_.reset(); }
 
   void SetUp() override {
-    const PersonSpriteSpec spec;
-    if (!std::filesystem::exists(spec.image_path)) {
-      GTEST_SKIP() << spec.image_path << " is missing: install the Debian package opencv-doc";
-    }
-    ASSERT_NE(shared_, nullptr) << "the default sprite did not load";
+    if (!castInstalled()) GTEST_SKIP() << "opencv-doc's sample data is missing: install the Debian package opencv-doc";
+    ASSERT_NE(shared_, nullptr) << "the default cast did not load";
     renderer_ = shared_.get();
   }
 
@@ -96,8 +116,13 @@ TEST_F(SceneRendererTest, SpriteTorsoAndMidHipMatchTheProjectedKeypoints) {
   Eigen::Isometry3d T_WC = lookAt({0.0, 0.7, 1.5}, {4.0, 0.0, 1.0});
   T_WC.linear() = T_WC.linear() * Eigen::AngleAxisd(0.087, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const CameraIntrinsics& k = renderer_->params().intrinsics;
-  const Eigen::Vector2d neck = projected(mid(person, K::kLeftShoulder, K::kRightShoulder), T_WC, k);
-  const Eigen::Vector2d hip = projected(mid(person, K::kLeftHip, K::kRightHip), T_WC, k);
+  // (the midpoints of the projected joints, as the detector reports them)
+  const auto mid_px = [&](K a, K b) -> Eigen::Vector2d {
+    return 0.5 *
+           (projected(person.keypoints_W_m[index(a)], T_WC, k) + projected(person.keypoints_W_m[index(b)], T_WC, k));
+  };
+  const Eigen::Vector2d neck = mid_px(K::kLeftShoulder, K::kRightShoulder);
+  const Eigen::Vector2d hip = mid_px(K::kLeftHip, K::kRightHip);
 
   // When the sprite is placed and the scene rendered with and without the person
   const SpritePlacement placement = renderer_->placeSprite(person, T_WC);
@@ -109,7 +134,9 @@ TEST_F(SceneRendererTest, SpriteTorsoAndMidHipMatchTheProjectedKeypoints) {
   EXPECT_LT((placement.mid_hip_px - hip).norm(), 1e-9);
   EXPECT_LT((placement.neck_px - neck).norm(), 1e-9);
   const PersonSprite& sprite = renderer_->sprite();
-  EXPECT_NEAR(placement.scale * (sprite.midHipPx() - sprite.neckPx()).norm(), (hip - neck).norm(), 1e-9);
+  const Eigen::Matrix3d& H_torso = placement.parts[static_cast<std::size_t>(BodyPart::kTorso)].H_sprite_image;
+  EXPECT_LT((applied(H_torso, neck) - sprite.neckPx()).norm(), 1e-6);
+  EXPECT_LT((applied(H_torso, hip) - sprite.midHipPx()).norm(), 1e-6);
   // ... and the drawn person covers the mid-hip and the neck, within the placement's bounds, with
   // their feet near the projected ground point under the pelvis.
   const auto covered = [&](const Eigen::Vector2d& p) {
@@ -188,7 +215,7 @@ TEST_F(SceneRendererTest, RenderingIsDeterministic) {
   // When it is rendered twice by one renderer and once by a second one built from the same photo
   const cv::Mat first = render(forest, T_WC, &person);
   const cv::Mat second = render(forest, T_WC, &person);
-  auto other = SceneRenderer::create({}, PersonSpriteSpec{});
+  auto other = SceneRenderer::create({}, defaultCast());
   ASSERT_TRUE(other.has_value());
   cv::Mat third;
   RenderScratch scratch;
@@ -199,13 +226,104 @@ TEST_F(SceneRendererTest, RenderingIsDeterministic) {
   EXPECT_EQ(cv::countNonZero(changed(first, third)), 0);
 }
 
+TEST_F(SceneRendererTest, EveryPartOfEveryPersonLandsOnItsProjectedBone) {
+  // Given each person of the cast walking towards, away from and across a camera 5 m away
+  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.3, 1.6}, {5.0, 0.0, 0.9});
+  const CameraIntrinsics& k = renderer_->params().intrinsics;
+  const ObstacleWorld empty = world({});
+  const cv::Mat background = render(empty, T_WC, nullptr);
+  ASSERT_GE(renderer_->castSize(), 6U);
+  for (std::size_t who = 0; who < renderer_->castSize(); ++who) {
+    for (const double heading : {M_PI, 0.0, M_PI / 2.0}) {
+      const PersonState person = walkingThrough(5.0, heading, 0.2);
+      // When placed and drawn
+      const SpritePlacement pl = renderer_->placeSprite(person, T_WC, who);
+      cv::Mat bgr;
+      renderer_->render(empty, T_WC, &person, bgr, scratch_, who);
+      const cv::Mat drawn = changed(bgr, background, 30.0F);
+      ASSERT_TRUE(pl.visible);
+      // Then each limb's map takes its projected joints onto the photo's joints of that limb
+      const PersonSprite& sprite = renderer_->sprite(who);
+      std::array<Eigen::Vector2d, kNumKeypoints> kp_px{};
+      for (std::size_t i = 0; i < kNumKeypoints; ++i) kp_px[i] = projected(person.keypoints_W_m[i], T_WC, k);
+      for (std::size_t p = 0; p < kPartCount; ++p) {
+        const auto ends_i = bodyPartEnds(static_cast<BodyPart>(p), kp_px);
+        const auto ends_s = bodyPartEnds(static_cast<BodyPart>(p), sprite.keypointsPx());
+        const Eigen::Matrix3d& H = pl.parts[p].H_sprite_image;
+        EXPECT_LT((applied(H, ends_i[0]) - ends_s[0]).norm(), 1e-6) << sprite.name() << " part " << p;
+        // (a limb pointing at the camera keeps a minimum length: the far end may fall short)
+        if ((ends_i[1] - ends_i[0]).norm() > 0.3 * pl.scale * (ends_s[1] - ends_s[0]).norm()) {
+          EXPECT_LT((applied(H, ends_i[1]) - ends_s[1]).norm(), 1e-6) << sprite.name() << " part " << p;
+        }
+      }
+      // ... and the person is drawn at the projected neck, hips, knees and ankles (within 3 px)
+      for (const K joint : {K::kLeftHip, K::kRightHip, K::kLeftKnee, K::kRightKnee, K::kLeftAnkle, K::kRightAnkle}) {
+        const Eigen::Vector2d p = kp_px[index(joint)];
+        const cv::Rect near(static_cast<int>(p.x()) - 3, static_cast<int>(p.y()) - 3, 7, 7);
+        EXPECT_GT(cv::countNonZero(drawn(near)), 0)
+            << sprite.name() << " joint " << index(joint) << " heading " << heading;
+      }
+    }
+  }
+}
+
+TEST_F(SceneRendererTest, ArmsAndLegsMoveWithTheGait) {
+  // Given a person walking across the image, at two instants a quarter stride apart
+  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.5}, {5.0, 0.0, 0.9});
+  const ObstacleWorld empty = world({});
+  const cv::Mat background = render(empty, T_WC, nullptr);
+  const PersonState early = walkingThrough(5.0, M_PI / 2.0, 0.0);
+  PersonState later = walkingThrough(5.0, M_PI / 2.0, 0.14);
+  // (the same place, so only the limbs differ)
+  const Eigen::Vector3d shift = early.p_W_m - later.p_W_m;
+  later.p_W_m += shift;
+  for (auto& p : later.keypoints_W_m) p += shift;
+
+  // When both are drawn
+  const cv::Mat a = changed(render(empty, T_WC, &early), background, 30.0F);
+  const cv::Mat b = changed(render(empty, T_WC, &later), background, 30.0F);
+
+  // Then the silhouettes differ below the hips (the legs swung) and much less above them
+  const CameraIntrinsics& k = renderer_->params().intrinsics;
+  const int hip_v = static_cast<int>(projected(mid(early, K::kLeftHip, K::kRightHip), T_WC, k).y());
+  const cv::Mat moved = a ^ b;
+  const int below = cv::countNonZero(moved.rowRange(hip_v, moved.rows));
+  const int torso_rows = cv::countNonZero(a.rowRange(0, hip_v));
+  EXPECT_GT(below, 150);
+  EXPECT_GT(below, cv::countNonZero(moved.rowRange(0, hip_v)));
+  EXPECT_GT(torso_rows, 300);
+}
+
+TEST_F(SceneRendererTest, APersonWalkingAwayShowsTheirBack) {
+  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.6}, {5.0, 0.0, 0.9});
+  const PersonState towards = walkingThrough(5.0, M_PI, 0.0);
+  const PersonState away = walkingThrough(5.0, 0.0, 0.0);
+  for (std::size_t who = 0; who < renderer_->castSize(); ++who) {
+    const bool front_photo = renderer_->sprite(who).view() == PersonView::kFront;
+    // A front photo is drawn as it is for someone walking towards the camera, mirrored with hair over
+    // the face for someone walking away; a back photo the other way round
+    const SpritePlacement t = renderer_->placeSprite(towards, T_WC, who);
+    const SpritePlacement a = renderer_->placeSprite(away, T_WC, who);
+    EXPECT_EQ(t.mirrored, !front_photo) << renderer_->sprite(who).name();
+    EXPECT_EQ(a.mirrored, front_photo) << renderer_->sprite(who).name();
+    EXPECT_FALSE(t.hair_over_face);
+    EXPECT_EQ(a.hair_over_face, front_photo);
+  }
+  // The cast has both: people photographed from the front and from behind
+  int backs = 0;
+  for (std::size_t who = 0; who < renderer_->castSize(); ++who)
+    backs += renderer_->sprite(who).view() == PersonView::kBack;
+  EXPECT_GE(backs, 2);
+  EXPECT_GE(static_cast<int>(renderer_->castSize()) - backs, 2);
+}
+
 TEST(SceneRendererErrors, AMissingPhotoIsAnErrorNamingIt) {
   // Given a sprite spec whose photo does not exist
-  PersonSpriteSpec spec;
-  spec.image_path = "/nonexistent/person.png";
+  PersonCastSpec cast = defaultCast();
+  cast.people[2].image_path = "/nonexistent/person.png";
 
   // When a renderer is created, then it fails with a message naming the file
-  const auto renderer = SceneRenderer::create({}, spec);
+  const auto renderer = SceneRenderer::create({}, cast);
   ASSERT_FALSE(renderer.has_value());
   EXPECT_NE(renderer.error().message.find("/nonexistent/person.png"), std::string::npos) << renderer.error().message;
 }
@@ -217,23 +335,63 @@ TEST(SceneRendererErrors, ACorruptPhotoIsAnError) {
     std::ofstream out(path, std::ios::binary);
     out << "\x89PNG\r\n\x1a\n this is not really an image";
   }
-  PersonSpriteSpec spec;
-  spec.image_path = path;
+  PersonCastSpec cast;
+  cast.people.push_back(PersonSpriteSpec{});
+  cast.people[0].image_path = path;
 
   // When a renderer is created, then it fails with a message naming the file, without crashing
-  const auto renderer = SceneRenderer::create({}, spec);
+  const auto renderer = SceneRenderer::create({}, cast);
   ASSERT_FALSE(renderer.has_value());
   EXPECT_NE(renderer.error().message.find(path), std::string::npos) << renderer.error().message;
   std::remove(path.c_str());
 }
 
-TEST(SceneRendererErrors, ACropOutsideThePhotoOrAMisplacedTorsoIsAnError) {
-  PersonSpriteSpec spec;
-  spec.neck_px = {79.0, 300.0};  // below the mid-hip
-  EXPECT_FALSE(validate(spec).has_value());
+TEST(SceneRendererErrors, BadSpritesAndCastsAreOneLineErrorsNamingThePersonAndKey) {
+  const auto message = [](const rt::Status& status) { return status ? std::string() : status.error().message; };
+  PersonSpriteSpec outside;
+  outside.keypoints_px[9] = {500.0, 100.0};  // a wrist outside the crop
+  EXPECT_NE(message(validate(outside)).find("basketball1_standing: keypoints_px: keypoint 9"), std::string::npos)
+      << message(validate(outside));
+  PersonSpriteSpec turned;
+  turned.view = PersonView::kBack;  // the shoulders say front
+  EXPECT_NE(message(validate(turned)).find("view"), std::string::npos);
+  PersonSpriteSpec upside_down;
+  std::swap(upside_down.keypoints_px[5], upside_down.keypoints_px[11]);
+  std::swap(upside_down.keypoints_px[6], upside_down.keypoints_px[12]);
+  EXPECT_NE(message(validate(upside_down)).find("neck above the mid-hip"), std::string::npos);
+  EXPECT_NE(message(validate(PersonCastSpec{})).find("the cast is empty"), std::string::npos);
+  PersonCastSpec twice;
+  twice.people = {PersonSpriteSpec{}, PersonSpriteSpec{}};
+  EXPECT_NE(message(validate(twice)).find("given twice"), std::string::npos);
+  for (const std::string& m : {message(validate(outside)), message(validate(PersonCastSpec{}))})
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
   SceneRenderParams params;
   params.intrinsics.distortion[0] = 0.1;
   EXPECT_FALSE(validate(params).has_value());
+}
+
+TEST(SceneRendererErrors, AVideoFramePastTheEndIsAnErrorNamingTheFrame) {
+  PersonCastSpec cast = defaultCast();
+  if (!std::filesystem::exists(cast.people[1].image_path)) GTEST_SKIP() << "opencv-doc is missing";
+  cast.people.resize(2);
+  cast.people[1].frame = 5000;  // vtest.avi has 795
+  const auto loaded = loadCast(cast);
+  ASSERT_FALSE(loaded.has_value());
+  EXPECT_NE(loaded.error().message.find("frame 5000 is past the video's end (795 frames)"), std::string::npos)
+      << loaded.error().message;
+}
+
+TEST(SceneRendererErrors, ADirectoryOrSpecialFileIsNotAPhoto) {
+  PersonCastSpec cast;
+  cast.people.push_back(PersonSpriteSpec{});
+  cast.people[0].image_path = testing::TempDir();
+  auto loaded = loadCast(cast);
+  ASSERT_FALSE(loaded.has_value());
+  EXPECT_NE(loaded.error().message.find("is a directory"), std::string::npos) << loaded.error().message;
+  cast.people[0].image_path = "/dev/zero";
+  loaded = loadCast(cast);
+  ASSERT_FALSE(loaded.has_value());
+  EXPECT_NE(loaded.error().message.find("/dev/zero: not a regular file"), std::string::npos) << loaded.error().message;
 }
 
 }  // namespace

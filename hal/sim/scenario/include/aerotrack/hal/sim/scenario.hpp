@@ -17,7 +17,7 @@
 #include "aerotrack/hal/sim/depth_camera.hpp"
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/hal/sim/obstacle_world.hpp"
-#include "aerotrack/hal/sim/person_sprite.hpp"
+#include "aerotrack/hal/sim/person_cast.hpp"
 #include "aerotrack/hal/sim/walking_person.hpp"
 #include "aerotrack/rt/expected.hpp"
 
@@ -115,8 +115,10 @@ struct GimbalCameraSpec {
   double rate_hz = 30.0;
   double latency_s = 0.040;  ///< Capture to detection result (the paper's detector time).
   Eigen::Vector3d mount_B_m = Eigen::Vector3d(0.08, 0.0, -0.06);  ///< Gimbal axis in the body frame.
-  KeypointCameraParams camera;     ///< Intrinsics for both modes; the rest for keypoint mode.
-  PersonSpriteSpec person_sprite;  ///< Image mode: the photo the person is cut out of.
+  KeypointCameraParams camera;  ///< Intrinsics for both modes; the rest for keypoint mode.
+  /// Image mode: the people drawn (the target and the bystanders wear them), and which is the target.
+  PersonCastSpec cast = defaultCast();
+  std::size_t target_person = 0;  ///< Index into cast.people.
 };
 
 struct DepthCameraSpec {
