@@ -55,6 +55,10 @@ std::uint8_t toByte(double c) {
   return static_cast<std::uint8_t>(std::min(c, 255.0) + 0.5);  // NOLINT(bugprone-incorrect-roundings): c >= 0
 }
 
+std::uint8_t toByteF(float c) {
+  return static_cast<std::uint8_t>(std::min(c, 255.0F) + 0.5F);  // NOLINT(bugprone-incorrect-roundings): c >= 0
+}
+
 void store(cv::Vec3b& px, const Colour& c) {
   px[0] = toByte(c[0]);
   px[1] = toByte(c[1]);
@@ -228,9 +232,22 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
   const auto& levels = ground_->levels;
   const int top_level = static_cast<int>(levels.size()) - 1;
   const double footprint_scale = inv_f / kGroundTexelM;
-  std::array<double, 16> inv_texel_m{};
-  for (std::size_t l = 0; l < inv_texel_m.size(); ++l)
-    inv_texel_m[l] = 1.0 / std::ldexp(kGroundTexelM, static_cast<int>(l));
+  std::array<float, 16> inv_texel_f{};
+  for (std::size_t l = 0; l < inv_texel_f.size(); ++l)
+    inv_texel_f[l] = static_cast<float>(1.0 / std::ldexp(kGroundTexelM, static_cast<int>(l)));
+  // The ground branch's constants in single precision. Coordinates wrap at the texture's 25.6 m
+  // period, so the camera's x, y are taken modulo it first (float keeps mm resolution there).
+  const double period_m = kGroundSize * kGroundTexelM;
+  const float o_x = static_cast<float>(o_W.x() - period_m * std::floor(o_W.x() / period_m));
+  const float o_y = static_cast<float>(o_W.y() - period_m * std::floor(o_W.y() / period_m));
+  const float o_z = static_cast<float>(o_W.z());
+  const float inv_height_f = static_cast<float>(inv_height);
+  const float footprint_scale_f = static_cast<float>(footprint_scale);
+  const float haze_f = static_cast<float>(haze_m);
+  const std::array<float, 3> grass_f = {static_cast<float>(kGrass[0]), static_cast<float>(kGrass[1]),
+                                        static_cast<float>(kGrass[2])};
+  const std::array<float, 3> sky_f = {static_cast<float>(kSkyHorizon[0]), static_cast<float>(kSkyHorizon[1]),
+                                      static_cast<float>(kSkyHorizon[2])};
   for (int v = 0; v < k.height_px; ++v) {
     cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
     const float* depth_row = scratch.depth_m.ptr<float>(v);
@@ -280,26 +297,25 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
         const double haze = range_m / (range_m + haze_m);
         colour = (1.0 - haze) * shade * *base + haze * kSkyHorizon;
       } else if (above_ground && d_W.z() < 0.0) {
-        // Plain scalars here: this branch runs for most pixels.
-        const double dx = d_W.x(), dy = d_W.y(), dz = d_W.z();
-        const double t = -o_W.z() / dz;
-        const double x = o_W.x() + t * dx, y = o_W.y() + t * dy;
-        const double range_sq = t * t * (dx * dx + dy * dy + dz * dz);
+        // Plain single-precision scalars here: this branch runs for most pixels (double's divisions and
+        // square roots cost twice as much, and a grass texel needs no more than float's 24 bits).
+        const float dx = static_cast<float>(d_W.x()), dy = static_cast<float>(d_W.y());
+        const float dz = static_cast<float>(d_W.z());
+        const float t = -o_z / dz;
+        const float x = o_x + t * dx, y = o_y + t * dy;
+        const float range_m = t * std::sqrt(dx * dx + dy * dy + dz * dz);
         // The pixel's footprint on the ground (range / f, stretched by the grazing angle range / height,
         // at most 20x) in level-0 texels picks the texture level: the finest with texels >= footprint.
-        const double texels = std::min(range_sq * inv_height, 20.0 * std::sqrt(range_sq)) * footprint_scale;
-        const int level = texels < 1.0 ? 0 : std::min(top_level, floorLog2(texels) + 1);
+        const float texels = range_m * std::min(range_m * inv_height_f, 20.0F) * footprint_scale_f;
+        const int level = texels < 1.0F ? 0 : std::min(top_level, floorLog2(static_cast<double>(texels)) + 1);
         const int size = kGroundSize >> level;
-        const double inv_texel = inv_texel_m[static_cast<std::size_t>(level)];
-        const std::int64_t i = fastFloor(x * inv_texel) & (size - 1), j = fastFloor(y * inv_texel) & (size - 1);
-        const double shade =
-            static_cast<double>(levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)]);
-        const double range_m = std::sqrt(range_sq);
-        const double keep = haze_m / (range_m + haze_m);  // 1 - haze
+        const float inv_texel = inv_texel_f[static_cast<std::size_t>(level)];
+        const int i = static_cast<int>(std::floor(x * inv_texel)) & (size - 1);
+        const int j = static_cast<int>(std::floor(y * inv_texel)) & (size - 1);
+        const float shade = levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)];
+        const float keep = haze_f / (range_m + haze_f);  // 1 - haze
         cv::Vec3b& px = row[u];
-        px[0] = toByte(keep * shade * kGrass[0] + (1.0 - keep) * kSkyHorizon[0]);
-        px[1] = toByte(keep * shade * kGrass[1] + (1.0 - keep) * kSkyHorizon[1]);
-        px[2] = toByte(keep * shade * kGrass[2] + (1.0 - keep) * kSkyHorizon[2]);
+        for (int ch = 0; ch < 3; ++ch) px[ch] = toByteF(keep * (shade * grass_f[ch] - sky_f[ch]) + sky_f[ch]);
         continue;
       } else {
         // Sine of the elevation, from 0 at the horizon to 1 at the zenith.
