@@ -103,6 +103,15 @@ std::array<double, 3> triple(const std::vector<double>& v) {
 
 }  // namespace
 
+void selectLocalization(AppConfig& config, bool image_camera) {
+  if (!image_camera || !config.estimation || !config.estimation->localization_image) return;
+  EstimationConfig& e = *config.estimation;
+  e.task.localization = *e.localization_image;
+  e.localization_params_path = e.localization_params_image_path;
+  e.localization_image.reset();
+  e.localization_params_image_path.clear();
+}
+
 EstimationConfig parseEstimation(const rt::ConfigNode& node, const std::string& config_path) {
   EstimationConfig e;
   std::filesystem::path params_path = node.getString("localization_params");
@@ -113,6 +122,15 @@ EstimationConfig parseEstimation(const rt::ConfigNode& node, const std::string& 
   auto localization = localization::readParamsYaml(e.localization_params_path);
   if (!localization) node.fail("localization_params", localization.error().message);
   e.task.localization = *localization;
+  if (node.has("localization_params_image")) {
+    std::filesystem::path image_path = node.getString("localization_params_image");
+    if (image_path.is_relative()) image_path = std::filesystem::path(config_path).parent_path() / image_path;
+    e.localization_params_image_path = std::filesystem::weakly_canonical(image_path, ec).string();
+    if (ec) e.localization_params_image_path = image_path.string();
+    auto image = localization::readParamsYaml(e.localization_params_image_path);
+    if (!image) node.fail("localization_params_image", image.error().message);
+    e.localization_image = *image;
+  }
   const rt::ConfigNode camera = node.child("gimbal_camera");
   e.mount_m = triple(camera.getDoubleList("mount_m", 3, -10.0, 10.0));
   e.camera_in_gimbal_m = triple(camera.getDoubleList("camera_in_gimbal_m", 3, -10.0, 10.0));
@@ -201,6 +219,8 @@ std::string toYaml(const AppConfig& c) {
     const auto list = [](const std::array<double, 3>& a) { return std::vector<double>(a.begin(), a.end()); };
     out << YAML::Key << "estimation" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "localization_params" << YAML::Value << e.localization_params_path;
+    if (e.localization_image)
+      out << YAML::Key << "localization_params_image" << YAML::Value << e.localization_params_image_path;
     out << YAML::Key << "gimbal_camera" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "mount_m" << YAML::Value << YAML::Flow << list(e.mount_m);
     out << YAML::Key << "camera_in_gimbal_m" << YAML::Value << YAML::Flow << list(e.camera_in_gimbal_m);

@@ -32,7 +32,12 @@ struct VehicleConfig {
 /// The `estimation:` section: the target pipeline's parameters, with the localization regression
 /// loaded from the file it names (relative paths: from the config file's folder).
 struct EstimationConfig {
-  std::string localization_params_path;                                               ///< Resolved.
+  std::string localization_params_path;  ///< Resolved.
+  /// Optional `localization_params_image`: the regression fitted to the real network's detections on
+  /// rendered frames (issue 22 item 3), used instead of localization_params when the simulated gimbal
+  /// camera renders images (selectLocalization). Empty: none.
+  std::string localization_params_image_path;
+  std::optional<localization::LocalizationParams> localization_image;
   std::array<double, 3> mount_m{}, camera_in_gimbal_m{}, camera_in_gimbal_rpy_rad{};  ///< As written.
   estimation::TargetTaskParams task;
 };
@@ -62,6 +67,11 @@ struct AppConfig {
   rt::RealtimeOptions realtime;
   std::vector<rt::TaskSpec> tasks;
 };
+
+/// The simulated camera's mode decides the regression: in image mode the real network measures the
+/// torso, so the estimation takes localization_params_image where the config gives it (its path then
+/// becomes localization_params, as a recording's config must say what ran).
+void selectLocalization(AppConfig& config, bool image_camera);
 
 /// Reads the `estimation:` section; config_path locates relative localization_params paths.
 /// Throws rt::ConfigError naming the key (use inside rt::parseConfig).

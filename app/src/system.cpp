@@ -16,6 +16,8 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
                                                     rt::TimeNs start_ns) {
   std::unique_ptr<System> system(new System(config));
   system->start_ns_ = start_ns;
+  selectLocalization(system->config_,
+                     scenario != nullptr && scenario->spec.gimbal_camera.mode == hal::sim::GimbalCameraMode::kImage);
   hal::sim::SimulationOptions sim_options;
   sim_options.physics_step_s = config.sim.physics_step_s;
   sim_options.render_depth = config.sim.render_depth;
@@ -35,7 +37,7 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
     // The effective configuration, so that `aerotrack replay` re-runs the modules as they ran.
     const std::string config_path = config.record_dir + "/config.yaml";
     std::ofstream config_file(config_path);
-    config_file << "# the configuration of the recorded run (aerotrack replay reads it)\n" << toYaml(config);
+    config_file << "# the configuration of the recorded run (aerotrack replay reads it)\n" << toYaml(system->config_);
     config_file.close();
     if (!config_file) return rt::Error{"record: " + config_path + ": write failed"};
     hal::Devices& d = system->devices_;

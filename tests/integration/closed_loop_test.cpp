@@ -28,6 +28,9 @@ std::string simYaml(const std::string& line = "", const std::string& with = "") 
   std::string text = buffer.str();
   const std::string relative = "localization_params: localization.yaml";
   text.replace(text.find(relative), relative.size(), "localization_params: " + kConfigDir + "/localization.yaml");
+  const std::string relative_image = "localization_params_image: localization_image.yaml";
+  text.replace(text.find(relative_image), relative_image.size(),
+               "localization_params_image: " + kConfigDir + "/localization_image.yaml");
   if (!line.empty()) {
     const auto pos = text.find(line);
     EXPECT_NE(pos, std::string::npos) << line;

@@ -34,6 +34,8 @@ std::string searchYaml(double search_timeout_s) {
     if (pos != std::string::npos) text.replace(pos, from.size(), to);
   };
   replace("localization_params: localization.yaml", "localization_params: " + kSearchConfigDir + "/localization.yaml");
+  replace("localization_params_image: localization_image.yaml",
+          "localization_params_image: " + kSearchConfigDir + "/localization_image.yaml");
   replace("  relocate_timeout_s: 5.0", "  relocate_timeout_s: 1.0");
   replace("  search_timeout_s: 20.0", "  search_timeout_s: " + std::to_string(search_timeout_s));
   replace("  render_depth: true\n", "  render_depth: true\n  faults:\n    person_occluded_s: [6.0, 8.0]\n");

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "aerotrack/localization/localization_io.hpp"
 #include "app_config.hpp"
 #include "sim_report.hpp"
 #include "support/require.hpp"
@@ -31,6 +32,11 @@ std::string simYamlWith(const std::string& line, const std::string& with) {
   const auto at_params = text.find(relative);
   EXPECT_NE(at_params, std::string::npos);
   text.replace(at_params, relative.size(), "localization_params: " + kConfigDir + "/localization.yaml");
+  const std::string relative_image = "localization_params_image: localization_image.yaml";
+  const auto at_image = text.find(relative_image);
+  EXPECT_NE(at_image, std::string::npos);
+  text.replace(at_image, relative_image.size(),
+               "localization_params_image: " + kConfigDir + "/localization_image.yaml");
   const auto pos = text.find(line);
   EXPECT_NE(pos, std::string::npos) << line;
   text.replace(pos, line.size(), with);
@@ -221,6 +227,34 @@ TEST(AppConfig, GivenAMissingLocalizationFileThenErrorNamesTheKeyAndTheFile) {
                                        "localization_params: /nowhere/params.yaml");
   EXPECT_EQ(errorOf(yaml), at(yaml, "  localization_params") +
                                ": estimation.localization_params: /nowhere/params.yaml: cannot open file");
+}
+
+TEST(AppConfig, InImageModeTheNetworksRegressionReplacesTheKeypointCamerasOne) {
+  // Given the shipped sim config, which names both fits
+  const auto parsed = parseAppConfig(simYamlWith("# aerotrack configuration", "# aerotrack configuration"), "sim.yaml");
+  ASSERT_TRUE(parsed.has_value()) << parsed.error().message;
+  ASSERT_TRUE(parsed->estimation && parsed->estimation->localization_image);
+  const auto image = localization::readParamsYaml(kConfigDir + "/localization_image.yaml");
+  const auto keypoints = localization::readParamsYaml(kConfigDir + "/localization.yaml");
+  ASSERT_TRUE(image && keypoints);
+  const auto torso_m = [](const localization::LocalizationParams& p) { return p.pinhole.torso_m; };
+  ASSERT_NE(torso_m(*image), torso_m(*keypoints));
+
+  // When the camera renders images, the estimation takes the network's fit, and says so in its path
+  AppConfig for_images = *parsed;
+  selectLocalization(for_images, true);
+  EXPECT_EQ(torso_m(for_images.estimation->task.localization), torso_m(*image));
+  EXPECT_NE(for_images.estimation->localization_params_path.find("localization_image.yaml"), std::string::npos);
+  // ... and with the keypoint camera it keeps the keypoint camera's
+  AppConfig for_keypoints = *parsed;
+  selectLocalization(for_keypoints, false);
+  EXPECT_EQ(torso_m(for_keypoints.estimation->task.localization), torso_m(*keypoints));
+
+  // A missing file names the key
+  const std::string bad = simYamlWith("localization_params_image: " + kConfigDir + "/localization_image.yaml",
+                                      "localization_params_image: /nowhere/net.yaml");
+  EXPECT_NE(errorOf(bad).find("estimation.localization_params_image: /nowhere/net.yaml"), std::string::npos)
+      << errorOf(bad);
 }
 
 TEST(AppConfig, GivenBadBackendThenErrorNamesIt) {

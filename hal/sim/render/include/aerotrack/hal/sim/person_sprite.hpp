@@ -68,22 +68,24 @@ struct PersonSpriteSpec {
   int frame = -1;
   PersonView view = PersonView::kFront;
   std::array<int, 4> crop_px = {22, 80, 160, 399};  ///< x, y, width, height: the person lies inside.
-  /// COCO-17 keypoints in the photo, the person's left and right (hal::CocoKeypoint order). Torso
-  /// joints measured by hand on a 3x enlargement (the hip joints at the crotch's level less 15 px);
-  /// the rest from MoveNet thunder on the crop (`aerotrack detect --model thunder`), checked by eye.
+  /// COCO-17 keypoints in the photo, the person's left and right (hal::CocoKeypoint order): MoveNet
+  /// thunder's on the crop (`aerotrack detect --model thunder`), checked by eye. The network's own
+  /// joints, not joints measured by hand: the renderer pins these photo points to the simulated
+  /// joints, so the network finds the simulated torso in the rendered person (hips measured by hand
+  /// at the crotch's level less 15 px, 18 px below thunder's, made the network's torso 13 % short).
   std::array<Eigen::Vector2d, kNumKeypoints> keypoints_px = {{{95, 115},
                                                               {98, 107},
                                                               {85, 108},
                                                               {94, 111},
                                                               {66, 114},
-                                                              {113, 152},
-                                                              {45, 158},
+                                                              {114, 158},
+                                                              {45, 156},
                                                               {142, 215},
                                                               {89, 206},
                                                               {145, 173},
                                                               {127, 166},
-                                                              {104, 292},
-                                                              {62, 292},
+                                                              {111, 274},
+                                                              {69, 277},
                                                               {119, 373},
                                                               {66, 374},
                                                               {115, 440},
