@@ -84,8 +84,9 @@ RUN --mount=type=secret,id=build-ca,mode=0444 \
  && xargs apt-get install -y --no-install-recommends < /tmp/runtime-packages.txt \
  && rm -f /etc/apt/apt.conf.d/99build-ca \
  && apt-get clean && rm -rf /var/lib/apt/lists/* /tmp/runtime-packages.txt
-# The photo the simulator's image-mode camera cuts its person from (not the whole opencv-doc).
+# The photo and video the simulator's image-mode camera cuts its people from (not the whole opencv-doc).
 COPY --from=build /usr/share/doc/opencv-doc/examples/data/basketball1.png /usr/share/doc/opencv-doc/examples/data/basketball1.png
+COPY --from=build /usr/share/doc/opencv-doc/examples/data/vtest.avi /usr/share/doc/opencv-doc/examples/data/vtest.avi
 # Where app/src/paths.cpp looks beside an installed binary: <bin>/../share/aerotrack/{config,models}.
 COPY --from=build /src/models /usr/local/share/aerotrack/models
 COPY --from=build /src/build/bin/aerotrack /usr/local/bin/aerotrack
