@@ -312,7 +312,9 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
         const float inv_texel = inv_texel_f[static_cast<std::size_t>(level)];
         const int i = static_cast<int>(std::floor(x * inv_texel)) & (size - 1);
         const int j = static_cast<int>(std::floor(y * inv_texel)) & (size - 1);
-        const float shade = levels[static_cast<std::size_t>(level)][static_cast<std::size_t>(j * size + i)];
+        const float shade =
+            levels[static_cast<std::size_t>(level)]
+                  [static_cast<std::size_t>(j) * static_cast<std::size_t>(size) + static_cast<std::size_t>(i)];
         const float keep = haze_f / (range_m + haze_f);  // 1 - haze
         cv::Vec3b& px = row[u];
         for (int ch = 0; ch < 3; ++ch) px[ch] = toByteF(keep * (shade * grass_f[ch] - sky_f[ch]) + sky_f[ch]);
