@@ -45,7 +45,7 @@ int main() {
         const Eigen::Vector3d p_C = T_WC.inverse() * person.keypoints_W_m[i];
         keypoints[i] = {k.cx_px + k.fx_px * p_C.x() / p_C.z(), k.cy_px + k.fy_px * p_C.y() / p_C.z(), 0.9};
       }
-      (heading == 0.0 ? back : front).push_back(perception::torsoAppearance(bgr, keypoints));
+      (heading == 0.0 ? back : front).push_back(perception::personAppearance(bgr, keypoints));
     }
   }
   std::printf("%-22s", "front vs front");

@@ -23,6 +23,24 @@ Eigen::Vector3d midpoint(const PersonState& p, CocoKeypoint a, CocoKeypoint b) {
   return 0.5 * (p.keypoints_W_m[index(a)] + p.keypoints_W_m[index(b)]);
 }
 
+/// The keypoint camera's measured signature: the truth with noise, its legs region only where the image
+/// pipeline would measure one (both knees seen: perception/appearance.hpp).
+AppearanceHistogram measuredSignature(const AppearanceHistogram& truth, const PersonDetection& detection,
+                                      const CameraIntrinsics& camera, std::mt19937_64& rng) {
+  AppearanceHistogram sig = noisySignature(truth, rng);
+  const auto seen = [&](CocoKeypoint k) {
+    const Keypoint2D& p = detection.keypoints[index(k)];
+    return p.score >= kLegsMinKeypointScore && p.v_px >= 0.0 && p.v_px < camera.height_px && p.u_px >= 0.0 &&
+           p.u_px < camera.width_px;
+  };
+  if (!seen(CocoKeypoint::kLeftKnee) || !seen(CocoKeypoint::kRightKnee)) {
+    const std::size_t offset = regionOffset(SignatureRegion::kLegs);
+    std::fill(sig.begin() + static_cast<std::ptrdiff_t>(offset),
+              sig.begin() + static_cast<std::ptrdiff_t>(offset + kSignatureRegionBins), 0.0F);
+  }
+  return sig;
+}
+
 }  // namespace
 
 rt::Expected<std::unique_ptr<Simulation>> Simulation::create(const ScenarioInstance& scenario,
@@ -319,7 +337,8 @@ void Simulation::captureCamera() {
     // everyone, and the lock-on downstream chooses (perception/keypoint_lock_on.hpp), so that it can
     // be fooled by a bystander as on a real camera.
     frame.target_index = -1;
-    frame.persons[0].appearance = noisySignature(personAppearance(0), appearance_rng_);
+    frame.persons[0].appearance =
+        measuredSignature(personAppearance(0), frame.persons[0], spec.camera.intrinsics, appearance_rng_);
     frame.persons[0].has_appearance = true;
   }
   if (!bystanders_.empty()) observeCrowd(T_WC, frame);
@@ -347,7 +366,8 @@ void Simulation::observeCrowd(const Eigen::Isometry3d& T_WC, DetectionFrame& fra
     sight_skip_id_ = id;
     if (const auto detection = observe(p.keypoints_W_m, T_WC, spec.camera, line_of_sight, crowd_rng_)) {
       candidates_.push_back({*detection, id, area(*detection)});
-      candidates_.back().detection.appearance = noisySignature(personAppearance(id), appearance_rng_);
+      candidates_.back().detection.appearance =
+          measuredSignature(personAppearance(id), candidates_.back().detection, spec.camera.intrinsics, appearance_rng_);
       candidates_.back().detection.has_appearance = true;
     }
   }

@@ -35,7 +35,13 @@ hal::DetectionFrame toDetectionFrame(const DetectorOutput& output, const hal::Im
   frame.sequence = image.sequence;
   frame.intrinsics = image.intrinsics;
   frame.person_count = output.count;
-  for (std::size_t i = 0; i < output.count; ++i) frame.persons[i] = output.persons[i].detection;
+  for (std::size_t i = 0; i < output.count; ++i) {
+    // The signature measured from the image travels with the detection: the target task's association
+    // compares it with each track's learnt colour (before, image mode's association was colour-blind).
+    frame.persons[i] = output.persons[i].detection;
+    frame.persons[i].appearance = output.persons[i].appearance.histogram;
+    frame.persons[i].has_appearance = output.persons[i].appearance.valid;
+  }
   frame.target_index = output.target ? static_cast<int>(*output.target) : -1;
   return frame;
 }

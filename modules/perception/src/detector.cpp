@@ -135,7 +135,7 @@ rt::Expected<DetectorOutput> Detector::runModel(MoveNetModel& model, const cv::M
     DetectedPerson& d = out.persons[out.count++];
     d.detection = person;
     d.torso = torsoFeatures(person.keypoints, bgr.cols, bgr.rows, params_.torso);
-    d.appearance = torsoAppearance(bgr, person.keypoints);
+    d.appearance = personAppearance(bgr, person.keypoints);
   };
   if (model.info().kind == ModelKind::kSinglePose) {
     const SinglePoseHeads heads = model.singlePoseHeads();

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <span>
 
 namespace aerotrack::perception {
@@ -10,16 +11,19 @@ namespace aerotrack::perception {
 Appearance toAppearance(const hal::PersonDetection& person) {
   Appearance a;
   if (!person.has_appearance) return a;
-  double total = 0.0;
   for (const float bin : person.appearance) {
-    if (!(bin >= 0.0F)) return a;  // negative or NaN: not a histogram
-    total += static_cast<double>(bin);
+    if (!(bin >= 0.0F) || !std::isfinite(bin)) return a;  // negative or NaN: not a histogram
   }
-  if (!(total > 0.0)) return a;
-  // Renormalise: the Bhattacharyya distance assumes both histograms sum to 1.
-  for (std::size_t i = 0; i < a.histogram.size(); ++i)
-    a.histogram[i] = static_cast<float>(static_cast<double>(person.appearance[i]) / total);
-  a.valid = true;
+  // Renormalise each measured region: the Bhattacharyya distance assumes histograms that sum to 1.
+  for (std::size_t r = 0; r < hal::kSignatureRegions; ++r) {
+    const auto region = static_cast<hal::SignatureRegion>(r);
+    const double total = hal::regionSum(person.appearance, region);
+    if (!(total > 0.0)) continue;
+    const std::size_t offset = hal::regionOffset(region);
+    for (std::size_t i = offset; i < offset + hal::kSignatureRegionBins; ++i)
+      a.histogram[i] = static_cast<float>(static_cast<double>(person.appearance[i]) / total);
+    a.valid = true;
+  }
   return a;
 }
 

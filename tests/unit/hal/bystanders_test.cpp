@@ -187,6 +187,39 @@ TEST(Bystanders, LookAlikeSignatureIsCloseToTheTargetsAndOthersAreFar) {
   }
 }
 
+TEST(Bystanders, GivenTheSameShirtOverOtherTrousersOrAnotherGrey_WhenSigned_ThenTheyAreFarApart) {
+  // Issue 22 item 2: two people in black-and-grey tops told apart by the grey's brightness or the legs.
+  const ScenarioInstance inst = crowdInstance(crowdYaml(R"(bystanders:
+  target_clothing: {hue_deg: 0.0, saturation: 0.8, grey_share: 0.9, grey_value: 0.1, legs_grey_share: 1.0, legs_grey_value: 0.1}
+  people:
+    - {path: [{p_m: [5.0, 3.0]}], clothing: {hue_deg: 0.0, saturation: 0.8, grey_share: 0.9, grey_value: 0.6, legs_grey_share: 1.0, legs_grey_value: 0.1}}
+    - {path: [{p_m: [5.0, -3.0]}], clothing: {hue_deg: 0.0, saturation: 0.8, grey_share: 0.9, grey_value: 0.1, legs_hue_deg: 220.0, legs_saturation: 0.6, legs_grey_share: 0.1}}
+)"));
+  const AppearanceSignature& target = inst.bystanders.target_appearance;
+  ASSERT_EQ(inst.bystanders.people.size(), 2U);
+  EXPECT_GT(signatureDistance(inst.bystanders.people[0].appearance, target), 0.6);  // a lighter grey top
+  EXPECT_GT(signatureDistance(inst.bystanders.people[1].appearance, target), 0.6);  // blue jeans
+  const std::string bad = crowdParseError(crowdYaml(
+      "bystanders:\n  people:\n    - {path: [{p_m: [5.0, 3.0]}], clothing: {hue_deg: 0.0, saturation: 0.8, legs_grey_value: 2.0}}\n"));
+  EXPECT_NE(bad.find("legs_grey_value"), std::string::npos) << bad;
+}
+
+TEST(Bystanders, GivenRandomClothing_WhenDrawn_ThenTheStreamAdvancesBySixDrawsAsBeforeTheLegsExisted) {
+  // The legs and the greys' brightness come from a stream of their own, so that every scenario's
+  // bystanders walk where they did before those fields were added.
+  std::mt19937_64 drawn(42), reference(42);
+  const Clothing a = randomClothing(drawn);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 6; ++i) (void)u(reference);
+  EXPECT_EQ(drawn(), reference());
+  std::mt19937_64 again(42);
+  const Clothing b = randomClothing(again);
+  EXPECT_EQ(a.legs_hue_deg, b.legs_hue_deg);
+  EXPECT_EQ(a.grey_value, b.grey_value);
+  EXPECT_GE(a.legs_grey_share, 0.2);
+  EXPECT_LE(a.legs_grey_share, 1.0);
+}
+
 TEST(Bystanders, DepthFrameSeesAStandingBystanderAtItsRange) {
   auto sim = crowdSim(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [3.0, 0.0]}]}\n", false, 8.0), true);
   hoverCrowd(*sim, 0.5);

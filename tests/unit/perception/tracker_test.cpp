@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "aerotrack/perception/appearance.hpp"
 #include "aerotrack/perception/person_tracker.hpp"
@@ -139,9 +140,9 @@ TEST(Appearance, GivenTwoShirtColours_WhenMeasuredFromImages_ThenSameIsNearAndDi
   cv::randu(noise, 0, 20);
   red_noisy += noise;
   cv::Mat blue(100, 80, CV_8UC3, cv::Scalar(200, 60, 30));
-  const Appearance a = torsoAppearance(red, torso_keypoints);
-  const Appearance b = torsoAppearance(red_noisy, torso_keypoints);
-  const Appearance c = torsoAppearance(blue, torso_keypoints);
+  const Appearance a = personAppearance(red, torso_keypoints);
+  const Appearance b = personAppearance(red_noisy, torso_keypoints);
+  const Appearance c = personAppearance(blue, torso_keypoints);
   ASSERT_TRUE(a.valid && b.valid && c.valid);
   EXPECT_LT(appearanceDistance(a, b), 0.2);
   EXPECT_GT(appearanceDistance(a, c), 0.9);
@@ -151,7 +152,109 @@ TEST(Appearance, GivenATorsoOutsideTheImage_WhenMeasured_ThenItIsInvalid) {
   std::array<hal::Keypoint2D, hal::kNumKeypoints> k{};
   for (auto& p : k) p = {500.0, 500.0, 0.9};
   cv::Mat img(100, 80, CV_8UC3, cv::Scalar(0, 0, 0));
-  EXPECT_FALSE(torsoAppearance(img, k).valid);
+  EXPECT_FALSE(personAppearance(img, k).valid);
+}
+
+/// A person standing upright in a 100 x 200 image: shoulders at v = 20, hips at 80, knees at 130 (knee
+/// score given), a shirt above v = 80 and trousers below.
+std::array<hal::Keypoint2D, hal::kNumKeypoints> standingKeypoints(double knee_score) {
+  std::array<hal::Keypoint2D, hal::kNumKeypoints> k{};
+  k[index(CocoKeypoint::kLeftShoulder)] = {60.0, 20.0, 0.9};
+  k[index(CocoKeypoint::kRightShoulder)] = {20.0, 20.0, 0.9};
+  k[index(CocoKeypoint::kLeftHip)] = {55.0, 80.0, 0.9};
+  k[index(CocoKeypoint::kRightHip)] = {25.0, 80.0, 0.9};
+  k[index(CocoKeypoint::kLeftKnee)] = {55.0, 130.0, knee_score};
+  k[index(CocoKeypoint::kRightKnee)] = {25.0, 130.0, knee_score};
+  return k;
+}
+
+cv::Mat dressed(const cv::Scalar& shirt_bgr, const cv::Scalar& trousers_bgr) {
+  cv::Mat img(200, 80, CV_8UC3, shirt_bgr);
+  img.rowRange(80, 200).setTo(trousers_bgr);
+  return img;
+}
+
+TEST(Appearance, GivenBlackGreyAndWhiteShirts_WhenMeasured_ThenTheirBrightnessTellsThemApart) {
+  // The first descriptor's one grey bin put every achromatic shirt at distance 0 (issue 22 item 2).
+  const auto k = standingKeypoints(0.0);
+  const cv::Scalar trousers(40, 40, 40);
+  const Appearance black = personAppearance(dressed(cv::Scalar(15, 15, 15), trousers), k);
+  const Appearance grey = personAppearance(dressed(cv::Scalar(110, 110, 110), trousers), k);
+  const Appearance white = personAppearance(dressed(cv::Scalar(235, 235, 235), trousers), k);
+  cv::Mat noisy = dressed(cv::Scalar(15, 15, 15), trousers);
+  cv::Mat noise(noisy.size(), CV_8UC3);
+  cv::randu(noise, 0, 20);
+  noisy += noise;
+  const Appearance black_noisy = personAppearance(noisy, k);
+  ASSERT_TRUE(black.valid && grey.valid && white.valid && black_noisy.valid);
+  EXPECT_LT(appearanceDistance(black, black_noisy), 0.3);
+  EXPECT_GT(appearanceDistance(black, grey), 0.6);
+  EXPECT_GT(appearanceDistance(grey, white), 0.6);
+  EXPECT_GT(appearanceDistance(black, white), 0.9);
+}
+
+TEST(Appearance, GivenTheSameShirtOverOtherTrousers_WhenTheKneesAreSeen_ThenTheLegsTellThemApart) {
+  const cv::Scalar shirt(30, 30, 200);
+  const cv::Mat jeans = dressed(shirt, cv::Scalar(140, 80, 40));
+  const cv::Mat khaki = dressed(shirt, cv::Scalar(120, 180, 200));
+  const Appearance a = personAppearance(jeans, standingKeypoints(0.8));
+  const Appearance b = personAppearance(khaki, standingKeypoints(0.8));
+  ASSERT_TRUE(a.valid && b.valid);
+  EXPECT_GT(hal::regionSum(a.histogram, hal::SignatureRegion::kLegs), 0.99);
+  EXPECT_GT(appearanceDistance(a, b), 0.6);
+  // Knees guessed (scores under kLegsMinKeypointScore): the legs are not measured, and the shirt alone
+  // makes them the same person -- also against a signature that has legs (only common regions count).
+  const Appearance a_no_legs = personAppearance(jeans, standingKeypoints(0.2));
+  const Appearance b_no_legs = personAppearance(khaki, standingKeypoints(0.2));
+  EXPECT_DOUBLE_EQ(hal::regionSum(a_no_legs.histogram, hal::SignatureRegion::kLegs), 0.0);
+  EXPECT_LT(appearanceDistance(a_no_legs, b_no_legs), 1e-6);
+  EXPECT_LT(appearanceDistance(a_no_legs, b), 1e-6);
+}
+
+TEST(Appearance, GivenRandomPixels_WhenMeasured_ThenTheHistogramMatchesOpenCvsHsvConversion) {
+  // Independent reference: OpenCV's own BGR -> HSV (float images: hue in degrees, S and V in [0, 1])
+  // voted through hal::colourVote, pixel by pixel.
+  cv::Mat img(200, 80, CV_8UC3);
+  cv::RNG rng(7);
+  rng.fill(img, cv::RNG::UNIFORM, 0, 256);
+  const auto k = standingKeypoints(0.9);
+  const Appearance measured = personAppearance(img, k);
+  ASSERT_TRUE(measured.valid);
+  cv::Mat hsv;
+  img.convertTo(hsv, CV_32FC3, 1.0 / 255.0);
+  cv::cvtColor(hsv, hsv, cv::COLOR_BGR2HSV);
+  const auto reference = [&](int u0, int u1, int v0, int v1, hal::SignatureRegion region) {
+    std::array<double, hal::kSignatureRegionBins> counts{};
+    for (int v = v0; v < v1; ++v)
+      for (int u = u0; u < u1; ++u) {
+        const cv::Vec3f p = hsv.at<cv::Vec3f>(v, u);
+        const hal::ColourVote vote = hal::colourVote(p[0], p[1], p[2]);
+        counts[vote.bin[0]] += vote.share[0];
+        counts[vote.bin[1]] += vote.share[1];
+      }
+    const double n = static_cast<double>((u1 - u0) * (v1 - v0));
+    for (std::size_t i = 0; i < counts.size(); ++i)
+      EXPECT_NEAR(measured.histogram[hal::regionOffset(region) + i], counts[i] / n, 1e-5) << "bin " << i;
+  };
+  // The torso box: u in [20, 60] shrunk by 8 px each side, v in [20, 80] shrunk by 9 px; the legs: hips'
+  // width [25, 55] less 3 px each side, v from 80 + 0.05 x 50 to 80 + 0.6 x 50.
+  reference(28, 52, 29, 71, hal::SignatureRegion::kTorso);
+  reference(28, 52, 82, 110, hal::SignatureRegion::kLegs);
+}
+
+TEST(Appearance, GivenAReferenceWithoutLegs_WhenBlendedWithOneWithLegs_ThenTheLegsAreTakenAsTheyAre) {
+  const Appearance torso_only = personAppearance(dressed(cv::Scalar(30, 30, 200), cv::Scalar(140, 80, 40)),
+                                                 standingKeypoints(0.1));
+  const Appearance whole = personAppearance(dressed(cv::Scalar(30, 30, 200), cv::Scalar(140, 80, 40)),
+                                            standingKeypoints(0.9));
+  Appearance reference = torso_only;
+  blendAppearance(reference, whole, 0.1);
+  EXPECT_NEAR(hal::regionSum(reference.histogram, hal::SignatureRegion::kLegs), 1.0, 1e-5);
+  EXPECT_LT(appearanceDistance(reference, whole), 1e-3);
+  Appearance empty;
+  blendAppearance(empty, torso_only, 0.1);
+  EXPECT_TRUE(empty.valid);
+  EXPECT_LT(appearanceDistance(empty, torso_only), 1e-6);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
 
+#include "aerotrack/hal/appearance_signature.hpp"
 #include "aerotrack/rt/bitwise_copyable.hpp"
 #include "aerotrack/rt/time.hpp"
 
@@ -122,18 +123,16 @@ inline constexpr std::array<std::pair<int, int>, 18> kCocoSkeleton = {{{0, 1},
                                                                        {0, 5},
                                                                        {0, 6}}};
 
-/// Bins of a person's appearance signature: perception's torso hue-saturation histogram, 12 hue x 3
-/// saturation bins + 1 grey bin (modules/perception/include/aerotrack/perception/appearance.hpp).
-inline constexpr std::size_t kAppearanceSignatureBins = 37;
 
 struct PersonDetection {
   std::array<Keypoint2D, kNumKeypoints> keypoints{};
   double score = 0.0;                                                         ///< Person confidence in [0, 1].
   double bbox_u_px = 0.0, bbox_v_px = 0.0, bbox_w_px = 0.0, bbox_h_px = 0.0;  ///< Top-left corner, size.
-  /// The person's torso colour histogram (bin = hue_bin * 3 + saturation_bin, grey last; sums to 1)
-  /// when the source measured one (the simulator's keypoint camera does; the image pipeline computes its own from the
-  /// image). Recorded in detections.csv, so the lock-on reruns on it in replay.
-  std::array<float, kAppearanceSignatureBins> appearance{};
+  /// The person's appearance signature (appearance_signature.hpp: torso and legs colour histograms, each
+  /// summing to 1 when measured, zeros when not) when the source measured one: the simulator's keypoint
+  /// camera reports it, the image pipeline measures it from the image. Recorded in detections.csv, so the
+  /// lock-on and the association rerun on it in replay.
+  AppearanceHistogram appearance{};
   bool has_appearance = false;
 };
 

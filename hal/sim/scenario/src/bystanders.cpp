@@ -2,6 +2,7 @@
 #include "aerotrack/hal/sim/bystanders.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -14,8 +15,6 @@ namespace {
 
 using rt::ConfigNode;
 
-constexpr int kSignatureHueBins = 12;
-constexpr int kSignatureSaturationBins = 3;
 constexpr double kMinSpeedMps = 0.1;  ///< Bystander speeds are in [kMinSpeedMps, kMaxSpeedMps].
 constexpr double kMaxSpeedMps = 3.0;  ///< Brisk walking to a jog.
 constexpr double kBystanderCoordMaxM = 1e5;
@@ -56,6 +55,11 @@ Clothing parseClothing(const ConfigNode& n) {
   c.second_saturation = n.getDoubleOr("second_saturation", c.saturation, 0.0, 1.0);
   c.second_share = n.getDoubleOr("second_share", 0.3, 0.0, 1.0);
   c.grey_share = n.getDoubleOr("grey_share", 0.2, 0.0, 0.95);
+  c.grey_value = n.getDoubleOr("grey_value", c.grey_value, 0.0, 1.0);
+  c.legs_hue_deg = n.getDoubleOr("legs_hue_deg", c.legs_hue_deg, 0.0, 360.0);
+  c.legs_saturation = n.getDoubleOr("legs_saturation", c.legs_saturation, 0.0, 1.0);
+  c.legs_grey_share = n.getDoubleOr("legs_grey_share", c.legs_grey_share, 0.0, 1.0);
+  c.legs_grey_value = n.getDoubleOr("legs_grey_value", c.legs_grey_value, 0.0, 1.0);
   n.finish();
   return c;
 }
@@ -392,23 +396,15 @@ void mirrorWalk(BystanderWalk& w) {
 
 AppearanceSignature signatureOf(const Clothing& clothing) {
   AppearanceSignature sig{};
-  const auto add = [&](double hue_deg, double saturation, double weight) {
-    const int sat_bin = std::min(kSignatureSaturationBins - 1, static_cast<int>(saturation * kSignatureSaturationBins));
-    const double position = std::fmod(hue_deg, 360.0) / 360.0 * kSignatureHueBins;
-    const int lower = static_cast<int>(std::floor(position)) % kSignatureHueBins;
-    const int upper = (lower + 1) % kSignatureHueBins;
-    const double upper_share = position - std::floor(position);
-    const auto bin = [&](int hue_bin) {
-      return static_cast<std::size_t>(hue_bin) * static_cast<std::size_t>(kSignatureSaturationBins) +
-             static_cast<std::size_t>(sat_bin);
-    };
-    sig[bin(lower)] += static_cast<float>(weight * (1.0 - upper_share));
-    sig[bin(upper)] += static_cast<float>(weight * upper_share);
-  };
   const double coloured = 1.0 - clothing.grey_share;
-  add(clothing.hue_deg, clothing.saturation, coloured * (1.0 - clothing.second_share));
-  add(clothing.second_hue_deg, clothing.second_saturation, coloured * clothing.second_share);
-  sig[kAppearanceSignatureBins - 1] += static_cast<float>(clothing.grey_share);
+  addColour(sig, SignatureRegion::kTorso, clothing.hue_deg, clothing.saturation, 1.0,
+            coloured * (1.0 - clothing.second_share));
+  addColour(sig, SignatureRegion::kTorso, clothing.second_hue_deg, clothing.second_saturation, 1.0,
+            coloured * clothing.second_share);
+  addColour(sig, SignatureRegion::kTorso, 0.0, 0.0, clothing.grey_value, clothing.grey_share);
+  addColour(sig, SignatureRegion::kLegs, clothing.legs_hue_deg, clothing.legs_saturation, 1.0,
+            1.0 - clothing.legs_grey_share);
+  addColour(sig, SignatureRegion::kLegs, 0.0, 0.0, clothing.legs_grey_value, clothing.legs_grey_share);
   return sig;
 }
 
@@ -425,6 +421,20 @@ Eigen::Vector3f clothingBgr(const Clothing& clothing) {
   return {static_cast<float>(c[2]), static_cast<float>(c[1]), static_cast<float>(c[0])};
 }
 
+namespace {
+
+/// A stream for the clothing fields added after the first six (issue 22 item 2), seeded by those six:
+/// the scenario's bystander stream draws exactly as before, so its people walk where they did.
+std::mt19937_64 extraClothingRng(const Clothing& c) {
+  std::uint64_t z = 0x9E3779B97F4A7C15ULL;
+  for (const double x : {c.hue_deg, c.saturation, c.second_hue_deg, c.second_saturation, c.second_share, c.grey_share}) {
+    z ^= std::bit_cast<std::uint64_t>(x) + 0x9E3779B97F4A7C15ULL + (z << 6) + (z >> 2);
+  }
+  return std::mt19937_64(z);
+}
+
+}  // namespace
+
 Clothing randomClothing(std::mt19937_64& rng) {
   Clothing c;
   c.hue_deg = uniformIn(rng, 0.0, 360.0);
@@ -433,6 +443,12 @@ Clothing randomClothing(std::mt19937_64& rng) {
   c.second_saturation = uniformIn(rng, 0.4, 1.0);
   c.second_share = uniformIn(rng, 0.1, 0.45);
   c.grey_share = uniformIn(rng, 0.1, 0.35);
+  std::mt19937_64 extra = extraClothingRng(c);
+  c.grey_value = uniformIn(extra, 0.05, 0.95);
+  c.legs_hue_deg = uniformIn(extra, 0.0, 360.0);
+  c.legs_saturation = uniformIn(extra, 0.3, 0.9);
+  c.legs_grey_share = uniformIn(extra, 0.2, 1.0);
+  c.legs_grey_value = uniformIn(extra, 0.05, 0.8);
   return c;
 }
 
@@ -444,6 +460,12 @@ Clothing lookAlikeClothing(const Clothing& target, std::mt19937_64& rng) {
   c.second_saturation = std::clamp(target.second_saturation + uniformIn(rng, -0.05, 0.05), 0.0, 1.0);
   c.second_share = std::clamp(target.second_share + uniformIn(rng, -0.05, 0.05), 0.0, 1.0);
   c.grey_share = std::clamp(target.grey_share + uniformIn(rng, -0.05, 0.05), 0.0, 0.95);
+  std::mt19937_64 extra = extraClothingRng(c);
+  c.grey_value = std::clamp(target.grey_value + uniformIn(extra, -0.05, 0.05), 0.0, 1.0);
+  c.legs_hue_deg = std::fmod(target.legs_hue_deg + uniformIn(extra, -8.0, 8.0) + 360.0, 360.0);
+  c.legs_saturation = std::clamp(target.legs_saturation + uniformIn(extra, -0.05, 0.05), 0.0, 1.0);
+  c.legs_grey_share = std::clamp(target.legs_grey_share + uniformIn(extra, -0.05, 0.05), 0.0, 1.0);
+  c.legs_grey_value = std::clamp(target.legs_grey_value + uniformIn(extra, -0.05, 0.05), 0.0, 1.0);
   return c;
 }
 
@@ -451,22 +473,23 @@ AppearanceSignature noisySignature(const AppearanceSignature& truth, std::mt1993
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> small(0.0, 0.0005);
   AppearanceSignature out{};
-  double sum = 0.0;
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    const double n = normal(rng);
-    const double u = small(rng);
-    const double v = std::max(0.0, static_cast<double>(truth[i]) * (1.0 + 0.15 * n) + u);
-    out[i] = static_cast<float>(v);
-    sum += v;
+  for (std::size_t r = 0; r < kSignatureRegions; ++r) {
+    const auto region = static_cast<SignatureRegion>(r);
+    const bool measured = regionSum(truth, region) > 0.0;
+    const std::size_t offset = regionOffset(region);
+    double sum = 0.0;
+    for (std::size_t i = offset; i < offset + kSignatureRegionBins; ++i) {
+      const double n = normal(rng);  // drawn for every bin, so the stream's use does not depend on the truth
+      const double u = small(rng);
+      const double v = measured ? std::max(0.0, static_cast<double>(truth[i]) * (1.0 + 0.15 * n) + u) : 0.0;
+      out[i] = static_cast<float>(v);
+      sum += v;
+    }
+    if (sum > 0.0)
+      for (std::size_t i = offset; i < offset + kSignatureRegionBins; ++i)
+        out[i] = static_cast<float>(static_cast<double>(out[i]) / sum);
   }
-  for (float& v : out) v = static_cast<float>(static_cast<double>(v) / sum);
   return out;
-}
-
-double signatureDistance(const AppearanceSignature& a, const AppearanceSignature& b) {
-  double bc = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) bc += std::sqrt(static_cast<double>(a[i]) * static_cast<double>(b[i]));
-  return std::sqrt(std::max(0.0, 1.0 - bc));
 }
 
 BystandersSpec parseBystanders(const rt::ConfigNode& n, const std::vector<Box>& boxes,

@@ -79,7 +79,7 @@ TEST(DatasetManifest, BadManifestsGetOneLineErrorsNamingFileLineAndKey) {
     std::string from, to, message;
   };
   const std::vector<Case> cases = {
-      {"format_version: 1", "format_version: 2", "format_version: 2 is not supported (this build reads 1)"},
+      {"format_version: 2", "format_version: 1", "format_version: 1 is not supported (this build reads 2)"},
       {"device: gimbal,", "device: lidar,", "streams[1].device: unknown device 'lidar'"},
       {"file: gimbal.csv", "file: ../gimbal.csv", "streams[1].file: must be a path inside the dataset's folder"},
       {"device: gimbal,", "device: odometry,", "streams[1].device: 'odometry' listed twice"},

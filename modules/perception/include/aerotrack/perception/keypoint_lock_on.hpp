@@ -14,9 +14,6 @@
 
 namespace aerotrack::perception {
 
-static_assert(static_cast<std::size_t>(kAppearanceBins) == hal::kAppearanceSignatureBins,
-              "a detection's appearance signature is the torso histogram the tracker compares");
-
 /// A detection's signature as the tracker's appearance (invalid without one).
 Appearance toAppearance(const hal::PersonDetection& person);
 

@@ -18,7 +18,7 @@
 namespace aerotrack::hal::replay {
 
 /// The format version this build writes and the only one it reads.
-inline constexpr int kDatasetFormatVersion = 1;
+inline constexpr int kDatasetFormatVersion = 2;  // 2: appearance signatures of 80 bins (torso and legs; issue 22)
 
 /// A camera as recorded: its image size and intrinsics, and where it sits on the drone.
 struct RecordedCamera {

@@ -12,8 +12,9 @@
 //   - random_walkers: people walking seeded random paths in a region (background traffic);
 //   - look_alike: any bystander may wear the target's clothes (a small perturbation of its
 //     appearance), which defeats an appearance cue.
-// Every person carries a true appearance signature: a normalised torso hue-saturation histogram in
-// perception's layout (hal::kAppearanceSignatureBins) made of two clothing colours and grey.
+// Every person carries a true appearance signature in hal's layout (appearance_signature.hpp): the
+// torso's histogram made of two clothing colours and a grey of some brightness, the legs' of a
+// trousers colour and a grey.
 // Everything random comes from one stream of the scenario seed (bystander generation), so a
 // scenario without the section instantiates exactly as before.
 #pragma once
@@ -38,8 +39,8 @@ class ConfigNode;
 
 namespace aerotrack::hal::sim {
 
-/// A person's torso colour histogram (hal::PersonDetection::appearance's layout; sums to 1).
-using AppearanceSignature = std::array<float, kAppearanceSignatureBins>;
+/// A person's appearance signature (hal::PersonDetection::appearance's layout; each region sums to 1).
+using AppearanceSignature = AppearanceHistogram;
 
 /// Random walkers and group members keep this far from the drone's start point.
 inline constexpr double kDroneStartKeepOutM = 2.0;
@@ -52,8 +53,8 @@ inline constexpr double kTargetStartKeepOutM = 1.0;
 /// the shoulders (0.259 H = 0.45 m wide at H = 1.75 m, Drillis & Contini) and the swinging arms.
 inline constexpr double kPersonBodyRadiusM = 0.25;
 
-/// Clothing: two colours (hue in degrees, saturation in [0, 1]) and a grey share (hair, skin in
-/// shadow, dark trousers), the signature's three parts.
+/// Clothing: the torso's two colours (hue in degrees, saturation in [0, 1]) and a grey share (hair, skin
+/// in shadow, a dark pattern) of some brightness; the legs' one colour and grey share.
 struct Clothing {
   double hue_deg = 0.0;
   double saturation = 0.7;
@@ -61,28 +62,36 @@ struct Clothing {
   double second_saturation = 0.5;
   double second_share = 0.3;  ///< Of the coloured part, [0, 1].
   double grey_share = 0.2;    ///< Of the whole, [0, 1).
+  double grey_value = 0.3;    ///< Brightness of the grey, [0, 1]: black 0, white 1.
+  double legs_hue_deg = 220.0;
+  double legs_saturation = 0.5;
+  double legs_grey_share = 0.8;  ///< Of the legs, [0, 1]: dark trousers are mostly grey.
+  double legs_grey_value = 0.2;
 };
 
-/// The signature of clothing: each colour split between its two nearest hue bins (linear, as
-/// perception's histogram does) in its saturation bin; grey in the last bin. Pure.
+/// The signature of clothing, both regions measured: each colour votes as a pixel of that colour does
+/// (hal::addColour; coloured cloth at brightness 1, the greys at their brightness). Pure.
 AppearanceSignature signatureOf(const Clothing& clothing);
 
 /// The main clothing colour as BGR in [0, 1] (HSV with value 1), for the image renderer's recolouring.
 Eigen::Vector3f clothingBgr(const Clothing& clothing);
 
-/// Random clothing: hues uniform, saturations in [0.4, 1], grey share in [0.1, 0.35].
+/// Random clothing: hues uniform, saturations in [0.4, 1], grey share in [0.1, 0.35]; grey brightness in
+/// [0.05, 0.95]; legs' saturation in [0.3, 0.9], grey share in [0.2, 1], grey brightness in [0.05, 0.8].
+/// Draws six numbers from rng, as before the legs and brightness existed (so that every scenario's
+/// bystanders walk where they did); the rest comes from a stream seeded by those six.
 Clothing randomClothing(std::mt19937_64& rng);
 
-/// Clothing like `target`'s: hues within +-8 deg, saturations and shares within +-0.05.
+/// Clothing like `target`'s: hues within +-8 deg, saturations, shares and brightnesses within +-0.05.
+/// Draws six numbers from rng (as randomClothing).
 Clothing lookAlikeClothing(const Clothing& target, std::mt19937_64& rng);
 
-/// One frame's measurement of a signature: each bin times (1 + 0.15 N(0, 1)) plus U(0, 0.0005),
-/// clamped at 0, renormalised (a real torso histogram changes with light, pose and crop). Draws
-/// 2 x kAppearanceSignatureBins numbers.
+/// One frame's measurement of a signature: each bin of a measured region times (1 + 0.15 N(0, 1)) plus
+/// U(0, 0.0005), clamped at 0, the region renormalised (a real histogram changes with light, pose and
+/// crop); a region not measured stays zeros. Draws 2 x kAppearanceSignatureBins numbers.
 AppearanceSignature noisySignature(const AppearanceSignature& truth, std::mt19937_64& rng);
 
-/// Bhattacharyya distance sqrt(1 - sum sqrt(a_i b_i)) in [0, 1] (perception's measure).
-double signatureDistance(const AppearanceSignature& a, const AppearanceSignature& b);
+using hal::signatureDistance;
 
 /// A bystander's random walk: legs of random length and turn inside a region.
 struct BystanderWalk {
