@@ -8,6 +8,7 @@
 // what the program uses, whatever implements it.
 #pragma once
 
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cfloat>
@@ -205,11 +206,12 @@ inline void collectKeys(const YAML::Node& map, const std::string& prefix, std::v
   }
 }
 
-/// The written keys are the table's keys for `params`; the reader needs every one of them (removing any
-/// one is "missing required key" naming it) and reads no other one (an extra key in any map is "unknown
-/// key"). Returns the written key paths.
+/// The written keys are the table's keys for `params`; the reader needs every one of them but `optional`
+/// (removing any other one is "missing required key" naming it; removing an optional one still reads) and
+/// reads no other one (an extra key in any map is "unknown key"). Returns the written key paths.
 template <class S>
-std::vector<std::string> keys(const FieldTableUnderTest<S>& t, const S& params) {
+std::vector<std::string> keys(const FieldTableUnderTest<S>& t, const S& params,
+                              const std::vector<std::string>& optional = {}) {
   const std::string text = t.write(params);
   const YAML::Node document = YAML::Load(text);
   std::vector<std::string> written;
@@ -227,8 +229,13 @@ std::vector<std::string> keys(const FieldTableUnderTest<S>& t, const S& params) 
     }
     parent.remove(rest);
     const rt::Expected<S> without = t.read(YAML::Dump(copy));
-    EXPECT_FALSE(without) << "reads without " << path;
-    if (!without) {
+    const bool is_optional = std::find(optional.begin(), optional.end(), path) != optional.end();
+    if (is_optional) {
+      EXPECT_TRUE(without) << "does not read without the optional " << path;
+    } else {
+      EXPECT_FALSE(without) << "reads without " << path;
+    }
+    if (!without && !is_optional) {
       EXPECT_NE(without.error().message.find(path + ": missing required key"), std::string::npos)
           << without.error().message;
     }

@@ -2,6 +2,7 @@
 #include "aerotrack/estimation/target_task.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace aerotrack::estimation {
@@ -12,6 +13,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.min_measurement_std_m = node.getDouble("min_measurement_std_m", 0.001, 10.0);
   params.max_wait_ns = rt::secondsToNs(node.getDouble("max_wait_s", 0.0, 2.0));
   params.bearing_fallback = node.getEnum("unreliable_torso", {"bearing", "skip"}) == "bearing";
+  params.look_gate_sigmas = node.getDoubleOr("look_gate_sigmas", params.look_gate_sigmas, 0.0, 100.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
 }
@@ -56,6 +58,11 @@ Eigen::Vector3d TargetTask::localize(const perception::TorsoFeatures& torso, con
 }
 
 double TargetTask::measurementStdM(const Eigen::Vector3d& p_C_m) const {
+  // The regression's own noise where its fit measured one (issue 22 item 3: the network scatters three times as
+  // much as the keypoint camera), else the configured one.
+  const localization::LocalizationParams& fit = params_.localization;
+  const double fitted_m = fit.noise_std_m + fit.noise_std_per_m * p_C_m.x();
+  if (fitted_m > 0.0) return std::max(params_.min_measurement_std_m, fitted_m);
   return std::max(params_.min_measurement_std_m, params_.measurement_std_per_m * p_C_m.head<2>().norm());
 }
 
@@ -167,6 +174,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const std::optional<double> followed_cost = cost_of(d2, reference_);
     if (!followed_cost) continue;
     const double cost = *followed_cost;
+    if (!looksLikeTheFollowed(c.look)) continue;
     if (bearing) {
       bearing_cost[static_cast<std::size_t>(i)] = cost;
       bearing_d2[static_cast<std::size_t>(i)] = *d2;
@@ -241,11 +249,27 @@ bool TargetTask::process(const Candidate& c) {
     ++stats_.accepted;
     // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
     // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).
+    if (c.look.valid && reference_.valid) {
+      // The spread of the person's own colour distance, learnt at the colour's rate (the first samples averaged).
+      const double d = perception::appearanceDistance(reference_, c.look);
+      ++own_look_count_;
+      const double rate = std::max(params_.tracker.appearance_rate, 1.0 / own_look_count_);
+      own_look_mean_ += rate * (d - own_look_mean_);
+      own_look_mean_sq_ += rate * (d * d - own_look_mean_sq_);
+    }
     if (c.look.valid) perception::blendAppearance(reference_, c.look, params_.tracker.appearance_rate);
     return true;
   }
   ++stats_.rejected;
   return false;
+}
+
+bool TargetTask::looksLikeTheFollowed(const perception::Appearance& look) const {
+  // Too few of the person's own distances to know their spread, or no colour to judge: the colour gate alone.
+  constexpr int kMinSamples = 10;
+  if (params_.look_gate_sigmas <= 0.0 || own_look_count_ < kMinSamples || !look.valid || !reference_.valid) return true;
+  const double std_dev = std::sqrt(std::max(0.0, own_look_mean_sq_ - own_look_mean_ * own_look_mean_));
+  return perception::appearanceDistance(reference_, look) <= own_look_mean_ + params_.look_gate_sigmas * std_dev;
 }
 
 std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::DetectionFrame& frame,

@@ -384,10 +384,66 @@ rt::Expected<LocalizationParams> fit(LocalizationModel model, std::span<const Lo
     error_sum_m += std::hypot(p_C.x() - s.x_m, p_C.y() - s.y_m);
   }
   params.fit_mean_error_m = error_sum_m / static_cast<double>(samples.size());
+  fitNoise(params, samples);
   if (rt::Status valid = validate(params); !valid) {
     return rt::Error{std::string(toString(model)) + " model: the fit gave " + valid.error().message};
   }
   return params;
+}
+
+void fitNoise(LocalizationParams& params, std::span<const LocalizationSample> samples) {
+  params.noise_std_m = params.noise_std_per_m = 0.0;
+  struct Residual {
+    double x_m, error_m;
+  };
+  std::vector<Residual> residuals;
+  residuals.reserve(samples.size());
+  for (const LocalizationSample& s : samples) {
+    const Eigen::Vector3d p_C = predict(params, s.torso_px, s.u_px);
+    const double error_m = std::hypot(p_C.x() - s.x_m, p_C.y() - s.y_m);
+    if (std::isfinite(error_m) && std::isfinite(s.x_m)) residuals.push_back({s.x_m, error_m});
+  }
+  if (residuals.empty()) return;
+  std::sort(residuals.begin(), residuals.end(), [](const Residual& a, const Residual& b) { return a.x_m < b.x_m; });
+  constexpr std::size_t kMinPerBin = 50;
+  constexpr std::size_t kMaxBins = 8;
+  // The median length of a 2-D isotropic Gaussian vector of per-axis sigma: sigma sqrt(2 ln 2).
+  const double kRayleighMedian = std::sqrt(2.0 * std::log(2.0));
+  const std::size_t bins = std::clamp<std::size_t>(residuals.size() / kMinPerBin, 1, kMaxBins);
+  std::vector<double> bin_x, bin_sigma, scratch;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t from = b * residuals.size() / bins;
+    const std::size_t to = (b + 1) * residuals.size() / bins;
+    const auto median_of = [&](auto value) {
+      scratch.clear();
+      for (std::size_t i = from; i < to; ++i) scratch.push_back(value(residuals[i]));
+      const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
+      std::nth_element(scratch.begin(), mid, scratch.end());
+      return *mid;
+    };
+    bin_x.push_back(median_of([](const Residual& r) { return r.x_m; }));
+    bin_sigma.push_back(median_of([](const Residual& r) { return r.error_m; }) / kRayleighMedian);
+  }
+  const auto n = static_cast<double>(bins);
+  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
+  for (std::size_t b = 0; b < bins; ++b) {
+    sx += bin_x[b];
+    sy += bin_sigma[b];
+    sxx += bin_x[b] * bin_x[b];
+    sxy += bin_x[b] * bin_sigma[b];
+  }
+  const double det = n * sxx - sx * sx;
+  double slope = det > 1e-12 ? (n * sxy - sx * sy) / det : 0.0;
+  double intercept = (sy - slope * sx) / n;
+  if (slope < 0.0) {  // noise that falls with distance is not a model to extrapolate: a constant
+    slope = 0.0;
+    intercept = sy / n;
+  } else if (intercept < 0.0) {  // through the origin
+    intercept = 0.0;
+    slope = sxx > 0.0 ? sxy / sxx : 0.0;
+  }
+  params.noise_std_m = intercept;
+  params.noise_std_per_m = slope;
 }
 
 Eigen::Vector3d predict(const LocalizationParams& params, double torso_px, double u_px) {
@@ -452,6 +508,8 @@ const rt::FieldTable<LocalizationParams>& localizationFields() {
       rt::number("z_m", &P::z_m, rt::Range::finite()),
       rt::count("fit_samples", &P::fit_samples),
       rt::number("fit_mean_error_m", &P::fit_mean_error_m, rt::Range::atLeast(0.0)),
+      rt::optionalNumber("noise_std_m", &P::noise_std_m, rt::Range::closed(0.0, 100.0), 0.0),
+      rt::optionalNumber("noise_std_per_m", &P::noise_std_per_m, rt::Range::closed(0.0, 10.0), 0.0),
       rt::section("paper", &P::paper, paperModelFields())
           .when(is(LocalizationModel::kPaper))
           .withComment("x = l1_m e^(k1_per_px L) + l2_m e^(k2_per_px L); y = (l3 e^(k3_per_px u) + l4 e^(k4_per_px u)) "

@@ -211,6 +211,40 @@ TEST(LocalizationEvaluate, GivenKnownErrorsThenTheSummaryAndTheDistanceTable) {
   EXPECT_FALSE(evaluate(params, std::vector<LocalizationSample>{}));
 }
 
+TEST(LocalizationNoise, GivenResidualsGrowingWithDistance_WhenFitted_ThenTheNoiseLineIsRecovered) {
+  // Each axis off by N(0, (0.05 + 0.04 x)^2) around the true model: fitNoise on the true parameters recovers the
+  // line from the residuals' medians.
+  const LocalizationParams truth = truePinhole();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> torso(20.0, 200.0);
+  std::uniform_real_distribution<double> u(0.0, 640.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<LocalizationSample> samples;
+  for (int i = 0; i < 8000; ++i) {
+    LocalizationSample s;
+    s.torso_px = torso(rng);
+    s.u_px = u(rng);
+    const Eigen::Vector3d p_C = predict(truth, s.torso_px, s.u_px);
+    const double sigma_m = 0.05 + 0.04 * p_C.x();
+    s.x_m = p_C.x() + sigma_m * normal(rng);
+    s.y_m = p_C.y() + sigma_m * normal(rng);
+    samples.push_back(s);
+  }
+  LocalizationParams fitted = truth;
+  fitNoise(fitted, samples);
+  EXPECT_NEAR(fitted.noise_std_per_m, 0.04, 0.004);
+  EXPECT_NEAR(fitted.noise_std_m, 0.05, 0.02);
+  // Constant noise: the slope near 0, the intercept the noise. fit() measures it on its own residuals.
+  const auto constant = fit(LocalizationModel::kPinhole, synthesize(truth, 2000, 0.2, 9), testIntrinsics());
+  ASSERT_TRUE(constant.has_value()) << constant.error().message;
+  EXPECT_NEAR(constant->noise_std_m + 5.0 * constant->noise_std_per_m, 0.2, 0.03);
+  // No samples: not measured.
+  LocalizationParams none = truth;
+  fitNoise(none, {});
+  EXPECT_EQ(none.noise_std_m, 0.0);
+  EXPECT_EQ(none.noise_std_per_m, 0.0);
+}
+
 TEST(LocalizationModelNames, ParseAndPrint) {
   EXPECT_EQ(toString(LocalizationModel::kPaper), "paper");
   ASSERT_TRUE(parseLocalizationModel("pinhole"));

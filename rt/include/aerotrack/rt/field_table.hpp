@@ -277,6 +277,18 @@ Field<S> number(std::string key, double S::*member, Range range) {
   return Field<S>(std::move(key), FieldKind::kNumber, std::move(ops));
 }
 
+/// A number (double) in `range` that a file may leave out: absent, it reads as `fallback` (a key added to a
+/// file format after files of it were written). Written, checked and walked like number().
+template <class S>
+Field<S> optionalNumber(std::string key, double S::*member, Range range, double fallback) {
+  Field<S> field = number(key, member, range);
+  typename Field<S>::Ops ops = field.ops();
+  ops.read = [key, member, range, fallback](const ConfigNode& node, S& s) {
+    s.*member = node.has(key) ? node.getDouble(key, range) : fallback;
+  };
+  return Field<S>(std::move(key), FieldKind::kNumber, std::move(ops));
+}
+
 /// A required integer in [min, max].
 template <class S>
 Field<S> integer(std::string key, int S::*member, int min, int max) {

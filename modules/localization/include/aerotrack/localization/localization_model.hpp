@@ -80,7 +80,20 @@ struct LocalizationParams {
   double z_m = 0.0;               ///< Constant height of the person's reference point in C, metres.
   std::size_t fit_samples = 0;    ///< Samples the fit used (informative).
   double fit_mean_error_m = 0.0;  ///< Mean horizontal error on those samples (informative).
+  /// A single frame's noise, measured on the fit's residuals (issue 22 item 3): the standard deviation of one
+  /// horizontal axis at forward distance x is noise_std_m + noise_std_per_m x. The estimator weighs each
+  /// measurement with it. Both 0: not measured (a file written before the keys existed; optional keys), and the
+  /// estimation section's measurement_std_per_m applies.
+  double noise_std_m = 0.0;
+  double noise_std_per_m = 0.0;
 };
+
+/// The noise model of fit(): the residuals sorted by distance into up to eight bins of equal count (at
+/// least 50 samples each; one bin for fewer than 100), each bin's standard deviation taken robustly as
+/// median(|r|) / 1.1774 (the median of the length of a 2-D isotropic Gaussian error, per axis), and a
+/// least-squares line a + b x through the bins, with a, b >= 0. Writes noise_std_m and noise_std_per_m of
+/// params (whose model predicts). Pure; allocates O(samples).
+void fitNoise(LocalizationParams& params, std::span<const LocalizationSample> samples);
 
 struct FitOptions {
   /// Scale of the Cauchy loss on each residual (metres): residuals well beyond it (gross
