@@ -231,6 +231,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "max_wait_s" << YAML::Value << rt::nsToSeconds(e.task.max_wait_ns);
     out << YAML::Key << "unreliable_torso" << YAML::Value << (e.task.bearing_fallback ? "bearing" : "skip");
     out << YAML::Key << "look_gate_sigmas" << YAML::Value << e.task.look_gate_sigmas;
+    out << YAML::Key << "look_gate_confirm_s" << YAML::Value << e.task.look_gate_confirm_s;
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
     out << YAML::Key << "estimator" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "accel_psd_xy_m2ps3" << YAML::Value << k.accel_psd_xy_m2ps3;

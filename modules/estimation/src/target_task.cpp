@@ -14,6 +14,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.max_wait_ns = rt::secondsToNs(node.getDouble("max_wait_s", 0.0, 2.0));
   params.bearing_fallback = node.getEnum("unreliable_torso", {"bearing", "skip"}) == "bearing";
   params.look_gate_sigmas = node.getDoubleOr("look_gate_sigmas", params.look_gate_sigmas, 0.0, 100.0);
+  params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
 }
@@ -174,7 +175,11 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const std::optional<double> followed_cost = cost_of(d2, reference_);
     if (!followed_cost) continue;
     const double cost = *followed_cost;
-    if (!looksLikeTheFollowed(c.look)) continue;
+    if (!looksLikeTheFollowed(c.look, frame.stamp_ns)) {
+      a.look_refused = true;
+      if (!bearing) a.look_refused_d2 = std::min(a.look_refused_d2, *d2);
+      continue;
+    }
     if (bearing) {
       bearing_cost[static_cast<std::size_t>(i)] = cost;
       bearing_d2[static_cast<std::size_t>(i)] = *d2;
@@ -264,10 +269,17 @@ bool TargetTask::process(const Candidate& c) {
   return false;
 }
 
-bool TargetTask::looksLikeTheFollowed(const perception::Appearance& look) const {
+bool TargetTask::looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const {
   // Too few of the person's own distances to know their spread, or no colour to judge: the colour gate alone.
   constexpr int kMinSamples = 10;
   if (params_.look_gate_sigmas <= 0.0 || own_look_count_ < kMinSamples || !look.valid || !reference_.valid) return true;
+  if (look_refused_since_ns_ >= 0 && rt::nsToSeconds(stamp_ns - look_refused_since_ns_) >= params_.look_gate_confirm_s &&
+      look_refused_d2_count_ > 0) {
+    // Confirmed over frames if the refused sat on the prediction: the mean of n chi-square (3 dof) values is 3
+    // with a standard deviation of sqrt(6 / n).
+    const double n = look_refused_d2_count_;
+    if (look_refused_d2_sum_ / n <= 3.0 + 3.0 * std::sqrt(6.0 / n)) return true;
+  }
   const double std_dev = std::sqrt(std::max(0.0, own_look_mean_sq_ - own_look_mean_ * own_look_mean_));
   return perception::appearanceDistance(reference_, look) <= own_look_mean_ + params_.look_gate_sigmas * std_dev;
 }
@@ -330,6 +342,17 @@ void TargetTask::step(rt::TimeNs now_ns) {
     std::array<Candidate, hal::kMaxPersons> candidates;
     const Association a = associate(frame, candidates);
     const int person = a.followed;
+    if (person >= 0 || !a.look_refused) {
+      look_refused_since_ns_ = -1;
+      look_refused_d2_sum_ = 0.0;
+      look_refused_d2_count_ = 0;
+    } else {
+      if (look_refused_since_ns_ < 0) look_refused_since_ns_ = frame.stamp_ns;
+      if (std::isfinite(a.look_refused_d2)) {
+        look_refused_d2_sum_ += a.look_refused_d2;
+        ++look_refused_d2_count_;
+      }
+    }
     bool followed_measured = false;
     if (person >= 0) {
       ++stats_.detections;

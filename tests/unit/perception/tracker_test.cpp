@@ -6,6 +6,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <utility>
+
 #include "aerotrack/perception/appearance.hpp"
 #include "aerotrack/perception/person_tracker.hpp"
 
@@ -236,10 +238,35 @@ TEST(Appearance, GivenRandomPixels_WhenMeasured_ThenTheHistogramMatchesOpenCvsHs
     for (std::size_t i = 0; i < counts.size(); ++i)
       EXPECT_NEAR(measured.histogram[hal::regionOffset(region) + i], counts[i] / n, 1e-5) << "bin " << i;
   };
-  // The torso box: u in [20, 60] shrunk by 8 px each side, v in [20, 80] shrunk by 9 px; the legs: hips'
-  // width [25, 55] less 3 px each side, v from 80 + 0.05 x 50 to 80 + 0.6 x 50.
+  // The torso box: u in [20, 60] shrunk by 8 px each side, v in [20, 80] shrunk by 9 px.
   reference(28, 52, 29, 71, hal::SignatureRegion::kTorso);
-  reference(28, 52, 82, 110, hal::SignatureRegion::kLegs);
+}
+
+TEST(Appearance, GivenAWalkerInStride_WhenTheLegsAreMeasured_ThenTheGroundBetweenThemIsNotCounted) {
+  // The thighs as bands on grass: hips at (30, 80) and (50, 80), knees spread to (15, 130) and (65, 130). A
+  // box between hips and knees would be mostly grass (measured in image mode: a walker's legs 0.3-0.6 from
+  // their own reference); bands along the thighs see the trousers.
+  std::array<hal::Keypoint2D, hal::kNumKeypoints> k = standingKeypoints(0.9);
+  k[index(CocoKeypoint::kLeftHip)] = {50.0, 80.0, 0.9};
+  k[index(CocoKeypoint::kRightHip)] = {30.0, 80.0, 0.9};
+  k[index(CocoKeypoint::kLeftKnee)] = {65.0, 130.0, 0.9};
+  k[index(CocoKeypoint::kRightKnee)] = {15.0, 130.0, 0.9};
+  const cv::Scalar jeans(140, 80, 40), grass(40, 160, 60);
+  cv::Mat stride(200, 80, CV_8UC3, grass);
+  stride.rowRange(0, 80).setTo(cv::Scalar(30, 30, 200));
+  for (const auto& [hip, knee] : {std::pair{k[index(CocoKeypoint::kLeftHip)], k[index(CocoKeypoint::kLeftKnee)]},
+                                  std::pair{k[index(CocoKeypoint::kRightHip)], k[index(CocoKeypoint::kRightKnee)]}})
+    cv::line(stride, cv::Point(static_cast<int>(hip.u_px), static_cast<int>(hip.v_px)),
+             cv::Point(static_cast<int>(knee.u_px), static_cast<int>(knee.v_px)), jeans, 14);
+  const Appearance walker = personAppearance(stride, k);
+  const Appearance standing = personAppearance(dressed(cv::Scalar(30, 30, 200), jeans), standingKeypoints(0.9));
+  ASSERT_TRUE(walker.valid && standing.valid);
+  hal::AppearanceHistogram walker_legs{}, standing_legs{};
+  for (std::size_t i = hal::regionOffset(hal::SignatureRegion::kLegs); i < hal::kAppearanceSignatureBins; ++i) {
+    walker_legs[i] = walker.histogram[i];
+    standing_legs[i] = standing.histogram[i];
+  }
+  EXPECT_LT(hal::signatureDistance(walker_legs, standing_legs), 0.1);
 }
 
 TEST(Appearance, GivenAReferenceWithoutLegs_WhenBlendedWithOneWithLegs_ThenTheLegsAreTakenAsTheyAre) {

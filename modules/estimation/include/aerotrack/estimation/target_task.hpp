@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 #include "aerotrack/estimation/bystander_tracks.hpp"
@@ -51,6 +52,13 @@ struct TargetTaskParams {
   /// (0.11-0.23 against the person's own 0.05 +- 0.015). After a loss (re-identification) only the colour gate
   /// applies. 0: off.
   double look_gate_sigmas = 3.0;
+  /// ... unless the look gate alone has refused someone the followed track would have taken in every frame for
+  /// this long, with distances that sat on the prediction as the person's own do (the mean Mahalanobis
+  /// distance of the refused, 3 dof, within 3 + 3 sqrt(6 / n) over n frames): the person's own look has changed
+  /// (a turn, the light, a partial view -- image mode), and a gate learnt only from the frames it lets through
+  /// would otherwise shut the person out for good. A newcomer beside the hidden person sits off the prediction
+  /// and drifts from it.
+  double look_gate_confirm_s = 0.5;
   /// Which detected person the estimator is given (issue 22 item 2; docs/modules/localization-estimation.md):
   /// true (`association: estimate`): once the filter has started, an assignment (global nearest neighbour) of
   /// the frame's people to the followed track and to tracks of the other people (bystander_tracks.hpp), each
@@ -117,6 +125,8 @@ class TargetTask final : public rt::Task {
   struct Association {
     int followed = -1;                          ///< The person given to the estimator, or -1.
     std::array<int, hal::kMaxPersons> track{};  ///< Each person's bystander track, kNoTrack or kNewTrack.
+    bool look_refused = false;  ///< Someone fit the followed track but for the look gate...
+    double look_refused_d2 = std::numeric_limits<double>::infinity();  ///< ... the nearest such distance's d2.
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
@@ -155,7 +165,10 @@ class TargetTask final : public rt::Task {
   double own_look_mean_ = 0.0, own_look_mean_sq_ = 0.0;
   int own_look_count_ = 0;
   /// Whether a colour is as near the learnt one as the followed person's own frames are (look_gate_sigmas).
-  bool looksLikeTheFollowed(const perception::Appearance& look) const;
+  bool looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const;
+  rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
+  double look_refused_d2_sum_ = 0.0;       ///< Over the run's frames with a refused distance...
+  int look_refused_d2_count_ = 0;          ///< ... and their number.
   BystanderTracks bystanders_;  ///< The torso colour of the people given to the estimator and taken.
 };
 
