@@ -42,7 +42,8 @@ ColourVote colourVote(double hue_deg, double saturation, double value) {
   // computed in float or double must decide alike for a pixel exactly on the threshold.
   constexpr double kRounding = 1e-6;  // also for the saturation bins' edges (85 / 255 is exactly 1/3)
   if (!(value >= kAchromaticMaxValue - kRounding) || !(saturation * value >= kAchromaticMaxChroma - kRounding)) {
-    constexpr auto kGreyFirst = static_cast<std::size_t>(kSignatureHueBins * kSignatureSaturationBins);
+    constexpr std::size_t kGreyFirst =
+        static_cast<std::size_t>(kSignatureHueBins) * static_cast<std::size_t>(kSignatureSaturationBins);
     const LinearVote v = clampedVote(std::isfinite(value) ? value : 0.0, kSignatureValueBins);
     out.bin = {kGreyFirst + static_cast<std::size_t>(v.lower), kGreyFirst + static_cast<std::size_t>(v.upper)};
     out.share = {1.0 - v.upper_share, v.upper_share};
@@ -53,7 +54,8 @@ ColourVote colourVote(double hue_deg, double saturation, double value) {
   const double turns = hue_deg / 360.0;
   const LinearVote h = circularVote((turns - std::floor(turns)) * kSignatureHueBins, kSignatureHueBins);
   const auto bin = [&](int hue_bin) {
-    return static_cast<std::size_t>(hue_bin * kSignatureSaturationBins + sat_bin);
+    return static_cast<std::size_t>(hue_bin) * static_cast<std::size_t>(kSignatureSaturationBins) +
+           static_cast<std::size_t>(sat_bin);
   };
   out.bin = {bin(h.lower), bin(h.upper)};
   out.share = {1.0 - h.upper_share, h.upper_share};

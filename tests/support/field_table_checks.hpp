@@ -8,8 +8,8 @@
 // what the program uses, whatever implements it.
 #pragma once
 
-#include <algorithm>
 #include <gtest/gtest.h>
+#include <algorithm>
 
 #include <cfloat>
 #include <cmath>

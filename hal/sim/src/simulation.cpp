@@ -366,8 +366,8 @@ void Simulation::observeCrowd(const Eigen::Isometry3d& T_WC, DetectionFrame& fra
     sight_skip_id_ = id;
     if (const auto detection = observe(p.keypoints_W_m, T_WC, spec.camera, line_of_sight, crowd_rng_)) {
       candidates_.push_back({*detection, id, area(*detection)});
-      candidates_.back().detection.appearance =
-          measuredSignature(personAppearance(id), candidates_.back().detection, spec.camera.intrinsics, appearance_rng_);
+      candidates_.back().detection.appearance = measuredSignature(personAppearance(id), candidates_.back().detection,
+                                                                  spec.camera.intrinsics, appearance_rng_);
       candidates_.back().detection.has_appearance = true;
     }
   }

@@ -273,8 +273,8 @@ bool TargetTask::looksLikeTheFollowed(const perception::Appearance& look, rt::Ti
   // Too few of the person's own distances to know their spread, or no colour to judge: the colour gate alone.
   constexpr int kMinSamples = 10;
   if (params_.look_gate_sigmas <= 0.0 || own_look_count_ < kMinSamples || !look.valid || !reference_.valid) return true;
-  if (look_refused_since_ns_ >= 0 && rt::nsToSeconds(stamp_ns - look_refused_since_ns_) >= params_.look_gate_confirm_s &&
-      look_refused_d2_count_ > 0) {
+  if (look_refused_since_ns_ >= 0 &&
+      rt::nsToSeconds(stamp_ns - look_refused_since_ns_) >= params_.look_gate_confirm_s && look_refused_d2_count_ > 0) {
     // Confirmed over frames if the refused sat on the prediction: the mean of n chi-square (3 dof) values is 3
     // with a standard deviation of sqrt(6 / n).
     const double n = look_refused_d2_count_;

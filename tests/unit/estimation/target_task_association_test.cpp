@@ -227,7 +227,8 @@ TEST(TargetTaskAssociation,
   EXPECT_LT(colour_gate_only.estimate.p_WT_m.x(), 4.8);
 }
 
-TEST(TargetTaskAssociation, GivenThePersonsLookChanges_WhenTheyStayInTheGate_ThenTheyAreTakenAgainAfterTheConfirmation) {
+TEST(TargetTaskAssociation,
+     GivenThePersonsLookChanges_WhenTheyStayInTheGate_ThenTheyAreTakenAgainAfterTheConfirmation) {
   // The look gate learns only from the frames it lets through; without the confirmation, a person whose look
   // changed for good (image mode: a turn, the light) would be shut out (measured: sharp_turn in image mode lost
   // 85 % of its measurements). Refused in every frame for look_gate_confirm_s (0.5 s, 15 frames), then taken.

@@ -23,8 +23,8 @@ double firstStdM(const localization::LocalizationParams& localization) {
   test::pushHover(odometry, gimbal, 0);
   hal::DetectionFrame frame;
   frame.sequence = 1;
-  frame.intrinsics = {test::kWidthPx, test::kHeightPx, test::kFocalPx, test::kFocalPx, 0.5 * test::kWidthPx,
-                      0.5 * test::kHeightPx, {}};
+  frame.intrinsics = {
+      test::kWidthPx, test::kHeightPx, test::kFocalPx, test::kFocalPx, 0.5 * test::kWidthPx, 0.5 * test::kHeightPx, {}};
   frame.person_count = 1;
   frame.target_index = 0;
   test::drawTorso(frame.persons[0], 5.0, 0.0, 0.3, false);

@@ -199,8 +199,9 @@ TEST(Bystanders, GivenTheSameShirtOverOtherTrousersOrAnotherGrey_WhenSigned_Then
   ASSERT_EQ(inst.bystanders.people.size(), 2U);
   EXPECT_GT(signatureDistance(inst.bystanders.people[0].appearance, target), 0.6);  // a lighter grey top
   EXPECT_GT(signatureDistance(inst.bystanders.people[1].appearance, target), 0.6);  // blue jeans
-  const std::string bad = crowdParseError(crowdYaml(
-      "bystanders:\n  people:\n    - {path: [{p_m: [5.0, 3.0]}], clothing: {hue_deg: 0.0, saturation: 0.8, legs_grey_value: 2.0}}\n"));
+  const std::string bad =
+      crowdParseError(crowdYaml("bystanders:\n  people:\n    - {path: [{p_m: [5.0, 3.0]}], clothing: {hue_deg: 0.0, "
+                                "saturation: 0.8, legs_grey_value: 2.0}}\n"));
   EXPECT_NE(bad.find("legs_grey_value"), std::string::npos) << bad;
 }
 

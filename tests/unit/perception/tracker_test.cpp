@@ -270,10 +270,10 @@ TEST(Appearance, GivenAWalkerInStride_WhenTheLegsAreMeasured_ThenTheGroundBetwee
 }
 
 TEST(Appearance, GivenAReferenceWithoutLegs_WhenBlendedWithOneWithLegs_ThenTheLegsAreTakenAsTheyAre) {
-  const Appearance torso_only = personAppearance(dressed(cv::Scalar(30, 30, 200), cv::Scalar(140, 80, 40)),
-                                                 standingKeypoints(0.1));
-  const Appearance whole = personAppearance(dressed(cv::Scalar(30, 30, 200), cv::Scalar(140, 80, 40)),
-                                            standingKeypoints(0.9));
+  const Appearance torso_only =
+      personAppearance(dressed(cv::Scalar(30, 30, 200), cv::Scalar(140, 80, 40)), standingKeypoints(0.1));
+  const Appearance whole =
+      personAppearance(dressed(cv::Scalar(30, 30, 200), cv::Scalar(140, 80, 40)), standingKeypoints(0.9));
   Appearance reference = torso_only;
   blendAppearance(reference, whole, 0.1);
   EXPECT_NEAR(hal::regionSum(reference.histogram, hal::SignatureRegion::kLegs), 1.0, 1e-5);

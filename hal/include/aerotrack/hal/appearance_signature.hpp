@@ -25,7 +25,8 @@ inline constexpr int kSignatureHueBins = 12;
 inline constexpr int kSignatureSaturationBins = 3;
 inline constexpr int kSignatureValueBins = 4;  ///< Achromatic pixels by brightness.
 inline constexpr std::size_t kSignatureRegionBins =
-    static_cast<std::size_t>(kSignatureHueBins * kSignatureSaturationBins + kSignatureValueBins);
+    static_cast<std::size_t>(kSignatureHueBins) * static_cast<std::size_t>(kSignatureSaturationBins) +
+    static_cast<std::size_t>(kSignatureValueBins);
 
 enum class SignatureRegion : std::size_t { kTorso = 0, kLegs = 1 };
 inline constexpr std::size_t kSignatureRegions = 2;

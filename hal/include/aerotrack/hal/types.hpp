@@ -123,7 +123,6 @@ inline constexpr std::array<std::pair<int, int>, 18> kCocoSkeleton = {{{0, 1},
                                                                        {0, 5},
                                                                        {0, 6}}};
 
-
 struct PersonDetection {
   std::array<Keypoint2D, kNumKeypoints> keypoints{};
   double score = 0.0;                                                         ///< Person confidence in [0, 1].

@@ -427,7 +427,8 @@ namespace {
 /// the scenario's bystander stream draws exactly as before, so its people walk where they did.
 std::mt19937_64 extraClothingRng(const Clothing& c) {
   std::uint64_t z = 0x9E3779B97F4A7C15ULL;
-  for (const double x : {c.hue_deg, c.saturation, c.second_hue_deg, c.second_saturation, c.second_share, c.grey_share}) {
+  for (const double x :
+       {c.hue_deg, c.saturation, c.second_hue_deg, c.second_saturation, c.second_share, c.grey_share}) {
     z ^= std::bit_cast<std::uint64_t>(x) + 0x9E3779B97F4A7C15ULL + (z << 6) + (z >> 2);
   }
   return std::mt19937_64(z);

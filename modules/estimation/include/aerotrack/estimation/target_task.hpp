@@ -125,7 +125,7 @@ class TargetTask final : public rt::Task {
   struct Association {
     int followed = -1;                          ///< The person given to the estimator, or -1.
     std::array<int, hal::kMaxPersons> track{};  ///< Each person's bystander track, kNoTrack or kNewTrack.
-    bool look_refused = false;  ///< Someone fit the followed track but for the look gate...
+    bool look_refused = false;                  ///< Someone fit the followed track but for the look gate...
     double look_refused_d2 = std::numeric_limits<double>::infinity();  ///< ... the nearest such distance's d2.
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
@@ -169,7 +169,7 @@ class TargetTask final : public rt::Task {
   rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
   double look_refused_d2_sum_ = 0.0;       ///< Over the run's frames with a refused distance...
   int look_refused_d2_count_ = 0;          ///< ... and their number.
-  BystanderTracks bystanders_;  ///< The torso colour of the people given to the estimator and taken.
+  BystanderTracks bystanders_;             ///< The torso colour of the people given to the estimator and taken.
 };
 
 }  // namespace aerotrack::estimation
