@@ -30,6 +30,16 @@ void drawPerson(hal::PersonDetection& person, double x_m, double y_m, int colour
   person.has_appearance = true;
 }
 
+/// Frame i of the level camera at 30 Hz, stamped t_ns, with nobody in it yet.
+hal::DetectionFrame emptyFrame(int i, rt::TimeNs t_ns) {
+  hal::DetectionFrame frame;
+  frame.stamp_ns = t_ns;
+  frame.result_ns = t_ns;
+  frame.sequence = static_cast<std::uint64_t>(i) + 1;
+  frame.intrinsics = {kW, kH, kFx, kFx, 0.5 * kW, 0.5 * kH, {}};
+  return frame;
+}
+
 struct Scene {
   TargetEstimate estimate;
   TargetTaskStats stats;
@@ -70,11 +80,7 @@ Scene run(bool choose_by_estimate, Event event, double end_s = 4.0) {
     const bool during = t_s >= 1.5 && t_s < 2.5;
     const bool swapped = during && event != Event::kPasserBy;
     const bool hide_person = event == Event::kHide;
-    hal::DetectionFrame frame;
-    frame.stamp_ns = t_ns;
-    frame.result_ns = t_ns;
-    frame.sequence = static_cast<std::uint64_t>(i) + 1;
-    frame.intrinsics = {kW, kH, kFx, kFx, 0.5 * kW, 0.5 * kH, {}};
+    hal::DetectionFrame frame = emptyFrame(i, t_ns);
     if (swapped && hide_person) {
       frame.person_count = 1;
       drawPerson(frame.persons[0], 5.0, kLookAlikeY, kPersonColour);  // only the look-alike, listed first
@@ -181,11 +187,7 @@ LookScene runLook(LookEvent event, double look_gate_sigmas, double end_s = 2.5) 
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     test::pushHover(odometry, gimbal, t_ns);
     const bool after = t_s >= 1.5;
-    hal::DetectionFrame frame;
-    frame.stamp_ns = t_ns;
-    frame.result_ns = t_ns;
-    frame.sequence = static_cast<std::uint64_t>(i) + 1;
-    frame.intrinsics = {kW, kH, kFx, kFx, 0.5 * kW, 0.5 * kH, {}};
+    hal::DetectionFrame frame = emptyFrame(i, t_ns);
     frame.person_count = 1;
     frame.target_index = i == 0 ? 0 : -1;  // designated in the first frame only
     hal::PersonDetection& p = frame.persons[0];
