@@ -470,24 +470,12 @@ int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& de
   double best_error = std::numeric_limits<double>::infinity();
   for (std::size_t id = 0; id < personCount(); ++id) {
     const PersonState p = personStateAt(id, exposure.stamp_ns);
-    const auto neck = project(T_CW * midpoint(p, CocoKeypoint::kLeftShoulder, CocoKeypoint::kRightShoulder), k);
-    const auto hip = project(T_CW * midpoint(p, CocoKeypoint::kLeftHip, CocoKeypoint::kRightHip), k);
-    if (!neck || !hip) continue;
-    double error_sum_px = 0.0;
-    int compared = 0;
-    for (std::size_t i = 0; i < kNumKeypoints; ++i) {
-      const Keypoint2D& kp = detection.keypoints[i];
-      if (kp.score <= 0.0) continue;
-      const auto uv = project(T_CW * p.keypoints_W_m[i], k);
-      if (!uv) continue;
-      error_sum_px += (Eigen::Vector2d(kp.u_px, kp.v_px) - *uv).norm();
-      ++compared;
-    }
-    if (compared == 0) continue;
-    const double error_px = error_sum_px / compared;
+    std::array<Eigen::Vector3d, kNumKeypoints> keypoints_C_m;
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) keypoints_C_m[i] = T_CW * p.keypoints_W_m[i];
+    const std::optional<double> error = keypointMatchError(detection, keypoints_C_m, k);
     // Within half a torso on average: farther, the detection is of nobody we simulate.
-    if (error_px <= 0.5 * (*neck - *hip).norm() && error_px < best_error) {
-      best_error = error_px;
+    if (error && *error <= 0.5 && *error < best_error) {
+      best_error = *error;
       best = static_cast<int>(id);
     }
   }

@@ -11,6 +11,7 @@ namespace aerotrack::hal::sim {
 namespace {
 
 constexpr double kMinDepthM = 1e-3;
+constexpr double kMinMatchDepthM = 0.1;  // nearer, a person fills more than the image
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // A uniform draw in (0, 1] from the top 53 bits of one engine output (platform independent, unlike
@@ -80,6 +81,44 @@ std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_C_m, const Camer
   if (!(p_C_m.z() > kMinDepthM)) return std::nullopt;
   return Eigen::Vector2d(intrinsics.cx_px + intrinsics.fx_px * p_C_m.x() / p_C_m.z(),
                          intrinsics.cy_px + intrinsics.fy_px * p_C_m.y() / p_C_m.z());
+}
+
+std::optional<double> keypointMatchError(const PersonDetection& detection,
+                                         const std::array<Eigen::Vector3d, kNumKeypoints>& keypoints_C_m,
+                                         const CameraIntrinsics& intrinsics) {
+  using K = CocoKeypoint;
+  const auto mid = [&](K a, K b) { return 0.5 * (keypoints_C_m[index(a)] + keypoints_C_m[index(b)]); };
+  const Eigen::Vector3d neck_C_m = mid(K::kLeftShoulder, K::kRightShoulder);
+  const Eigen::Vector3d hip_C_m = mid(K::kLeftHip, K::kRightHip);
+  if (!(neck_C_m.z() > kMinMatchDepthM && hip_C_m.z() > kMinMatchDepthM)) return std::nullopt;
+  const auto neck = project(neck_C_m, intrinsics);
+  const auto hip = project(hip_C_m, intrinsics);
+  const auto inImage = [&](const Eigen::Vector2d& uv) {
+    return uv.x() >= 0.0 && uv.y() >= 0.0 && uv.x() <= intrinsics.width_px && uv.y() <= intrinsics.height_px;
+  };
+  // One end may be cut off by the frame (the network then guesses it at the border), not both.
+  if (!neck || !hip || !(inImage(*neck) || inImage(*hip))) return std::nullopt;
+  const double torso_px = (*neck - *hip).norm();
+  if (!(torso_px > 0.0)) return std::nullopt;
+
+  std::array<std::optional<Eigen::Vector2d>, kNumKeypoints> truth_px;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) truth_px[i] = project(keypoints_C_m[i], intrinsics);
+  double straight_px = 0.0;
+  double exchanged_px = 0.0;
+  int compared = 0;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+    const Keypoint2D& kp = detection.keypoints[i];
+    if (kp.score <= 0.0) continue;
+    // COCO puts each left keypoint right before its right twin, from the eyes (1, 2) on.
+    const std::size_t twin = i == 0 ? 0 : (i % 2 == 1 ? i + 1 : i - 1);
+    if (!truth_px[i] || !truth_px[twin]) return std::nullopt;
+    const Eigen::Vector2d uv(kp.u_px, kp.v_px);
+    straight_px += (uv - *truth_px[i]).norm();
+    exchanged_px += (uv - *truth_px[twin]).norm();
+    ++compared;
+  }
+  if (compared == 0) return std::nullopt;
+  return std::min(straight_px, exchanged_px) / compared / torso_px;
 }
 
 std::optional<PersonDetection> observe(const std::array<Eigen::Vector3d, kNumKeypoints>& keypoints_W_m,

@@ -1,6 +1,7 @@
 // Tests of the keypoint camera model (hal/sim/person/keypoint_camera.hpp): pinhole projection by
 // hand, visibility (behind, outside the image, occluded, too few), noise statistics against the
-// configured torso fraction, and determinism for a given seed.
+// configured torso fraction, determinism for a given seed, and how a detection is matched to a
+// person (keypointMatchError).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -311,6 +312,80 @@ TEST(KeypointCamera, GivenAnyVisibilityWhenObservingThenDrawsTheSameAmountOfRand
   EXPECT_TRUE(observe(kps, lookAt({-5, 0, 1.5}, {0, 0, 1.0}), {}, {}, seen).has_value());
   EXPECT_FALSE(observe(kps, lookAt({-5, 0, 1.5}, {-10, 0, 1.0}), {}, {}, unseen).has_value());
   EXPECT_EQ(seen(), unseen());  // the stream stays aligned: 4 draws per keypoint either way
+}
+
+Keypoints inCamera(const Keypoints& kps_W, const Eigen::Isometry3d& T_WC) {
+  Keypoints out;
+  for (std::size_t i = 0; i < kNumKeypoints; ++i) out[i] = T_WC.inverse() * kps_W[i];
+  return out;
+}
+
+TEST(KeypointMatch, GivenTheExactProjectionThenErrorIsZeroAndGrowsAsAFractionOfTheTorso) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.2});
+  const KeypointCameraParams p = noiseless();
+  std::mt19937_64 rng(1);
+  auto det = observe(kps, T_WC, p, {}, rng);
+  ASSERT_TRUE(det.has_value());
+  const Keypoints kps_C = inCamera(kps, T_WC);
+  EXPECT_NEAR(keypointMatchError(*det, kps_C, p.intrinsics).value(), 0.0, 1e-12);
+  // Every keypoint 10 px to the right: the mean error over the torso length, by hand.
+  const double torso_px =
+      (det->keypoints[index(K::kLeftShoulder)].v_px + det->keypoints[index(K::kRightShoulder)].v_px -
+       det->keypoints[index(K::kLeftHip)].v_px - det->keypoints[index(K::kRightHip)].v_px) /
+      -2.0;
+  for (Keypoint2D& k : det->keypoints) k.u_px += 10.0;
+  EXPECT_NEAR(keypointMatchError(*det, kps_C, p.intrinsics).value(), 10.0 / torso_px, 1e-3);
+  // Unreported keypoints do not count; none reported is no match.
+  for (std::size_t i = 1; i < kNumKeypoints; ++i) det->keypoints[i].score = 0.0;
+  EXPECT_NEAR(keypointMatchError(*det, kps_C, p.intrinsics).value(), 10.0 / torso_px, 1e-3);
+  det->keypoints[0].score = 0.0;
+  EXPECT_FALSE(keypointMatchError(*det, kps_C, p.intrinsics).has_value());
+}
+
+TEST(KeypointMatch, GivenLeftAndRightReadExchangedThenTheSamePersonStillMatchesExactly) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-4, 0, 1.5}, {0, 0, 1.2});
+  const KeypointCameraParams p = noiseless();
+  std::mt19937_64 rng(1);
+  const auto det = observe(kps, T_WC, p, {}, rng);
+  ASSERT_TRUE(det.has_value());
+  PersonDetection exchanged = *det;  // what a network reading the front as a back reports
+  for (std::size_t i = 1; i < kNumKeypoints; i += 2) std::swap(exchanged.keypoints[i], exchanged.keypoints[i + 1]);
+  EXPECT_GT(std::abs(exchanged.keypoints[index(K::kLeftShoulder)].u_px - det->keypoints[index(K::kLeftShoulder)].u_px),
+            20.0);
+  EXPECT_NEAR(keypointMatchError(exchanged, inCamera(kps, T_WC), p.intrinsics).value(), 0.0, 1e-12);
+}
+
+TEST(KeypointMatch, GivenAPersonAtTheCameraPlaneOrOutsideTheImageThenNoMatch) {
+  const Keypoints kps = standingFacingMinusX();
+  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.2});
+  const KeypointCameraParams p = noiseless();
+  std::mt19937_64 rng(1);
+  const auto det = observe(kps, T_WC, p, {}, rng);
+  ASSERT_TRUE(det.has_value());
+  // A bystander beside the camera, their torso 5 cm in front of it and 1 m aside: their projection
+  // is thousands of pixels wide, so any detection lies within half of it -- and yet it is nobody seen.
+  Keypoints beside = inCamera(kps, T_WC);
+  const Eigen::Vector3d torso_C = 0.25 * (beside[index(K::kLeftShoulder)] + beside[index(K::kRightShoulder)] +
+                                          beside[index(K::kLeftHip)] + beside[index(K::kRightHip)]);
+  for (Eigen::Vector3d& q : beside) q += Eigen::Vector3d(1.0, 0.0, 0.05 - torso_C.z());
+  EXPECT_FALSE(keypointMatchError(*det, beside, p.intrinsics).has_value());
+  // Hips below the image's lower edge (cut off by the frame), the neck inside: still a match.
+  Keypoints cut = inCamera(kps, T_WC);
+  const Eigen::Vector3d hip_C = 0.5 * (cut[index(K::kLeftHip)] + cut[index(K::kRightHip)]);
+  const double down_m =
+      (p.intrinsics.height_px + 5.0 - p.intrinsics.cy_px) / p.intrinsics.fy_px * hip_C.z() - hip_C.y();
+  for (Eigen::Vector3d& q : cut) q.y() += down_m;  // the hips 5 px below the image, the neck above them
+  EXPECT_TRUE(keypointMatchError(*det, cut, p.intrinsics).has_value());
+  // Shifted sideways until the torso leaves the image.
+  Keypoints aside = inCamera(kps, T_WC);
+  for (Eigen::Vector3d& q : aside) q.x() += 6.0;
+  EXPECT_FALSE(keypointMatchError(*det, aside, p.intrinsics).has_value());
+  // A reported keypoint behind the camera: not this person.
+  Keypoints half_behind = inCamera(kps, T_WC);
+  half_behind[index(K::kNose)].z() = -1.0;
+  EXPECT_FALSE(keypointMatchError(*det, half_behind, p.intrinsics).has_value());
 }
 
 }  // namespace

@@ -166,10 +166,10 @@ class Simulation {
   /// Person id's true appearance signature (what the camera's noisy signatures scatter around).
   const AppearanceSignature& personAppearance(std::size_t id) const;
   /// Notes whom the autonomy stack follows: the detector output frame (its followed person,
-  /// target_index) is matched to the true people at its exposure -- the person whose keypoints
-  /// project nearest the detection's (mean pixel distance over the reported keypoints, within half
-  /// their projected torso length) -- and the
-  /// identity metrics record it (0: the target, k: bystander k, -1: nobody followed, or a detection
+  /// target_index) is matched to the true people at its exposure -- the person in the image whose
+  /// keypoints project nearest the detection's (keypointMatchError: mean pixel distance over the
+  /// reported keypoints, left and right allowed exchanged, within half their projected torso
+  /// length) -- and the identity metrics record it (0: the target, k: bystander k, -1: nobody followed, or a detection
   /// that matches no one). Stepping thread; frames older than the last 64 exposures are ignored.
   void recordFollowed(const DetectionFrame& frame);
   /// The true person a detection (image pixels of the exposure `sequence`) belongs to, as above;

@@ -69,6 +69,18 @@ using LineOfSight = std::function<bool(const Eigen::Vector3d& from_W_m, const Ei
 /// result may lie outside the image. Pure, allocation-free.
 std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_C_m, const CameraIntrinsics& intrinsics);
 
+/// How well a detection fits one person whose true COCO keypoints (camera frame, metres) are
+/// keypoints_C_m: the mean pixel distance between the reported keypoints (score > 0) and the same
+/// keypoints projected, as a fraction of the projected neck-to-hip length. The smaller of two
+/// readings: the labels as given, and with left and right exchanged -- a real network often reads a
+/// back view as a front (measured on the rendered cast: shoulders one shoulder-width apart), and
+/// that is the same person. Nothing when the person cannot be what the detector saw: the neck or
+/// hip is nearer than 0.1 m, both project outside the image, or a reported keypoint of theirs is
+/// behind the camera (a person beside the camera plane projects to huge, meaningless pixels).
+std::optional<double> keypointMatchError(const PersonDetection& detection,
+                                         const std::array<Eigen::Vector3d, kNumKeypoints>& keypoints_C_m,
+                                         const CameraIntrinsics& intrinsics);
+
 /// What the detector reports for one person whose COCO keypoints (world frame, metres) are
 /// keypoints_W_m, seen by a camera at pose T_WC (camera frame C in the world W). Unreported keypoints
 /// have score 0 and coordinates 0; reported ones are noisy, clamped to the image. The box bounds the
