@@ -6,12 +6,37 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <locale>
+#include <map>
 #include <sstream>
+
+#include "aerotrack/rt/input_file.hpp"
+#include "aerotrack/rt/input_limits.hpp"
 
 namespace aerotrack::rt {
 namespace {
+
+/// yaml-cpp keeps both entries of a key given twice and returns the first: a second value, often
+/// the one meant, would be silently ignored. Walks every map of the document.
+Status checkUniqueKeys(const YAML::Node& node, const std::string& source, const std::string& path) {
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      if (auto status = checkUniqueKeys(node[i], source, path + "[" + std::to_string(i) + "]"); !status) return status;
+    }
+  }
+  if (!node.IsMap()) return ok();
+  std::map<std::string, int> first_line;
+  for (const auto& entry : node) {
+    const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : std::string("<complex key>");
+    const std::string key_path = path.empty() ? key : path + "." + key;
+    const int line = entry.first.Mark().is_null() ? 0 : entry.first.Mark().line + 1;
+    if (const auto [it, inserted] = first_line.emplace(key, line); !inserted)
+      return Error{source + ":" + std::to_string(line) + ": " + key_path + ": given twice (first on line " +
+                   std::to_string(it->second) + ")"};
+    if (auto status = checkUniqueKeys(entry.second, source, key_path); !status) return status;
+  }
+  return ok();
+}
 
 std::string shortValue(const YAML::Node& value) {
   if (value.IsScalar()) return "'" + value.Scalar() + "'";
@@ -54,6 +79,7 @@ Expected<ConfigNode> ConfigNode::fromString(const std::string& text, const std::
   try {
     YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) return Error{source_name + ": the top level must be a map of keys"};
+    if (auto status = checkUniqueKeys(root, source_name, ""); !status) return status.error();
     return ConfigNode(root, source, "");
   } catch (const YAML::Exception& e) {
     return Error{source_name + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg};
@@ -61,12 +87,9 @@ Expected<ConfigNode> ConfigNode::fromString(const std::string& text, const std::
 }
 
 Expected<ConfigNode> ConfigNode::loadFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return Error{path + ": cannot open file"};
-  std::stringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error{path + ": read error"};
-  return fromString(text.str(), path);
+  Expected<std::string> text = readBoundedFile(path, limits::kMaxYamlBytes);
+  if (!text) return text.error();
+  return fromString(text.value(), path);
 }
 
 std::string ConfigNode::keyPath(const std::string& key) const {

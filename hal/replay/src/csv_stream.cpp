@@ -9,6 +9,9 @@
 #include <cstring>
 #include <utility>
 
+#include "aerotrack/rt/input_file.hpp"
+#include "aerotrack/rt/input_limits.hpp"
+
 namespace aerotrack::hal::replay {
 namespace {
 
@@ -30,13 +33,20 @@ std::string joinHeader(const std::vector<std::string>& columns) {
 }
 
 /// Reads one line without its newline; false at the end of the file. `complete`: it ended in '\n'.
-bool readLine(std::FILE* file, std::string& line, bool& complete) {
+/// `too_long`: it passed the limit on a line (input_limits.hpp) and was not read further -- a file
+/// with no newline, such as /dev/zero, would otherwise be read into memory whole.
+bool readLine(std::FILE* file, std::string& line, bool& complete, bool& too_long) {
   line.clear();
   complete = false;
+  too_long = false;
   int c = 0;
   while ((c = std::fgetc(file)) != EOF) {
     if (c == '\n') {
       complete = true;
+      return true;
+    }
+    if (line.size() >= rt::limits::kMaxCsvLineBytes) {
+      too_long = true;
       return true;
     }
     line.push_back(static_cast<char>(c));
@@ -44,10 +54,16 @@ bool readLine(std::FILE* file, std::string& line, bool& complete) {
   return !line.empty();
 }
 
+std::string lineTooLong(const std::string& path, int line) {
+  return path + ":" + std::to_string(line) + ": line longer than the limit of " +
+         rt::formatBytes(rt::limits::kMaxCsvLineBytes);
+}
+
 }  // namespace
 
 rt::Expected<CsvStreamReader> CsvStreamReader::open(const std::string& path, const std::vector<std::string>& columns,
                                                     BadRowPolicy policy) {
+  if (auto status = rt::checkInputFile(path); !status) return status.error();  // fopen opens a directory
   CsvStreamReader reader;
   reader.file_.reset(std::fopen(path.c_str(), "rb"));
   if (!reader.file_) return rt::Error{path + ": cannot open: " + std::strerror(errno)};
@@ -56,12 +72,13 @@ rt::Expected<CsvStreamReader> CsvStreamReader::open(const std::string& path, con
   reader.policy_ = policy;
   std::string header;
   bool complete = false;
-  if (!readLine(reader.file_.get(), header, complete) || !complete) {
-    return rt::Error{path + ":1: missing header (expected '" + joinHeader(columns) + "')"};
-  }
+  bool too_long = false;
+  const bool read = readLine(reader.file_.get(), header, complete, too_long);
+  if (too_long) return rt::Error{lineTooLong(path, 1)};
+  if (!read || !complete) return rt::Error{path + ":1: missing header (expected '" + joinHeader(columns) + "')"};
   if (!header.empty() && header.back() == '\r') header.pop_back();
   if (header != joinHeader(columns)) {
-    return rt::Error{path + ":1: header '" + header + "' is not '" + joinHeader(columns) + "'"};
+    return rt::Error{path + ":1: header " + rt::quoteForMessage(header) + " is not '" + joinHeader(columns) + "'"};
   }
   return reader;
 }
@@ -94,8 +111,10 @@ rt::Expected<CsvRecord> CsvStreamReader::parse(const std::string& text, int line
 rt::Expected<std::optional<CsvRecord>> CsvStreamReader::next() {
   std::string text;
   bool complete = false;
-  while (readLine(file_.get(), text, complete)) {
+  bool too_long = false;
+  while (readLine(file_.get(), text, complete, too_long)) {
     ++line_;
+    if (too_long) return rt::Error{lineTooLong(path_, line_)};
     if (!complete) {  // what a killed recorder leaves: not a record
       truncated_tail_ = true;
       return std::optional<CsvRecord>{};
@@ -106,6 +125,9 @@ rt::Expected<std::optional<CsvRecord>> CsvStreamReader::next() {
     std::string problem;
     if (!record) {
       problem = record.error().message;
+    } else if (record->stamp_ns < 0 || record->stamp_ns > rt::limits::kMaxStampNs) {
+      problem = "stamp_ns " + std::to_string(record->stamp_ns) + " is outside [0, " +
+                std::to_string(rt::limits::kMaxStampNs) + "]";
     } else if (record->stamp_ns < last_stamp_ns_) {
       problem = "stamp_ns " + std::to_string(record->stamp_ns) + " goes back from " + std::to_string(last_stamp_ns_);
     }

@@ -13,6 +13,8 @@
 #include <string_view>
 
 #include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/input_file.hpp"
+#include "aerotrack/rt/input_limits.hpp"
 
 namespace aerotrack::localization {
 namespace {
@@ -52,15 +54,6 @@ std::string formatNumber(double value) {
   const auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
   if (ec != std::errc()) return "nan";
   return std::string(buffer.data(), end);
-}
-
-rt::Expected<std::string> readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return rt::Error{path + ": cannot open file"};
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return rt::Error{path + ": cannot read file"};
-  return text.str();
 }
 
 rt::Status writeFile(const std::string& path, const std::string& text) {
@@ -137,7 +130,7 @@ rt::Expected<std::vector<LocalizationSample>> parseSamplesCsv(const std::string&
 }
 
 rt::Expected<std::vector<LocalizationSample>> readSamplesCsv(const std::string& path) {
-  rt::Expected<std::string> text = readFile(path);
+  rt::Expected<std::string> text = rt::readBoundedFile(path, rt::limits::kMaxCalibrationCsvBytes);
   if (!text) return text.error();
   return parseSamplesCsv(*text, path);
 }

@@ -6,6 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "aerotrack/rt/input_file.hpp"
+#include "aerotrack/rt/input_limits.hpp"
+
 namespace aerotrack::perception {
 
 namespace {
@@ -37,11 +40,11 @@ const std::vector<std::string>& knownModelNames() {
 }
 
 rt::Expected<ModelInfo> readModelInfo(const std::string& sidecar_path, std::string name) {
-  std::ifstream in(sidecar_path);
-  if (!in) return rt::Error{sidecar_path + ": cannot open file"};
+  const rt::Expected<std::string> text = rt::readBoundedFile(sidecar_path, rt::limits::kMaxTextBytes);
+  if (!text) return text.error();
   nlohmann::json j;
   try {
-    in >> j;
+    j = nlohmann::json::parse(text.value());
   } catch (const nlohmann::json::exception& e) {
     return rt::Error{sidecar_path + ": not valid JSON"};
   }

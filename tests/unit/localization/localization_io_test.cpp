@@ -60,7 +60,7 @@ TEST(SamplesCsv, GivenBadInputThenOneLineNamingFileLineAndColumn) {
 TEST(SamplesCsv, GivenAMissingFileThenAnError) {
   const auto result = readSamplesCsv("/nonexistent/train.csv");
   ASSERT_FALSE(result);
-  EXPECT_EQ(result.error().message, "/nonexistent/train.csv: cannot open file");
+  EXPECT_EQ(result.error().message, "/nonexistent/train.csv: cannot open file: no such file or directory");
 }
 
 TEST(SamplesCsv, GivenSamplesWhenWrittenAndReadBackThenTheSameDoubles) {

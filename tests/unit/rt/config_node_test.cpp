@@ -120,7 +120,7 @@ TEST(ConfigNode, GivenTopLevelNotAMapThenError) {
 TEST(ConfigNode, GivenMissingFileThenErrorNamesIt) {
   const auto root = ConfigNode::loadFile("/nonexistent/aerotrack.yaml");
   ASSERT_FALSE(root);
-  EXPECT_EQ(root.error().message, "/nonexistent/aerotrack.yaml: cannot open file");
+  EXPECT_EQ(root.error().message, "/nonexistent/aerotrack.yaml: cannot open file: no such file or directory");
 }
 
 // ---- ranges ----

@@ -1,6 +1,8 @@
 // Reading scenario files: see scenario.hpp and config/scenarios/README.md. Every key is checked
 // (rt::ConfigNode); optional sections keep the defaults written in scenario.hpp.
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -9,14 +11,16 @@
 #include "aerotrack/hal/sim/scenario.hpp"
 
 #include "aerotrack/hal/sim/cast_file.hpp"
+#include "aerotrack/hal/sim/obstacle_world.hpp"
 #include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/input_limits.hpp"
 
 namespace aerotrack::hal::sim {
 namespace {
 
 using rt::ConfigNode;
 
-constexpr double kBig = 1e5;
+constexpr double kBig = rt::limits::kMaxWorldExtentM;  // every coordinate, the input policy
 
 Eigen::Vector2d vec2(const ConfigNode& n, const std::string& key, double lo = -kBig, double hi = kBig) {
   const auto v = n.getDoubleList(key, 2, lo, hi);
@@ -77,6 +81,12 @@ ForestGenerator parseForest(const ConfigNode& n) {
   f.height_m = n.getDouble("height_m", 0.1, 100.0);
   f.min_gap_m = n.getDouble("min_gap_m", 0.0, 20.0);
   f.path_clearance_m = n.getDouble("path_clearance_m", 0.0, 20.0);
+  const Eigen::Vector2d size_m = f.region_max_m - f.region_min_m;
+  const double trees = f.density_per_m2 * size_m.x() * size_m.y();
+  if (trees > static_cast<double>(rt::limits::kMaxObstacles))
+    n.fail("density_per_m2", "gives " + std::to_string(std::llround(trees)) +
+                                 " trees over the region, more than the limit of " +
+                                 std::to_string(rt::limits::kMaxObstacles) + " obstacles");
   n.finish();
   return f;
 }
@@ -180,6 +190,24 @@ void parsePerson(const ConfigNode& n, ScenarioSpec& s) {
     n.fail("path", "give exactly one of path (waypoints) or random_path (generator)");
   if (!s.path.empty() && s.path.size() < 2) n.fail("path", "needs at least two points");
   n.finish();
+}
+
+/// The person walks on the ground: a waypoint inside a listed box or cylinder, or a leg through
+/// one, is a scenario that cannot happen (checked at the height of the shins, like a bystander's).
+/// Generated obstacles are kept clear of the path by their generators.
+void checkPersonPath(const ConfigNode& person, const ScenarioSpec& s) {
+  if (s.path.empty()) return;
+  auto world = ObstacleWorld::create(s.boxes, s.cylinders);
+  if (!world) person.fail("path", "the listed obstacles are invalid: " + world.error().message);
+  constexpr double kCheckHeightM = 0.3;
+  const std::vector<ConfigNode> points = person.childList("path");
+  for (std::size_t i = 0; i < s.path.size(); ++i) {
+    const Eigen::Vector3d here(s.path[i].p_W_m.x(), s.path[i].p_W_m.y(), kCheckHeightM);
+    if (world->distance(here) <= 0.0) points[i].fail("p_m", "lies inside an obstacle");
+    if (i == 0) continue;
+    const Eigen::Vector3d prev(s.path[i - 1].p_W_m.x(), s.path[i - 1].p_W_m.y(), kCheckHeightM);
+    if (!world->segmentClear(prev, here)) points[i].fail("p_m", "the leg to this point passes through an obstacle");
+  }
 }
 
 /// sensors.odometry.drift: every key optional (default 0: no drift).
@@ -308,8 +336,14 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
   ScenarioSpec s;
   s.source = root.sourceName();
   s.name = root.getString("name");
+  // The name becomes a folder and file names of the results: a word, never a path.
+  if (s.name.empty() || s.name.size() > 64 || s.name.front() == '.' ||
+      !std::all_of(s.name.begin(), s.name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '.';
+      }))
+    root.fail("name", "must be 1-64 letters, digits, '_', '-' or '.', not starting with '.' (it names output files)");
   s.end_margin_s = root.getDouble("end_margin_s", 0.0, 3600.0);
-  s.max_duration_s = root.getDouble("max_duration_s", 1.0, 24.0 * 3600.0);
+  s.max_duration_s = root.getDouble("max_duration_s", 1.0, rt::limits::kMaxRunS);
 
   const ConfigNode world = root.child("world");
   s.bounds_min_m = vec3(world, "bounds_min_m");
@@ -322,6 +356,7 @@ ScenarioSpec parseRoot(const ConfigNode& root) {
   world.finish();
 
   parsePerson(root.child("person"), s);
+  checkPersonPath(root.child("person"), s);
 
   const ConfigNode drone = root.child("drone");
   s.drone.start_m = vec3(drone, "start_m");
