@@ -175,7 +175,9 @@ TEST(CsvStream, CorruptRowsGetAnErrorNamingTheFileAndLineOrAreSkippedAndCounted)
   for (const Case& c :
        {Case{"3,abc,0", ":4: angle_rad: expected a number, got 'abc'"}, Case{"3,0.5", ":4: 2 fields, expected 3"},
         Case{"x3,0.5,0", ":4: stamp_ns: expected integer nanoseconds, got 'x3'"},
-        Case{"3,,0", ":4: angle_rad: expected a number, got ''"}, Case{"1,0.5,0", ":4: stamp_ns 1 goes back from 2"}}) {
+        Case{"3,,0", ":4: angle_rad: expected a number, got ''"}, Case{"1,0.5,0", ":4: stamp_ns 1 goes back from 2"},
+        Case{"-3,0.5,0", ":4: stamp_ns -3 is outside [0, 4611686018427387904]"},
+        Case{"9223372036854775807,0.5,0", ":4: stamp_ns 9223372036854775807 is outside [0, 4611686018427387904]"}}) {
     writeText(path, std::string("stamp_ns,angle_rad,rate_radps\n1,0.1,0\n2,0.2,0\n") + c.row + "\n4,0.4,0\n");
     auto strict = CsvStreamReader::open(path, GimbalStateCodec::columns());
     ASSERT_TRUE(strict);
@@ -209,9 +211,32 @@ TEST(CsvStream, MissingFileOrWrongHeaderIsAOneLineError) {
   ASSERT_FALSE(other);
   EXPECT_NE(other.error().message.find("other.csv:1: header 'stamp_ns,rate_radps,angle_rad' is not"),
             std::string::npos);
+  writeText(dir.file("binary.csv"), std::string("\x89PNG\r\x1a\x00\x01", 8) + std::string(200, 'a') + "\n");
+  auto binary = CsvStreamReader::open(dir.file("binary.csv"), GimbalStateCodec::columns());
+  ASSERT_FALSE(binary);
+  EXPECT_NE(binary.error().message.find("binary.csv:1: header '\\x89PNG\\x0d\\x1a\\x00\\x01aaa"), std::string::npos)
+      << binary.error().message;
+  EXPECT_EQ(binary.error().message.find('\n'), std::string::npos);
+  EXPECT_EQ(binary.error().message.find(std::string(100, 'a')), std::string::npos);  // cut short
+  EXPECT_EQ(CsvStreamReader::open(dir.path(), GimbalStateCodec::columns()).error().message,
+            dir.path() + ": is a directory, expected a file");
   auto unwritable = CsvStreamWriter::create(dir.file("no/such/dir.csv"), GimbalStateCodec::columns());
   ASSERT_FALSE(unwritable);
   EXPECT_NE(unwritable.error().message.find("cannot create"), std::string::npos);
+}
+
+TEST(CsvStream, ALineWithoutEndIsRefusedAtTheLimitNotReadIntoMemory) {
+  TempDir dir;
+  auto endless = CsvStreamReader::open("/dev/zero", GimbalStateCodec::columns());
+  ASSERT_FALSE(endless);
+  EXPECT_EQ(endless.error().message, "/dev/zero:1: line longer than the limit of 256 KiB");
+  writeText(dir.file("long.csv"), "stamp_ns,angle_rad,rate_radps\n1,0.1,0\n2," + std::string(300000, '1') + ",0\n");
+  auto reader = CsvStreamReader::open(dir.file("long.csv"), GimbalStateCodec::columns(), BadRowPolicy::kSkip);
+  ASSERT_TRUE(reader);
+  ASSERT_TRUE(reader->next());
+  auto long_row = reader->next();
+  ASSERT_FALSE(long_row);
+  EXPECT_EQ(long_row.error().message, dir.file("long.csv") + ":3: line longer than the limit of 256 KiB");
 }
 
 TEST(CsvStream, WriterRefusesAWrongSizedRecordAndWritesAfterClose) {
