@@ -67,7 +67,8 @@ rt::Expected<std::vector<CsvRecord>> readAll(const std::string& path, const std:
 }  // namespace
 
 rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
-                                                            const std::string& replayed_dir, bool inputs) {
+                                                            const std::string& replayed_dir, bool inputs,
+                                                            bool recording_cut_short) {
   namespace fs = std::filesystem;
   // Stamps are compared from each recording's start: a replay on another clock (real time) lines up.
   const auto a_manifest = hal::replay::readManifest((fs::path(recorded_dir) / "manifest.yaml").string());
@@ -89,6 +90,13 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
     if (!b) return b.error();
     if (a->empty() && b->empty()) continue;
     StreamComparison c;
+    if (recording_cut_short && !a->empty()) {
+      const rt::TimeNs last_ns = a->back().stamp_ns - a_start_ns;
+      while (!b->empty() && b->back().stamp_ns - b_start_ns > last_ns) {
+        b->pop_back();
+        ++c.past_end;
+      }
+    }
     c.file = stream.file;
     c.recorded = a->size();
     c.replayed = b->size();
@@ -133,7 +141,9 @@ std::string formatComparison(const std::vector<StreamComparison>& comparisons) {
   for (const StreamComparison& c : comparisons) {
     out << "  " << c.file << ": " << c.identical << " of " << c.recorded << " recorded records replayed identically";
     if (c.same()) {
-      out << " (bit for bit)\n";
+      out << " (bit for bit)";
+      if (c.past_end > 0) out << "; " << c.past_end << " replayed past the recording's end, not compared";
+      out << "\n";
     } else {
       out << "; " << c.replayed << " replayed, largest difference " << number(c.max_abs_difference)
           << "; first: " << c.first_difference << "\n";

@@ -17,6 +17,7 @@ struct StreamComparison {
   std::string file;  ///< Relative to the dataset folder.
   std::uint64_t recorded = 0;
   std::uint64_t replayed = 0;
+  std::uint64_t past_end = 0;       ///< Replayed after the stream's last record of a recording cut short.
   std::uint64_t identical = 0;      ///< Records equal bit for bit, in order, stamps included.
   double max_abs_difference = 0.0;  ///< Over the values of records at the same index (stamps included).
   std::string first_difference;     ///< "" when the two streams are the same.
@@ -24,9 +25,13 @@ struct StreamComparison {
 };
 
 /// Compares the streams both folders hold; with inputs false, only what the modules and actuators
-/// produced (not what the devices delivered). Error: a stream that cannot be read (one line naming it).
+/// produced (not what the devices delivered). recording_cut_short: the recording has no trusted end
+/// (its recorder was killed, or its manifest's end_ns lies past its data), so the replay's records
+/// stamped after a stream's last recorded record are beyond what the recording can judge: they are
+/// counted as past_end, not compared. Error: a stream that cannot be read (one line naming it).
 rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
-                                                            const std::string& replayed_dir, bool inputs = true);
+                                                            const std::string& replayed_dir, bool inputs = true,
+                                                            bool recording_cut_short = false);
 
 /// One line per stream, for a person.
 std::string formatComparison(const std::vector<StreamComparison>& comparisons);

@@ -123,8 +123,18 @@ int replayCommand(const ParsedArgs& args) {
   rt::DurationNs longest_period_ns = 0;
   for (const rt::TaskSpec& spec : config->tasks)
     if (spec.periodic()) longest_period_ns = std::max(longest_period_ns, rt::periodFromRateHz(spec.rate_hz));
-  const rt::DurationNs duration_ns =
-      (manifest->end_ns ? *manifest->end_ns : t.endNs() + longest_period_ns) - t.firstNs();
+  // A manifest's end_ns is trusted only up to a second past the last record: beyond, the run
+  // would replay nothing for as long (an hour, or 9e18 ns) and write what it saw of it.
+  const rt::TimeNs data_end_ns = t.endNs() + longest_period_ns;
+  rt::TimeNs recording_end_ns = manifest->end_ns ? *manifest->end_ns : data_end_ns;
+  bool recording_cut_short = !manifest->end_ns;
+  if (recording_end_ns > data_end_ns + std::max<rt::DurationNs>(longest_period_ns, rt::secondsToNs(1.0))) {
+    recording_cut_short = true;
+    std::printf("replay: the manifest's end_ns lies %.1f s past the last record; replaying to the last record\n",
+                rt::nsToSeconds(recording_end_ns - t.endNs()));
+    recording_end_ns = data_end_ns;
+  }
+  const rt::DurationNs duration_ns = recording_end_ns - t.firstNs();
   // Real time: the devices' replay starts when the tasks first ask (start_at_first_use), just below.
   const rt::TimeNs end_ns = (realtime ? mono_clock.now() : start_ns) + duration_ns;
   if (!left_out.empty()) std::printf("replay: left out the simulator's tasks: %s\n", left_out.c_str());
@@ -152,7 +162,8 @@ int replayCommand(const ParsedArgs& args) {
   if (stop.load()) return 130;
   if (!compare) return 0;
   // An imported video has no delivery times to compare with: only what the modules produced is.
-  auto comparison = compareDatasets(dir, config->record_dir, /*inputs=*/manifest->source != "import");
+  auto comparison =
+      compareDatasets(dir, config->record_dir, /*inputs=*/manifest->source != "import", recording_cut_short);
   if (!comparison) return failCommand("replay", comparison.error().message);
   std::printf("compare with the recording:\n%s", formatComparison(*comparison).c_str());
   if (comparison->empty()) return failCommand("replay", dir + ": nothing to compare (no outputs recorded)");

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/input_limits.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {
@@ -83,10 +84,17 @@ rt::Expected<DatasetManifest> readManifest(const std::string& path) {
                                        std::to_string(kDatasetFormatVersion) + ")");
     }
     m.software_version = root->getString("software_version");
-    m.start_ns = static_cast<rt::TimeNs>(root->getUint64("start_ns"));
+    const std::uint64_t start_ns = root->getUint64("start_ns");
+    if (start_ns > static_cast<std::uint64_t>(rt::limits::kMaxStampNs))
+      root->fail("start_ns", "must be at most " + std::to_string(rt::limits::kMaxStampNs) + " (the input policy)");
+    m.start_ns = static_cast<rt::TimeNs>(start_ns);
     if (root->has("end_ns")) {
-      m.end_ns = static_cast<rt::TimeNs>(root->getUint64("end_ns"));
-      if (*m.end_ns < m.start_ns) root->fail("end_ns", "is before start_ns");
+      const std::uint64_t end_ns = root->getUint64("end_ns");
+      if (end_ns < start_ns) root->fail("end_ns", "is before start_ns");
+      if (end_ns - start_ns > static_cast<std::uint64_t>(rt::limits::kMaxRunNs))
+        root->fail("end_ns", "lies more than " + std::to_string(static_cast<long long>(rt::limits::kMaxRunS)) +
+                                 " s after start_ns, the longest recording (the input policy)");
+      m.end_ns = static_cast<rt::TimeNs>(end_ns);
     }
     m.source = root->getEnum("source", {"sim", "real", "replay", "import"});
     for (const rt::ConfigNode& s : root->childList("streams")) {

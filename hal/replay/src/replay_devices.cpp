@@ -2,16 +2,25 @@
 #include "aerotrack/hal/replay/replay_devices.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <system_error>
 #include <utility>
 
 #include "aerotrack/hal/replay/frame_files.hpp"
 #include "aerotrack/hal/replay/stream_codecs.hpp"
+#include "aerotrack/rt/input_limits.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {
+
+std::string formatSeconds(rt::DurationNs ns) {
+  std::array<char, 32> text{};
+  std::snprintf(text.data(), text.size(), "%.1f s", rt::nsToSeconds(ns));
+  return text.data();
+}
 
 /// A codec's decoded record: Delivered<Sample> for delivered streams.
 template <class Codec>
@@ -163,7 +172,8 @@ bool ReplayTimeline::ended(rt::TimeNs now_ns) const {
 
 rt::Expected<std::shared_ptr<ReplayDataset>> ReplayDataset::open(const ReplayOptions& options,
                                                                  rt::TimeNs replay_start_ns) {
-  if (!(options.offset_s >= 0.0)) return rt::Error{"replay: offset_s must be >= 0"};
+  if (!(options.offset_s >= 0.0 && options.offset_s <= rt::limits::kMaxRunS))
+    return rt::Error{"replay: offset_s must be in [0, " + formatSeconds(rt::limits::kMaxRunNs) + "]"};
   auto manifest = readManifest((std::filesystem::path(options.dir) / "manifest.yaml").string());
   if (!manifest) return manifest.error();
   // Built with a provisional timeline; the real one needs the streams' end.
@@ -214,6 +224,13 @@ rt::Expected<std::shared_ptr<ReplayDataset>> ReplayDataset::open(const ReplayOpt
     end_ns = std::max(end_ns, d->setpoints_->samples.back().stamp_ns);
   if (d->gimbal_commands_ && !d->gimbal_commands_->samples.empty())
     end_ns = std::max(end_ns, d->gimbal_commands_->samples.back().stamp_ns);
+  // The input policy: a recording spans at most kMaxRunNs, and an offset must land inside it.
+  if (end_ns - manifest->start_ns > rt::limits::kMaxRunNs)
+    return rt::Error{options.dir + ": a record lies " + formatSeconds(end_ns - manifest->start_ns) +
+                     " after start_ns, past the limit of " + formatSeconds(rt::limits::kMaxRunNs) + " for a recording"};
+  if (options.offset_s > 0.0 && rt::secondsToNs(options.offset_s) > end_ns - manifest->start_ns)
+    return rt::Error{"offset_s " + formatSeconds(rt::secondsToNs(options.offset_s)) +
+                     " is past the recording's last record at " + formatSeconds(end_ns - manifest->start_ns)};
   d->timeline_ = ReplayTimeline(manifest->start_ns, end_ns, replay_start_ns, options);
   return d;
 }
