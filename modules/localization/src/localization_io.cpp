@@ -122,7 +122,9 @@ rt::Expected<std::vector<LocalizationSample>> parseSamplesCsv(const std::string&
     if (!(values[0] > 0.0)) {
       return rt::Error{where + "torso_px: must be > 0, got " + formatNumber(values[0])};
     }
-    samples.push_back({values[0], values[1], values[2], values[3], values[4]});
+    const LocalizationSample sample{values[0], values[1], values[2], values[3], values[4]};
+    if (const std::string why = implausibleSample(sample); !why.empty()) return rt::Error{where + why};
+    samples.push_back(sample);
   }
   if (!have_header) return rt::Error{source_name + ": empty file (expected the header torso_px,u_px,x_m,y_m)"};
   if (samples.empty()) return rt::Error{source_name + ": no data rows after the header"};
@@ -160,22 +162,32 @@ std::string formatParamsYaml(const LocalizationParams& params) {
 }
 
 rt::Status writeParamsYaml(const LocalizationParams& params, const std::string& path) {
-  if (rt::Status valid = validate(params); !valid) return rt::Error{path + ": not written: " + valid.error().message};
+  if (rt::Status valid = validatePredictions(params); !valid)
+    return rt::Error{path + ": not written: " + valid.error().message};
   return writeFile(path, formatParamsYaml(params));
 }
 
-rt::Expected<LocalizationParams> parseParamsYaml(const std::string& text, const std::string& source_name) {
-  rt::Expected<rt::ConfigNode> root = rt::ConfigNode::fromString(text, source_name);
+namespace {
+
+/// The fields, then what they predict (validatePredictions), the error naming the file.
+rt::Expected<LocalizationParams> parseParamsRoot(rt::Expected<rt::ConfigNode> root, const std::string& source_name) {
   if (!root) return root.error();
   const rt::ConfigNode node = *root;
-  return rt::parseConfig<LocalizationParams>([&node] { return localizationFields().parse(node); });
+  auto params = rt::parseConfig<LocalizationParams>([&node] { return localizationFields().parse(node); });
+  if (!params) return params;
+  if (rt::Status plausible = validatePredictions(*params); !plausible)
+    return rt::Error{source_name + ": " + plausible.error().message};
+  return params;
+}
+
+}  // namespace
+
+rt::Expected<LocalizationParams> parseParamsYaml(const std::string& text, const std::string& source_name) {
+  return parseParamsRoot(rt::ConfigNode::fromString(text, source_name), source_name);
 }
 
 rt::Expected<LocalizationParams> readParamsYaml(const std::string& path) {
-  rt::Expected<rt::ConfigNode> root = rt::ConfigNode::loadFile(path);
-  if (!root) return root.error();
-  const rt::ConfigNode node = *root;
-  return rt::parseConfig<LocalizationParams>([&node] { return localizationFields().parse(node); });
+  return parseParamsRoot(rt::ConfigNode::loadFile(path), path);
 }
 
 }  // namespace aerotrack::localization

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
@@ -130,7 +131,21 @@ rt::Status checkSamples(std::span<const LocalizationSample> samples, std::size_t
       return rt::Error{"sample " + std::to_string(i) + " has a non-finite value"};
     }
     if (!(s.torso_px > 0.0)) return rt::Error{"sample " + std::to_string(i) + " has torso_px <= 0"};
+    if (const std::string why = implausibleSample(s); !why.empty())
+      return rt::Error{"sample " + std::to_string(i) + ": " + why};
   }
+  // Rows that do not vary fit any curve through one point with no error (500 identical rows fitted
+  // to 0.000 m): the regression needs views at several distances.
+  std::vector<double> torsos;
+  torsos.reserve(samples.size());
+  for (const LocalizationSample& s : samples) torsos.push_back(s.torso_px);
+  std::sort(torsos.begin(), torsos.end());
+  const auto distinct = static_cast<std::size_t>(std::unique(torsos.begin(), torsos.end()) - torsos.begin());
+  constexpr std::size_t kMinDistinctTorsos = 5;
+  if (distinct < kMinDistinctTorsos)
+    return rt::Error{"the samples do not vary: " + std::to_string(distinct) +
+                     " distinct torso length(s), need at least " + std::to_string(kMinDistinctTorsos) +
+                     " (views at several distances)"};
   return rt::ok();
 }
 
@@ -385,7 +400,7 @@ rt::Expected<LocalizationParams> fit(LocalizationModel model, std::span<const Lo
   }
   params.fit_mean_error_m = error_sum_m / static_cast<double>(samples.size());
   fitNoise(params, samples);
-  if (rt::Status valid = validate(params); !valid) {
+  if (rt::Status valid = validatePredictions(params); !valid) {
     return rt::Error{std::string(toString(model)) + " model: the fit gave " + valid.error().message};
   }
   return params;
@@ -524,6 +539,38 @@ const rt::FieldTable<LocalizationParams>& localizationFields() {
 
 rt::Status validate(const LocalizationParams& params) {
   return localizationFields().validate(params);
+}
+
+rt::Status validatePredictions(const LocalizationParams& params) {
+  if (rt::Status fields = validate(params); !fields) return fields;
+  constexpr double kMaxPredictionM = 1e4;
+  for (const double torso_px : {10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0}) {
+    for (const double u_px : {0.0, 320.0, 640.0, 960.0, 1280.0}) {
+      const Eigen::Vector3d p_C = predict(params, torso_px, u_px);
+      if (!p_C.allFinite() || p_C.cwiseAbs().maxCoeff() > kMaxPredictionM) {
+        std::array<char, 160> text{};
+        std::snprintf(text.data(), text.size(),
+                      "predicts (%.3g, %.3g) m for a torso of %g px at u = %g px: not a position", p_C.x(), p_C.y(),
+                      torso_px, u_px);
+        return rt::Error{std::string(toString(params.model)) + " model " + text.data()};
+      }
+    }
+  }
+  return rt::ok();
+}
+
+std::string implausibleSample(const LocalizationSample& s) {
+  const auto outside = [](const char* column, double value, const char* range) {
+    std::array<char, 96> text{};
+    std::snprintf(text.data(), text.size(), "%s: must be in %s, got %.6g", column, range, value);
+    return std::string(text.data());
+  };
+  if (!(s.torso_px > 0.0 && s.torso_px <= 1e4)) return outside("torso_px", s.torso_px, "(0, 10000]");
+  if (!(std::abs(s.u_px) <= 1e4)) return outside("u_px", s.u_px, "[-10000, 10000]");
+  if (!(s.x_m > 0.0 && s.x_m <= 1e3)) return outside("x_m", s.x_m, "(0, 1000]");
+  if (!(std::abs(s.y_m) <= 1e3)) return outside("y_m", s.y_m, "[-1000, 1000]");
+  if (std::isfinite(s.z_m) && !(std::abs(s.z_m) <= 1e3)) return outside("z_m", s.z_m, "[-1000, 1000]");
+  return "";
 }
 
 }  // namespace aerotrack::localization

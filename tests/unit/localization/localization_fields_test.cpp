@@ -3,7 +3,8 @@
 // reader (parseParamsYaml) and writer (formatParamsYaml), for both models: written and read back gives
 // the same parameters; at both ends of every field's range the reader and validate() agree (they did not:
 // the reader took [-1e300, 1e300] and validate() any finite number); the written keys are exactly the
-// keys read, the other model's section included (an unknown key).
+// keys read, the other model's section included (an unknown key). And the rule across fields: a
+// parameter file whose predictions are not positions is refused by the reader, the writer and the fit.
 #include <gtest/gtest.h>
 
 #include <set>
@@ -11,14 +12,21 @@
 
 #include "aerotrack/localization/localization_io.hpp"
 #include "aerotrack/localization/localization_model.hpp"
+#include "aerotrack/rt/config_node.hpp"
 #include "support/field_table_checks.hpp"
 
 namespace aerotrack::localization {
 namespace {
 
+/// The table itself: the public reader (parseParamsYaml) adds a rule across fields, what the
+/// parameters predict (validatePredictions, tested below), which moving one field alone breaks.
 field_checks::FieldTableUnderTest<LocalizationParams> localization() {
   return {localizationFields(), [](const LocalizationParams& p) { return formatParamsYaml(p); },
-          [](const std::string& yaml) { return parseParamsYaml(yaml, "params.yaml"); },
+          [](const std::string& yaml) -> rt::Expected<LocalizationParams> {
+            auto root = rt::ConfigNode::fromString(yaml, "params.yaml");
+            if (!root) return root.error();
+            return rt::parseConfig<LocalizationParams>([&] { return localizationFields().parse(*root); });
+          },
           [](const LocalizationParams& p) { return validate(p); }};
 }
 
@@ -95,6 +103,25 @@ TEST(LocalizationFields, GivenTheWrittenFileThenItKeepsItsCommentsAndLayout) {
             "  x_inv_sq_m_px2: 0\n"
             "  y_scale_correction: 0\n"
             "  y_offset_m: 0\n");
+}
+
+TEST(LocalizationFields, GivenParamsThatPredictInfinityThenReaderWriterAndFitRefuseThem) {
+  LocalizationParams params = bases()[0];
+  params.paper.l1_m = 10.0;
+  params.paper.k1_per_px = -0.01;
+  params.paper.l2_m = 1.0;
+  params.paper.k2_per_px = -0.001;
+  ASSERT_TRUE(validatePredictions(params)) << validatePredictions(params).error().message;
+  ASSERT_TRUE(parseParamsYaml(formatParamsYaml(params), "ok.yaml"));
+  params.paper.k1_per_px = 1000.0;  // a finite number: validate() takes it
+  EXPECT_TRUE(validate(params));
+  const auto read = parseParamsYaml(formatParamsYaml(params), "k1.yaml");
+  ASSERT_FALSE(read);
+  EXPECT_EQ(read.error().message.rfind("k1.yaml: paper model predicts (inf", 0), 0U) << read.error().message;
+  const rt::Status written = writeParamsYaml(params, "/nonexistent/never.yaml");
+  ASSERT_FALSE(written);
+  EXPECT_NE(written.error().message.find("not written: paper model predicts (inf"), std::string::npos)
+      << written.error().message;
 }
 
 }  // namespace

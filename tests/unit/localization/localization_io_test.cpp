@@ -55,6 +55,13 @@ TEST(SamplesCsv, GivenBadInputThenOneLineNamingFileLineAndColumn) {
   EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n50,320,4\n"), "data.csv:2: expected 4 fields, got 3");
   EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n0,320,4,0\n"), "data.csv:2: torso_px: must be > 0, got 0");
   EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n-3.5,320,4,0\n"), "data.csv:2: torso_px: must be > 0, got -3.5");
+  // Implausible values (issue 23 item 7): they fitted, and evaluated to errors of 6.6e132 m.
+  EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n50,1e6,4,0\n"), "data.csv:2: u_px: must be in [-10000, 10000], got 1e+06");
+  EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n50,320,1e308,0\n"), "data.csv:2: x_m: must be in (0, 1000], got 1e+308");
+  EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n50,320,-2,0\n"), "data.csv:2: x_m: must be in (0, 1000], got -2");
+  EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m\n2e4,320,4,0\n"), "data.csv:2: torso_px: must be in (0, 10000], got 20000");
+  EXPECT_EQ(errorOf("torso_px,u_px,x_m,y_m,z_m\n50,320,4,0,-5e3\n"),
+            "data.csv:2: z_m: must be in [-1000, 1000], got -5000");
 }
 
 TEST(SamplesCsv, GivenAMissingFileThenAnError) {

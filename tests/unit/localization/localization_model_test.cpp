@@ -175,6 +175,18 @@ TEST(LocalizationFit, GivenTooFewOrInvalidSamplesThenAnError) {
   EXPECT_FALSE(fit(LocalizationModel::kPinhole, synthesize(truePinhole(), 20, 0.0, 9), no_focal));
 }
 
+TEST(LocalizationFit, GivenRowsThatDoNotVaryThenTheFitRefusesThem) {
+  // 500 identical rows fitted with 0.000 m error (issue 23 item 7): any curve passes through one point.
+  const std::vector<LocalizationSample> same(500, synthesize(truePinhole(), 1, 0.0, 11)[0]);
+  for (const LocalizationModel model : {LocalizationModel::kPaper, LocalizationModel::kPinhole}) {
+    const auto fitted = fit(model, same, testIntrinsics());
+    ASSERT_FALSE(fitted) << toString(model);
+    EXPECT_NE(fitted.error().message.find("the samples do not vary: 1 distinct torso length(s), need at least 5"),
+              std::string::npos)
+        << fitted.error().message;
+  }
+}
+
 TEST(LocalizationFit, GivenDataNoModelCanExplainThenConvergenceFailureIsAnError) {
   // Given one iteration only: Ceres cannot converge, and the fit says so.
   FitOptions options;

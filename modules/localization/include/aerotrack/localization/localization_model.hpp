@@ -134,4 +134,15 @@ const rt::FieldTable<PinholeModelParams>& pinholeModelFields();
 /// path ("pinhole.fx_px must be in (0, inf), got 0").
 rt::Status validate(const LocalizationParams& params);
 
+/// validate(), then what the parameters predict: finite and within 10 km for every torso of 10-1000
+/// px at u of 0-1280 px. An exponent of 1000 per pixel is a finite number that evaluates to
+/// infinity: without this a person would silently never be estimated. Reading, writing and fitting
+/// a parameter file check it.
+rt::Status validatePredictions(const LocalizationParams& params);
+
+/// The range of a plausible calibration sample (the input policy): torso_px in (0, 10000], u_px in
+/// [-10000, 10000], x_m in (0, 1000], y_m and z_m (when given) in [-1000, 1000]. "" or the reason,
+/// naming the column ("x_m: must be in (0, 1000], got 1e+308").
+std::string implausibleSample(const LocalizationSample& sample);
+
 }  // namespace aerotrack::localization
