@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -77,8 +78,14 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
   if (!b_manifest) return b_manifest.error();
   const rt::TimeNs a_start_ns = a_manifest->start_ns;
   const rt::TimeNs b_start_ns = b_manifest->start_ns;
-  std::vector<StreamComparison> out;
-  for (const ComparedStream& stream : comparedStreams()) {
+  struct Loaded {
+    const ComparedStream* stream;
+    std::string a_path;
+    std::vector<CsvRecord> a, b;
+  };
+  const std::vector<ComparedStream> streams = comparedStreams();
+  std::vector<Loaded> loaded;
+  for (const ComparedStream& stream : streams) {
     if (stream.input && !inputs) continue;
     const std::string a_path = (fs::path(recorded_dir) / stream.file).string();
     const std::string b_path = (fs::path(replayed_dir) / stream.file).string();
@@ -89,13 +96,30 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
     auto b = readAll(b_path, stream.columns);
     if (!b) return b.error();
     if (a->empty() && b->empty()) continue;
+    loaded.push_back({&stream, a_path, std::move(a.value()), std::move(b.value())});
+  }
+  // A recorder killed mid-run flushed each stream up to a different record: past the earliest
+  // stream's last record the recording is incomplete (an output on disk whose input is not, a
+  // replay's records the recorder never saw). Both sides are compared up to that time only.
+  rt::TimeNs complete_until_ns = std::numeric_limits<rt::TimeNs>::max();
+  if (recording_cut_short) {
+    for (const Loaded& l : loaded)
+      if (!l.a.empty()) complete_until_ns = std::min(complete_until_ns, l.a.back().stamp_ns - a_start_ns);
+  }
+  std::vector<StreamComparison> out;
+  for (Loaded& l : loaded) {
+    const ComparedStream& stream = *l.stream;
+    const std::string& a_path = l.a_path;
+    std::vector<CsvRecord>* a = &l.a;
+    std::vector<CsvRecord>* b = &l.b;
     StreamComparison c;
-    if (recording_cut_short && !a->empty()) {
-      const rt::TimeNs last_ns = a->back().stamp_ns - a_start_ns;
-      while (!b->empty() && b->back().stamp_ns - b_start_ns > last_ns) {
-        b->pop_back();
-        ++c.past_end;
-      }
+    while (!a->empty() && a->back().stamp_ns - a_start_ns > complete_until_ns) {
+      a->pop_back();
+      ++c.past_end;
+    }
+    while (!b->empty() && b->back().stamp_ns - b_start_ns > complete_until_ns) {
+      b->pop_back();
+      ++c.past_end;
     }
     c.file = stream.file;
     c.recorded = a->size();
@@ -142,7 +166,7 @@ std::string formatComparison(const std::vector<StreamComparison>& comparisons) {
     out << "  " << c.file << ": " << c.identical << " of " << c.recorded << " recorded records replayed identically";
     if (c.same()) {
       out << " (bit for bit)";
-      if (c.past_end > 0) out << "; " << c.past_end << " replayed past the recording's end, not compared";
+      if (c.past_end > 0) out << "; " << c.past_end << " past the recording's complete part, not compared";
       out << "\n";
     } else {
       out << "; " << c.replayed << " replayed, largest difference " << number(c.max_abs_difference)

@@ -26,8 +26,8 @@ struct StreamComparison {
 
 /// Compares the streams both folders hold; with inputs false, only what the modules and actuators
 /// produced (not what the devices delivered). recording_cut_short: the recording has no trusted end
-/// (its recorder was killed, or its manifest's end_ns lies past its data), so the replay's records
-/// stamped after a stream's last recorded record are beyond what the recording can judge: they are
+/// (its recorder was killed, or its manifest's end_ns lies past its data), so it is complete only up
+/// to the earliest of its streams' last records; the records of both sides stamped after that are
 /// counted as past_end, not compared. Error: a stream that cannot be read (one line naming it).
 rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& recorded_dir,
                                                             const std::string& replayed_dir, bool inputs = true,

@@ -28,7 +28,15 @@ grep -q "offset_s 1000.0 s is past the recording's last record" <<<"$out" || fai
 
 # A lockstep recording killed with SIGKILL mid-run (no end_ns, streams cut at different records):
 # every recorded record replays identically; what the replay produced after them is not a difference.
-timeout -s KILL 2 "$bin" sim --scenario sharp_turn --out hr-ksim --record hr-kill > /dev/null 2>&1
+# Killed once a second of odometry is on disk (a fixed delay raced a slow start on a loaded machine).
+"$bin" sim --scenario sharp_turn --out hr-ksim --record hr-kill > /dev/null 2>&1 &
+pid=$!
+for _ in $(seq 1 600); do  # up to 60 s
+  [[ -f hr-kill/odometry.csv && $(wc -l < hr-kill/odometry.csv) -gt 100 ]] && break
+  sleep 0.1
+done
+kill -KILL "$pid"
+wait "$pid" 2> /dev/null
 grep -q "^end_ns" hr-kill/manifest.yaml && fail "the killed recording has an end"
 out=$(timeout 120 "$bin" replay hr-kill --compare --out hr-out4 2>&1) || fail "killed recording: exit $?: $(tail -1 <<<"$out")"
 grep -q "^replay identical to the recording$" <<<"$out" || fail "killed recording: not identical"
