@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "aerotrack/hal/image_decode.hpp"
 #include "aerotrack/perception/detector.hpp"
 #include "aerotrack/rt/clock.hpp"
 #include "commands.hpp"
@@ -90,32 +91,6 @@ void draw(cv::Mat& image, const perception::DetectorOutput& out) {
   }
 }
 
-/// Decoders fill a truncated JPEG or PNG with grey and return it as if whole (libjpeg only warns),
-/// so a cut-off file would pass for an image without people. JPEG ends with the EOI marker FF D9,
-/// PNG with its IEND chunk: look for them near the end (a few trailing bytes are tolerated).
-/// Other formats are left to the decoder. Returns an empty string or the reason.
-std::string truncationOf(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::vector<unsigned char> head(8, 0);
-  in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
-  const bool jpeg = head[0] == 0xFF && head[1] == 0xD8;
-  const bool png = head[0] == 0x89 && head[1] == 'P' && head[2] == 'N' && head[3] == 'G';
-  if (!jpeg && !png) return "";
-  in.clear();
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  const std::streamoff tail_size = std::min<std::streamoff>(size, 1024);
-  std::vector<unsigned char> tail(static_cast<std::size_t>(tail_size));
-  in.seekg(size - tail_size);
-  in.read(reinterpret_cast<char*>(tail.data()), tail_size);
-  for (std::size_t i = 0; i + 1 < tail.size(); ++i) {
-    if (jpeg && tail[i] == 0xFF && tail[i + 1] == 0xD9) return "";
-    if (png && i + 3 < tail.size() && tail[i] == 'I' && tail[i + 1] == 'E' && tail[i + 2] == 'N' && tail[i + 3] == 'D')
-      return "";
-  }
-  return jpeg ? "the JPEG data is truncated (no end-of-image marker)" : "the PNG data is truncated (no IEND chunk)";
-}
-
 bool looksLikeVideo(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -149,15 +124,10 @@ int detectCommand(const ParsedArgs& args) {
   cv::Mat last;
   perception::DetectorOutput last_out;
   if (!looksLikeVideo(input)) {
-    if (const std::string truncated = truncationOf(input); !truncated.empty())
-      return failCommand("detect", input + ": " + truncated);
-    cv::Mat image;
-    try {
-      image = cv::imread(input, cv::IMREAD_COLOR);
-    } catch (const cv::Exception&) {
-      image.release();
-    }
-    if (image.empty()) return failCommand("detect", input + ": cannot decode the image (corrupt or not an image)");
+    // Sizes, kinds of file and corrupt data are refused before anything is decoded (image_decode.hpp).
+    auto decoded = hal::readImageFile(input, cv::IMREAD_COLOR);
+    if (!decoded) return failCommand("detect", decoded.error().message);
+    const cv::Mat image = std::move(decoded.value());
     const rt::TimeNs begin = clock.now();
     auto out = detector->detectFrame(image, model_name);
     const double latency_ms = rt::nsToMilliseconds(clock.now() - begin);

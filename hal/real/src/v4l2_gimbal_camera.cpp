@@ -6,6 +6,9 @@
 
 #include <cmath>
 #include <limits>
+#include <span>
+
+#include "aerotrack/hal/image_decode.hpp"
 
 namespace aerotrack::hal::real {
 namespace {
@@ -53,28 +56,11 @@ rt::Expected<cv::Mat> decodeToBgr(const std::uint8_t* data, std::size_t size_byt
   }
   if (size_bytes < 4 || size_bytes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     return rt::Error{"MJPG frame of " + std::to_string(size_bytes) + " bytes"};
-  // A JPEG ends with EOI (FF D9); a frame cut short by the USB transfer does not, and libjpeg would
-  // fill the missing rows with grey instead of failing.
-  if (data[size_bytes - 2] != 0xFF || data[size_bytes - 1] != 0xD9) {
-    // uvcvideo may pad a frame after EOI: look for it in the last bytes.
-    bool found = false;
-    const std::size_t from = size_bytes > 64 ? size_bytes - 64 : 0;
-    for (std::size_t i = size_bytes - 1; i > from; --i) {
-      if (data[i - 1] == 0xFF && data[i] == 0xD9) {
-        found = true;
-        break;
-      }
-    }
-    if (!found) return rt::Error{"MJPG frame of " + std::to_string(size_bytes) + " bytes is truncated (no JPEG end)"};
-  }
-  const cv::Mat bytes(1, static_cast<int>(size_bytes), CV_8UC1, const_cast<std::uint8_t*>(data));  // NOLINT: read only
-  cv::Mat bgr;
-  try {
-    bgr = cv::imdecode(bytes, cv::IMREAD_COLOR);
-  } catch (const cv::Exception&) {
-    bgr.release();  // OpenCV throws on some malformed streams: the same as undecodable
-  }
-  if (bgr.empty()) return rt::Error{"MJPG frame of " + std::to_string(size_bytes) + " bytes is not a valid JPEG"};
+  // A frame cut short by the USB transfer, or garbled, is refused: libjpeg would fill the missing
+  // rows with grey and only warn (image_decode.hpp). uvcvideo's padding after EOI is tolerated.
+  auto decoded = decodeImage(std::span<const std::uint8_t>(data, size_bytes), cv::IMREAD_COLOR);
+  if (!decoded) return rt::Error{"MJPG frame of " + std::to_string(size_bytes) + " bytes: " + decoded.error().message};
+  const cv::Mat bgr = std::move(decoded.value());
   if (bgr.cols != width_px || bgr.rows != height_px)
     return rt::Error{"MJPG frame is " + std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows) + ", expected " +
                      std::to_string(width_px) + "x" + std::to_string(height_px)};

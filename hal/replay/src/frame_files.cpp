@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "aerotrack/hal/depth_units.hpp"
+#include "aerotrack/hal/image_decode.hpp"
 
 namespace aerotrack::hal::replay {
 
@@ -44,14 +45,7 @@ rt::Status encode(const std::string& path, const char* extension, const cv::Mat&
 rt::Expected<cv::Mat> decode(const std::string& path, int flags) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return rt::Error{path + ": missing frame file"};
-  cv::Mat image;
-  try {
-    image = cv::imread(path, flags);
-  } catch (const cv::Exception& e) {
-    return rt::Error{path + ": not a readable image: " + e.what()};
-  }
-  if (image.empty()) return rt::Error{path + ": not a readable image (corrupt or truncated)"};
-  return image;
+  return readImageFile(path, flags);  // sizes checked before decoding, corrupt data refused
 }
 
 }  // namespace

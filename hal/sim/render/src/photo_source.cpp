@@ -6,6 +6,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "aerotrack/hal/image_decode.hpp"
+
 namespace aerotrack::hal::sim {
 namespace {
 
@@ -40,13 +42,9 @@ rt::Expected<cv::Mat> readPhoto(const std::string& path, int frame) {
     return frames->front();
   }
   if (auto status = checkFile(path); !status) return status.error();
-  cv::Mat image;
-  try {
-    image = cv::imread(path, cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    return rt::Error{path + ": cannot decode: " + e.what()};
-  }
-  if (auto status = checkDecoded(path, image); !status) return status.error();
+  auto image = readImageFile(path, cv::IMREAD_COLOR);  // sizes and corrupt data checked before decoding
+  if (!image) return image.error();
+  if (auto status = checkDecoded(path, *image); !status) return status.error();
   return image;
 }
 

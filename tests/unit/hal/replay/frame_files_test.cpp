@@ -64,7 +64,7 @@ TEST(DepthPng, GivenBadFilesThenEachErrorNamesTheFile) {
   std::filesystem::resize_file(dir.file("000003.png"), size / 2);  // a copy cut in the middle
   const auto truncated = readDepthPng(dir.file("000003.png"));
   ASSERT_FALSE(truncated);
-  EXPECT_NE(truncated.error().message.find("000003.png: not a readable image"), std::string::npos)
+  EXPECT_NE(truncated.error().message.find("000003.png: the PNG data is truncated"), std::string::npos)
       << truncated.error().message;
 
   ASSERT_TRUE(cv::imwrite(dir.file("000004.png"), cv::Mat(6, 8, CV_8UC1, cv::Scalar(9))));
