@@ -193,7 +193,7 @@ TEST(V4l2Conversions, GivenMjpgWhenDecodedThenColoursSurviveAndCorruptFramesAreE
   EXPECT_FALSE(decodeToBgr(jpeg.data(), jpeg.size(), RawImageFormat::kMjpg, 640, 480));  // wrong size
   auto cut = decodeToBgr(jpeg.data(), jpeg.size() / 2, RawImageFormat::kMjpg, 64, 48);   // USB transfer cut short
   ASSERT_FALSE(cut);
-  expectOneLine(cut.error().message, "premature end of JPEG file");
+  expectOneLine(cut.error().message, "corrupt JPEG data");
   std::vector<std::uint8_t> garbage(500, 0x5A);
   garbage[498] = 0xFF;
   garbage[499] = 0xD9;  // ends like a JPEG, is not one
@@ -277,7 +277,7 @@ TEST(V4l2GimbalCamera, GivenACorruptJpegWhenGrabbedThenItIsDroppedAndCountedAndT
   EXPECT_EQ(h.state, DeviceHealth::State::kDegraded);
   EXPECT_EQ(h.error_count, 1U);
   EXPECT_NE(h.detail.find("1 undecodable"), std::string::npos) << h.detail;
-  EXPECT_NE(h.detail.find("premature end of JPEG file"), std::string::npos) << h.detail;
+  EXPECT_NE(h.detail.find("corrupt JPEG data"), std::string::npos) << h.detail;
   rig.push(1, kT0 + 43 * kMs);
   const ImageFrameHandle f = rig.camera->grab(kT0 + 44 * kMs);
   ASSERT_NE(f, nullptr);
