@@ -265,7 +265,7 @@ int benchCommand(const ParsedArgs& args) {
       args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials), 100.0 * visible_sum / n,
       losses, longest_loss_max_s, occluded_sum_s / n, out_of_image_sum_s / n, distance_sum / n,
       planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0, plan_p99_max, collisions);
-  if (stop.load()) return 130;
+  if (stop.load()) return signals.stoppedStatus();
   return failed_runs == 0 ? 0 : 1;
 }
 
@@ -350,7 +350,7 @@ int suiteCommand(const ParsedArgs& args, const std::string& self, std::int64_t j
   }
   std::printf("suite %s: %s/report.md, %s/suite.json; %d trial(s) without a result, %d cell(s) in error\n",
               suite->name.c_str(), out_dir.c_str(), out_dir.c_str(), missing, error_cells);
-  if (stop.load()) return 130;
+  if (stop.load()) return signals.stoppedStatus();
   return missing == 0 && error_cells == 0 ? 0 : 1;
 }
 

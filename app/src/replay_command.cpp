@@ -159,7 +159,7 @@ int replayCommand(const ParsedArgs& args) {
   auto recorded = (*system)->finishRecording(realtime ? mono_clock.now() : replay_clock.now());
   if (!recorded) return failCommand("replay", recorded.error().message);
   if (!recorded->empty()) std::printf("%s\n", recorded->c_str());
-  if (stop.load()) return 130;
+  if (stop.load()) return signals.stoppedStatus();
   if (!compare) return 0;
   // An imported video has no delivery times to compare with: only what the modules produced is.
   auto comparison =

@@ -120,8 +120,9 @@ int runCommand(const ParsedArgs& args) {
   } else if (!recorded->empty()) {
     std::printf("%s\n", recorded->c_str());
   }
-  if (signals.received() != 0) std::fprintf(stderr, "aerotrack run: stopped by signal %d\n", signals.received());
-  return 0;
+  if (signals.received() == 0) return 0;
+  std::fprintf(stderr, "aerotrack run: stopped by signal %d\n", signals.received());
+  return signals.stoppedStatus();  // systemd's unit lists 143 as a clean stop (SuccessExitStatus)
 }
 
 }  // namespace aerotrack::app

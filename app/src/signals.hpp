@@ -18,6 +18,9 @@ class SignalWatcher {
 
   /// The signal that stopped us, or 0.
   int received() const { return received_.load(); }
+  /// The exit status of a command stopped by a signal, after its clean shutdown: the shell's
+  /// convention, 128 + the signal (130 for SIGINT, 143 for SIGTERM) -- the same for every command.
+  int stoppedStatus() const { return 128 + (received() != 0 ? received() : 2); }
 
  private:
   std::atomic<bool>& stop_;

@@ -136,7 +136,7 @@ int simCommand(const ParsedArgs& args) {
   }
   std::printf("results: %s, %s%s%s\n", summary_path.c_str(), topdown_path.c_str(), strip_path.empty() ? "" : ", ",
               strip_path.c_str());
-  return info.interrupted ? 130 : 0;
+  return info.interrupted ? signals.stoppedStatus() : 0;
 }
 
 }  // namespace aerotrack::app
