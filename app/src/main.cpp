@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <glog/logging.h>
 #include <opencv2/core/utils/logger.hpp>
 
 #include "cli.hpp"
@@ -15,6 +16,10 @@ int main(int argc, char** argv) {
   // OpenCV prints warnings of its own (DNN layer fallbacks, decoder complaints); the commands
   // report what matters in their own one-line messages.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  // Ceres logs through glog: a diverging residual during a fit printed a multi-line warning before
+  // the command's own one-line error. The fit reports its failures itself; only fatal errors print.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  google::InitGoogleLogging(argv[0]);
   try {
     const std::vector<CommandSpec> table = commandTable();
     const auto args = parseArgs(std::vector<std::string>(argv + 1, argv + argc), table);
