@@ -3,10 +3,11 @@
 #   release  build/       Release: what flies and what the demo runs (build/bin/aerotrack)
 #   asan     build-asan/  AddressSanitizer + UndefinedBehaviorSanitizer: the whole test suite (scripts/test.sh)
 #   tsan     build-tsan/  ThreadSanitizer: the concurrency tests (scripts/check.sh tsan)
+#   fuzz     build-fuzz/  clang, libFuzzer + ASan + UBSan: the fuzz targets of tests/fuzz (scripts/fuzz.sh)
 # Every tree is a CMake unity build (AEROTRACK_UNITY_BUILD, docs/testing.md: about half the cold build
 # time). ccache is used when it is installed (scripts/setup.sh --dev installs it); nothing depends on it.
 # Incremental: a second run with nothing changed takes about a second.
-# usage: scripts/build.sh [--tree release|asan|tsan] [-DOPTION=VALUE...] [TARGET...]
+# usage: scripts/build.sh [--tree release|asan|tsan|fuzz] [-DOPTION=VALUE...] [TARGET...]
 #   TARGETs default to `aerotrack` for release and to everything for asan and tsan; -D options apply to
 #   the first configure of a tree only.
 set -euo pipefail
@@ -40,7 +41,13 @@ case $tree in
     options+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DAEROTRACK_SANITIZE=thread -DAEROTRACK_BUILD_BENCHMARKS=OFF
       "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG")
     ;;
-  *) echo "build.sh: unknown tree '$tree' (release, asan, tsan)" >&2; exit 1 ;;
+  fuzz)  # clang: libFuzzer is clang's. No tests or benchmarks: the fuzz targets only.
+    dir=build-fuzz
+    options+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DAEROTRACK_SANITIZE=address,undefined -DAEROTRACK_FUZZ=ON
+      -DBUILD_TESTING=OFF -DAEROTRACK_BUILD_BENCHMARKS=OFF -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_C_COMPILER=clang-14
+      "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
+    ;;
+  *) echo "build.sh: unknown tree '$tree' (release, asan, tsan, fuzz)" >&2; exit 1 ;;
 esac
 if command -v ccache >/dev/null; then  # CCACHE_DISABLE=1 turns it off for a cold measurement
   options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
