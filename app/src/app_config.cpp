@@ -278,6 +278,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "odometry_timeout_s" << YAML::Value << v.odometry_timeout_s;
     out << YAML::Key << "depth_timeout_s" << YAML::Value << v.depth_timeout_s;
     out << YAML::Key << "camera_timeout_s" << YAML::Value << v.camera_timeout_s;
+    out << YAML::Key << "gimbal_timeout_s" << YAML::Value << v.gimbal_timeout_s;
     out << YAML::Key << "max_planner_failures" << YAML::Value << v.max_planner_failures;
     out << YAML::Key << "overrun_storm" << YAML::Value << v.overrun_storm;
     out << YAML::Key << "overrun_window_s" << YAML::Value << v.overrun_window_s;

@@ -2,6 +2,7 @@
 // step, and the simulator's truth-fed baseline_follow stand-in. Thin by design.
 #pragma once
 
+#include <cmath>
 #include <memory>
 
 #include <algorithm>
@@ -81,17 +82,41 @@ class GimbalCameraTask final : public rt::Task {
   perception::KeypointLockOn lock_on_;
 };
 
-/// Publishes each new depth frame on the depth channel.
+/// Publishes each new depth frame on the depth channel -- unless it is blank: fewer than 0.5 % of
+/// its pixels (sampled on a grid of every 8th row and column) hold a range. A camera delivering
+/// frames of zeros is as blind as one delivering none, and the supervisor's depth failsafe must see
+/// it so (issue 23's fault matrix: with them published, the drone flew on a map no longer updated).
+/// A forward camera on a flying drone always has the ground or something in range.
 class DepthCameraTask final : public rt::Task {
  public:
   DepthCameraTask(hal::DepthCamera& device, rt::SharedSlot<hal::DepthFrame>& out) : device_(device), out_(out) {}
   void step(rt::TimeNs now_ns) override {
-    if (auto frame = device_.grab(now_ns)) out_.write(std::move(frame));
+    auto frame = device_.grab(now_ns);
+    if (!frame) return;
+    if (isBlank(*frame)) {
+      ++blank_frames_;
+      return;
+    }
+    out_.write(std::move(frame));
+  }
+  std::uint64_t blankFrames() const { return blank_frames_; }
+
+  static bool isBlank(const hal::DepthFrame& frame) {
+    constexpr int kStride = 8;
+    std::size_t sampled = 0;
+    std::size_t valid = 0;
+    for (int v = 0; v < frame.depth_m.rows; v += kStride) {
+      const float* row = frame.depth_m.ptr<float>(v);
+      for (int u = 0; u < frame.depth_m.cols; u += kStride, ++sampled)
+        if (row[u] > 0.0F && std::isfinite(row[u])) ++valid;
+    }
+    return valid * 200 < sampled || sampled == 0;  // under 0.5 %
   }
 
  private:
   hal::DepthCamera& device_;
   rt::SharedSlot<hal::DepthFrame>& out_;
+  std::uint64_t blank_frames_ = 0;
 };
 
 /// Publishes the gimbal encoder's newest reading, and every new one (by stamp) on the stream that

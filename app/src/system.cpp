@@ -213,6 +213,7 @@ System::TaskResult System::makeSupervisorTask(System& s, const std::string& wher
   const supervisor::SupervisorChannels channels{c.odometry,
                                                 c.depth,
                                                 c.newest_camera_frame_ns,
+                                                c.gimbal_state,
                                                 c.target,
                                                 c.planner_failures_in_a_row,
                                                 c.deadline_misses,

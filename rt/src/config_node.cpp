@@ -332,7 +332,11 @@ std::vector<ConfigNode> ConfigNode::childList(const std::string& key) const {
 void ConfigNode::finish() const {
   if (!node_.IsMap()) return;
   for (const auto& item : node_) {
-    const std::string key = item.first.as<std::string>();
+    // A key that is a list or a map ("[a, b]: 1") is never one we read (as<string> would throw a
+    // YAML exception past the caller: found by fuzz_scenario).
+    if (!item.first.IsScalar())
+      throw ConfigError(locate(item.first, "") + ": a key must be a plain word, got a list or map");
+    const std::string key = item.first.Scalar();
     if (used_->count(key) == 0) throw ConfigError(locate(item.first, key) + ": unknown key");
   }
 }

@@ -1,8 +1,9 @@
 // The closed loop on the sim HAL in lockstep (issue 9): the planner flies from the estimated person, the
 // gimbal controller keeps them in frame, the supervisor watches. Tracking through sharp_turn at 1.5 m/s;
 // holding the tracking distance at 2.5 m/s; relocation after a forced 2 s occlusion; each failsafe under its injected
-// fault (camera frames stop, odometry freezes, depth stops) holds the drone without collision; a planner forced to fail
-// degrades to a hover.
+// fault (camera frames stop, odometry freezes, depth stops; issue 23: depth frames of zeros, the gimbal encoder silent,
+// the vehicle link lost) holds the drone without collision; the gimbal stuck, frames late and garbage keypoints are
+// ridden out; a planner forced to fail degrades to a hover.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -165,11 +166,29 @@ TEST_P(Failsafe, FiresAndTheDroneHoldsWithoutCollision) {
   EXPECT_LT(f.final_speed_mps, 0.3);  // braked to a hover
 }
 
-INSTANTIATE_TEST_SUITE_P(Faults, Failsafe,
-                         ::testing::Values(FaultCase{"camera_stop_s: [10.0, 1000.0]", "", "failsafe: no camera frames"},
-                                           FaultCase{"odometry_freeze_s: [10.0, 1000.0]", "",
-                                                     "failsafe: stale odometry"},
-                                           FaultCase{"depth_stop_s: [10.0, 1000.0]", "", "failsafe: no depth images"}));
+INSTANTIATE_TEST_SUITE_P(
+    Faults, Failsafe,
+    ::testing::Values(FaultCase{"camera_stop_s: [10.0, 1000.0]", "", "failsafe: no camera frames"},
+                      FaultCase{"odometry_freeze_s: [10.0, 1000.0]", "", "failsafe: stale odometry"},
+                      FaultCase{"depth_stop_s: [10.0, 1000.0]", "", "failsafe: no depth images"},
+                      // Issue 23's fault matrix: each ends in a latched hold.
+                      FaultCase{"depth_zero_s: [10.0, 1000.0]", "", "failsafe: no depth images"},
+                      FaultCase{"gimbal_silent_s: [10.0, 1000.0]", "", "failsafe: no gimbal state"},
+                      FaultCase{"vehicle_link_lost_s: [10.0, 1000.0]", "", "failsafe: vehicle link lost"}));
+
+// Issue 23's fault matrix, the faults that pass: the drone rides them out, tracking again after.
+class TransientFault : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(TransientFault, IsRiddenOutWithoutCollisionAndTheTrackResumes) {
+  const Flight f = fly(withFault(GetParam()), 1, 24.0);
+  EXPECT_EQ(f.mode, "track") << f.reason;
+  EXPECT_EQ(f.summary["collisions"], 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Faults, TransientFault,
+                         ::testing::Values("gimbal_stuck_s: [12.0, 14.0]",        // the motor ignores commands 2 s
+                                           "camera_late_s: [12.0, 16.0]",         // frames 0.5 s late for 4 s
+                                           "detector_garbage_s: [12.0, 14.0]"));  // random keypoints 2 s
 
 // Every plan fails its final check (an impossible speed limit): failures in a row are no failsafe (issue 21).
 // The supervisor degrades: the drone brakes to a hover, the gimbal stays on the person, planning goes on.

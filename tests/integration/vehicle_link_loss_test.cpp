@@ -65,6 +65,7 @@ supervisor:
   odometry_timeout_s: 2.0   # longer than the link's timeout: the link's loss is seen first
   depth_timeout_s: 1.0
   camera_timeout_s: 1.0
+  gimbal_timeout_s: 0.5
   max_planner_failures: 20
   overrun_storm: 50
   overrun_window_s: 1.0

@@ -97,6 +97,12 @@ SimConfig parseSimConfig(const rt::ConfigNode& node) {
     window("person_occluded_s", c.faults.person_occluded);
     window("odometry_freeze_s", c.faults.odometry_freeze);
     window("depth_stop_s", c.faults.depth_stop);
+    window("gimbal_stuck_s", c.faults.gimbal_stuck);
+    window("gimbal_silent_s", c.faults.gimbal_silent);
+    window("vehicle_link_lost_s", c.faults.vehicle_link_lost);
+    window("camera_late_s", c.faults.camera_late);
+    window("detector_garbage_s", c.faults.detector_garbage);
+    window("depth_zero_s", c.faults.depth_zero);
     faults.finish();
   }
   node.finish();
@@ -109,10 +115,17 @@ void emitYaml(YAML::Emitter& out, const SimConfig& c) {
   out << YAML::Key << "seed" << YAML::Value << c.seed;
   out << YAML::Key << "physics_step_s" << YAML::Value << c.physics_step_s;
   out << YAML::Key << "render_depth" << YAML::Value << c.render_depth;
-  const std::pair<const char*, const sim::FaultWindow*> windows[] = {{"camera_stop_s", &c.faults.camera_stop},
-                                                                     {"person_occluded_s", &c.faults.person_occluded},
-                                                                     {"odometry_freeze_s", &c.faults.odometry_freeze},
-                                                                     {"depth_stop_s", &c.faults.depth_stop}};
+  const std::pair<const char*, const sim::FaultWindow*> windows[] = {
+      {"camera_stop_s", &c.faults.camera_stop},
+      {"person_occluded_s", &c.faults.person_occluded},
+      {"odometry_freeze_s", &c.faults.odometry_freeze},
+      {"depth_stop_s", &c.faults.depth_stop},
+      {"gimbal_stuck_s", &c.faults.gimbal_stuck},
+      {"gimbal_silent_s", &c.faults.gimbal_silent},
+      {"vehicle_link_lost_s", &c.faults.vehicle_link_lost},
+      {"camera_late_s", &c.faults.camera_late},
+      {"detector_garbage_s", &c.faults.detector_garbage},
+      {"depth_zero_s", &c.faults.depth_zero}};
   bool any = false;
   for (const auto& [key, w] : windows) any = any || w->begin_s >= 0.0;
   if (any) {

@@ -1,6 +1,8 @@
 // Sim device views onto the simulation.
 #include "aerotrack/hal/sim/devices.hpp"
 
+#include <algorithm>
+
 namespace aerotrack::hal::sim {
 namespace {
 
@@ -20,19 +22,66 @@ std::optional<OdometrySample> SimOdometry::read(TimeNs now_ns) {
   return frozen_;
 }
 
+void SimVehicleLink::send(const Setpoint& setpoint) {
+  if (sim_->options().faults.vehicle_link_lost.active(sim_->secondsSinceStart(setpoint.stamp_ns))) return;
+  sim_->setpointInbox().write(setpoint);
+}
+
+VehicleStatus SimVehicleLink::status(TimeNs now_ns) {
+  if (sim_->options().faults.vehicle_link_lost.active(sim_->secondsSinceStart(now_ns)))
+    return {now_ns, false, true, FlightMode::kHold};
+  return {now_ns, true, true, FlightMode::kOffboard};
+}
+
+void SimGimbal::command(const GimbalCommand& command) {
+  if (sim_->options().faults.gimbal_stuck.active(sim_->secondsSinceStart(command.stamp_ns))) {
+    sim_->gimbalInbox().write(GimbalCommand{command.stamp_ns, GimbalCommand::Mode::kRate, 0.0, 0.0, 0.0});
+    return;
+  }
+  sim_->gimbalInbox().write(command);
+}
+
+std::optional<GimbalState> SimGimbal::read(TimeNs now_ns) {
+  if (sim_->options().faults.gimbal_silent.active(sim_->secondsSinceStart(now_ns))) return std::nullopt;
+  return sim_->gimbalOut().read();
+}
+
 std::optional<DetectionFrame> SimGimbalCamera::grabDetections(TimeNs now_ns) {
-  auto frame = sim_->detectionsOut().try_pop();
-  if (!frame) return frame;
   const SimFaults& faults = sim_->options().faults;
   const double t_s = sim_->secondsSinceStart(now_ns);
+  std::optional<DetectionFrame> frame;
+  if (faults.camera_late.active(t_s) || !late_.empty()) {
+    // Frames wait until kCameraLateS after their exposure; the newest due one is delivered.
+    while (auto f = sim_->detectionsOut().try_pop()) {
+      if (late_.size() >= 64) late_.pop_front();
+      late_.push_back(*f);
+    }
+    const TimeNs due_ns = now_ns - (faults.camera_late.active(t_s) ? rt::secondsToNs(kCameraLateS) : 0);
+    while (!late_.empty() && late_.front().stamp_ns <= due_ns) {
+      frame = late_.front();
+      late_.pop_front();
+    }
+  } else {
+    frame = sim_->detectionsOut().try_pop();
+  }
+  if (!frame) return frame;
   if (faults.camera_stop.active(t_s)) {
     while (sim_->detectionsOut().try_pop()) {
     }
+    late_.clear();
     return std::nullopt;
   }
   if (faults.person_occluded.active(t_s)) {
     frame->person_count = 0;
     frame->target_index = -1;
+  }
+  if (faults.detector_garbage.active(t_s)) {
+    // Keypoints anywhere in the image with any score: what a detector with corrupt weights returns.
+    const CameraIntrinsics& k = sim_->scenario().spec.gimbal_camera.camera.intrinsics;
+    std::uniform_real_distribution<double> u(0.0, k.width_px), v(0.0, k.height_px), score(0.0, 1.0);
+    for (std::size_t i = 0; i < std::min(frame->person_count, kMaxPersons); ++i) {
+      for (Keypoint2D& kp : frame->persons[i].keypoints) kp = {u(garbage_rng_), v(garbage_rng_), score(garbage_rng_)};
+    }
   }
   return frame;
 }
@@ -109,8 +158,14 @@ DepthFrameHandle SimDepthCamera::grab(TimeNs now_ns) {
   const std::uint64_t version = sim_->depthOut().version();
   if (version == version_) return {};
   version_ = version;
-  if (sim_->options().faults.depth_stop.active(sim_->secondsSinceStart(now_ns))) return {};
-  return sim_->depthOut().read();
+  const double t_s = sim_->secondsSinceStart(now_ns);
+  if (sim_->options().faults.depth_stop.active(t_s)) return {};
+  DepthFrameHandle frame = sim_->depthOut().read();
+  if (!frame || !sim_->options().faults.depth_zero.active(t_s)) return frame;
+  if (!zeros_ || zeros_.use_count() > 1) zeros_ = std::make_shared<DepthFrame>();
+  *zeros_ = *frame;
+  zeros_->depth_m = cv::Mat::zeros(frame->depth_m.size(), CV_32FC1);
+  return zeros_;
 }
 
 }  // namespace aerotrack::hal::sim

@@ -197,7 +197,18 @@ Sight Simulation::personSight(const Eigen::Isometry3d& T_WC, const PersonState& 
 }
 
 void Simulation::step(TimeNs now_ns) {
-  setpoint_in_.readIfNewer(setpoint_version_, active_setpoint_);
+  if (setpoint_in_.readIfNewer(setpoint_version_, active_setpoint_)) offboard_hold_ = false;
+  // The flight controller's offboard-loss failsafe (PX4: COM_OF_LOSS_T, then hold): no setpoint for
+  // kOffboardLossS and it holds where its estimator says it is, at rest, facing the same way.
+  if (setpoint_version_ != 0 && !offboard_hold_ &&
+      now_ns_ - active_setpoint_.stamp_ns > rt::secondsToNs(kOffboardLossS)) {
+    const QuadrotorState& drone = quad_.state();
+    const QuadrotorState seen = drift_ ? inOdometryFrame(drift_->error(), drone) : drone;
+    active_setpoint_ =
+        Setpoint{now_ns_, seen.p_W_m, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), active_setpoint_.yaw_rad, 0.0};
+    offboard_hold_ = true;
+    ++offboard_losses_;
+  }
   gimbal_in_.readIfNewer(gimbal_version_, active_gimbal_command_);
   // Sensors due at the current instant sample before physics moves on, so that samples fall on
   // their own schedule (start + k * period) whatever the physics step.

@@ -45,6 +45,8 @@ std::string_view toString(Reason reason) {
       return "failsafe: no depth images";
     case Reason::kNoCameraFrames:
       return "failsafe: no camera frames";
+    case Reason::kNoGimbalState:
+      return "failsafe: no gimbal state";
     case Reason::kPlannerFailures:
       return "planner failures in a row";
     case Reason::kOverrunStorm:
@@ -66,6 +68,7 @@ bool isFailsafe(Reason reason) {
     case Reason::kStaleOdometry:
     case Reason::kNoDepth:
     case Reason::kNoCameraFrames:
+    case Reason::kNoGimbalState:
     case Reason::kOverrunStorm:
     case Reason::kVehicleLinkLost:
       return true;
@@ -102,6 +105,7 @@ rt::Status validate(const SupervisorParams& p) {
   if (!(p.hold_then_land_s >= 0.0)) return rt::Error{"hold_then_land_s must be >= 0"};
   if (!(p.odometry_timeout_s > 0.0)) return rt::Error{"odometry_timeout_s must be > 0"};
   if (!(p.depth_timeout_s > 0.0)) return rt::Error{"depth_timeout_s must be > 0"};
+  if (!(p.gimbal_timeout_s > 0.0)) return rt::Error{"gimbal_timeout_s must be > 0"};
   if (!(p.camera_timeout_s > 0.0)) return rt::Error{"camera_timeout_s must be > 0"};
   if (p.max_planner_failures < 1) return rt::Error{"max_planner_failures must be >= 1"};
   if (p.overrun_storm < 1) return rt::Error{"overrun_storm must be >= 1"};
@@ -121,6 +125,7 @@ SupervisorParams parseSupervisorParams(const rt::ConfigNode& node) {
   p.odometry_timeout_s = node.getDouble("odometry_timeout_s", 0.01, 60.0);
   p.depth_timeout_s = node.getDouble("depth_timeout_s", 0.01, 60.0);
   p.camera_timeout_s = node.getDouble("camera_timeout_s", 0.01, 60.0);
+  p.gimbal_timeout_s = node.getDouble("gimbal_timeout_s", 0.01, 60.0);
   p.max_planner_failures = node.getInt("max_planner_failures", 1, 100000);
   p.overrun_storm = node.getInt("overrun_storm", 1, 1000000);
   p.overrun_window_s = node.getDouble("overrun_window_s", 0.01, 60.0);
@@ -165,6 +170,8 @@ bool Supervisor::failsafe(const SupervisorInputs& in, Reason& reason) {
     reason = Reason::kNoDepth;
   } else if (stale(in.camera_stamp_ns, params_.camera_timeout_s)) {
     reason = Reason::kNoCameraFrames;
+  } else if (stale(in.gimbal_stamp_ns, params_.gimbal_timeout_s)) {
+    reason = Reason::kNoGimbalState;
   } else if (storm) {
     reason = Reason::kOverrunStorm;
   } else {

@@ -72,9 +72,10 @@ void hoverCrowd(Simulation& sim, double seconds, std::vector<DetectionFrame>* de
                 const Eigen::Vector3d& at = Eigen::Vector3d(0, 0, 1.5)) {
   Setpoint hold;
   hold.p_W_m = at;
-  sim.setpointInbox().write(hold);
   const rt::TimeNs start = sim.truth().stamp_ns;
   for (rt::TimeNs t = start; t <= start + rt::secondsToNs(seconds); t += 5'000'000) {
+    hold.stamp_ns = t;  // streamed (the flight controller holds after 1 s without)
+    sim.setpointInbox().write(hold);
     sim.step(t);
     while (auto f = sim.detectionsOut().try_pop())
       if (detections != nullptr) detections->push_back(*f);

@@ -252,9 +252,12 @@ std::unique_ptr<Simulation> makeDisturbedSim(const std::string& yaml) {
 void holdSetpoint(Simulation& sim, double seconds, const Eigen::Vector3d& p_O_m) {
   Setpoint hold;
   hold.p_W_m = p_O_m;  // the setpoint is in the odometry frame
-  sim.setpointInbox().write(hold);
   const rt::TimeNs start = sim.truth().stamp_ns;
-  for (rt::TimeNs t = start; t <= start + rt::secondsToNs(seconds); t += 5'000'000) sim.step(t);
+  for (rt::TimeNs t = start; t <= start + rt::secondsToNs(seconds); t += 5'000'000) {
+    hold.stamp_ns = t;  // streamed (the flight controller holds after 1 s without)
+    sim.setpointInbox().write(hold);
+    sim.step(t);
+  }
 }
 
 TEST(SimulationDisturbances, GivenZeroDriftKeysOrAJumpNotYetDueThenTheRunIsBitIdenticalToOneWithout) {
@@ -268,9 +271,10 @@ TEST(SimulationDisturbances, GivenZeroDriftKeysOrAJumpNotYetDueThenTheRunIsBitId
     Setpoint go;
     go.p_W_m = {3.0, -1.0, 2.0};
     go.yaw_rad = 0.7;
-    plain->setpointInbox().write(go);
-    zero->setpointInbox().write(go);
     for (rt::TimeNs t = 0; t <= 4 * kNsPerSecond; t += 5'000'000) {
+      go.stamp_ns = t;  // streamed (the flight controller holds after 1 s without)
+      plain->setpointInbox().write(go);
+      zero->setpointInbox().write(go);
       plain->step(t);
       zero->step(t);
       ASSERT_EQ(plain->truth().drone.p_W_m, zero->truth().drone.p_W_m);

@@ -58,8 +58,9 @@ void hover(Simulation& sim, double seconds, std::vector<DetectionFrame>* detecti
   const rt::TimeNs start = sim.truth().stamp_ns;
   Setpoint hold;
   hold.p_W_m = Eigen::Vector3d(0, 0, 1.5);
-  sim.setpointInbox().write(hold);
   for (rt::TimeNs t = start; t <= start + rt::secondsToNs(seconds); t += 5'000'000) {
+    hold.stamp_ns = t;  // streamed, as a companion computer does (the flight controller holds after 1 s without)
+    sim.setpointInbox().write(hold);
     sim.step(t);
     while (auto f = sim.detectionsOut().try_pop())
       if (detections != nullptr) detections->push_back(*f);
@@ -168,10 +169,33 @@ TEST(Simulation, GivenSetpointInsideAWallThenTheCollisionIsCounted) {
   Setpoint into_wall;
   into_wall.p_W_m = Eigen::Vector3d(10.2, 0, 1.5);
   into_wall.yaw_rad = 0.0;
-  sim->setpointInbox().write(into_wall);
-  for (rt::TimeNs t = 0; t <= 10 * kNsPerSecond; t += 5'000'000) sim->step(t);
+  for (rt::TimeNs t = 0; t <= 10 * kNsPerSecond; t += 5'000'000) {
+    into_wall.stamp_ns = t;  // streamed (the flight controller holds after 1 s without)
+    sim->setpointInbox().write(into_wall);
+    sim->step(t);
+  }
   EXPECT_GE(sim->metrics().collisions(), 1);
   EXPECT_LT(sim->metrics().minClearanceM(), 0.0);
+}
+
+TEST(Simulation, GivenSetpointsThatStopThenTheFlightControllerHoldsWhereItIsAfterOneSecond) {
+  // PX4's offboard-loss failsafe (COM_OF_LOSS_T): the vehicle_link_lost fault of issue 23 relies on it.
+  auto sim = makeSim(false, false);
+  Setpoint go;
+  go.p_W_m = Eigen::Vector3d(0, 0, 1.5);
+  for (rt::TimeNs t = 0; t <= 3 * kNsPerSecond; t += 5'000'000) {  // climb to 1.5 m, streamed
+    go.stamp_ns = t;
+    sim->setpointInbox().write(go);
+    sim->step(t);
+  }
+  go.p_W_m = Eigen::Vector3d(6, 0, 1.5);  // one last setpoint, 6 m away, then silence
+  go.stamp_ns = 3 * kNsPerSecond + 5'000'000;
+  sim->setpointInbox().write(go);
+  for (rt::TimeNs t = go.stamp_ns; t <= 9 * kNsPerSecond; t += 5'000'000) sim->step(t);
+  EXPECT_EQ(sim->offboardLosses(), 1U);
+  EXPECT_LT(sim->truth().drone.v_W_mps.norm(), 0.2);  // at rest
+  EXPECT_LT(sim->truth().drone.p_W_m.x(), 5.0);       // held short of the stale setpoint
+  EXPECT_GT(sim->truth().drone.p_W_m.x(), 0.5);       // it had flown towards it for a second
 }
 
 TEST(Simulation, GivenSameSeedThenBitIdenticalTruth) {

@@ -97,5 +97,18 @@ TEST(ConfigNode, GivenAKeyTwiceThenTheErrorNamesBothLines) {
   EXPECT_TRUE(ConfigNode::fromString("a: {d: 1}\nb: {d: 2}\n", "ok.yaml"));  // the same key in two maps
 }
 
+TEST(ConfigNode, GivenAKeyThatIsAListThenAnErrorNotATerminate) {
+  // Found by fuzz_scenario: finish() converted every key to a string, and a list threw past parseConfig.
+  const auto root = ConfigNode::fromString("name: x\n[a, b]: 1\n", "k.yaml");
+  ASSERT_TRUE(root);
+  const auto finished = parseConfig<int>([&] {
+    (void)root->getString("name");
+    root->finish();
+    return 0;
+  });
+  ASSERT_FALSE(finished);
+  EXPECT_EQ(finished.error().message, "k.yaml:2: a key must be a plain word, got a list or map");
+}
+
 }  // namespace
 }  // namespace aerotrack::rt

@@ -14,16 +14,18 @@ struct Rig {
   rt::LatestSlot<hal::OdometrySample> odometry;
   rt::SharedSlot<hal::DepthFrame> depth;
   std::atomic<rt::TimeNs> camera_ns{-1};
+  rt::LatestSlot<hal::GimbalState> gimbal;
   rt::LatestSlot<estimation::TargetEstimate> target;
   std::atomic<int> planner_failures{0};
   std::atomic<std::uint64_t> deadline_misses{0};
   std::atomic<bool> link_lost{false};
   rt::LatestSlot<SupervisorState> out;
   std::atomic<bool> sweep{false};
-  SupervisorTask task{
-      SupervisorParams{}, 0,
-      SupervisorChannels{odometry, depth, camera_ns, target, planner_failures, deadline_misses, link_lost, out, sweep},
-      /*sweep_when_searching=*/true};
+  bool gimbal_alive = true;
+  SupervisorTask task{SupervisorParams{}, 0,
+                      SupervisorChannels{odometry, depth, camera_ns, gimbal, target, planner_failures, deadline_misses,
+                                         link_lost, out, sweep},
+                      /*sweep_when_searching=*/true};
 
   // Every stream fresh at t_s, flying at 1.5 m; the person seen now when `seen`.
   void step(double t_s, bool seen) {
@@ -36,6 +38,11 @@ struct Rig {
     frame->stamp_ns = now_ns;
     depth.write(std::move(frame));
     camera_ns.store(now_ns);
+    if (gimbal_alive) {
+      hal::GimbalState g;
+      g.stamp_ns = now_ns;
+      gimbal.write(g);
+    }
     estimation::TargetEstimate e;
     e.stamp_ns = now_ns;
     e.initialised = true;
@@ -45,6 +52,21 @@ struct Rig {
     task.step(now_ns);
   }
 };
+
+TEST(SupervisorTask, AGimbalEncoderGoneSilentIsAFailsafeHold) {
+  // Issue 23's fault matrix: with the encoder silent, the camera's bearing is unknown and the person
+  // is placed wrongly; the drone flew on and passed 0.16 m from an obstacle.
+  Rig rig;
+  double t = 0.0;
+  for (; t < 3.0; t += 0.02) rig.step(t, true);
+  ASSERT_EQ(rig.out.read()->mode, Mode::kTrack);
+  rig.gimbal_alive = false;
+  for (const double end = t + 0.4; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kTrack);  // within gimbal_timeout_s (0.5 s)
+  for (const double end = t + 0.3; t < end; t += 0.02) rig.step(t, true);
+  EXPECT_EQ(rig.out.read()->mode, Mode::kHold);
+  EXPECT_EQ(rig.out.read()->reason, Reason::kNoGimbalState);
+}
 
 TEST(SupervisorTask, MissedDeadlinesFromTheExecutorTriggerTheOverrunStorm) {
   Rig rig;

@@ -18,6 +18,7 @@ SupervisorInputs healthy(double t, double seen_s = -1.0, double altitude_m = 1.5
   in.altitude_m = altitude_m;
   in.depth_stamp_ns = sec(t);
   in.camera_stamp_ns = sec(t);
+  in.gimbal_stamp_ns = sec(t);
   in.person_live = seen_s >= 0.0;
   in.person_accepted_ns = seen_s >= 0.0 ? sec(seen_s) : -1;
   return in;
@@ -275,7 +276,8 @@ TEST(SupervisorParams, EveryKeyIsRequiredAndChecked) {
       "s:\n  takeoff_altitude_m: 1.5\n  takeoff_tolerance_m: 0.3\n  relocate_after_s: 0.4\n"
       "  relocate_timeout_s: 5.0\n  search_timeout_s: 20.0\n  hold_then_land_s: 0.0\n  odometry_timeout_s: 0.2\n  "
       "depth_timeout_s: 1.0\n"
-      "  camera_timeout_s: 1.0\n  max_planner_failures: 20\n  overrun_storm: 50\n  overrun_window_s: 1.0\n"
+      "  camera_timeout_s: 1.0\n  gimbal_timeout_s: 0.5\n  max_planner_failures: 20\n  overrun_storm: 50\n  "
+      "overrun_window_s: 1.0\n"
       "  startup_grace_s: 2.0\n",
       "s.yaml");
   ASSERT_TRUE(node.has_value());

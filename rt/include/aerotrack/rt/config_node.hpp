@@ -126,13 +126,16 @@ class ConfigNode {
   std::shared_ptr<std::set<std::string>> used_;  // shared so copies of a node agree
 };
 
-/// Runs a parse function and turns a thrown ConfigError into an Error value.
+/// Runs a parse function and turns a thrown ConfigError into an Error value. A YAML exception that a
+/// reader let through (a conversion on an unexpected node) becomes one too, rather than terminate.
 template <class T>
 Expected<T> parseConfig(const std::function<T()>& parse) {
   try {
     return parse();
   } catch (const ConfigError& error) {
     return Error{error.what()};
+  } catch (const YAML::Exception& error) {
+    return Error{"YAML: " + error.msg};
   }
 }
 

@@ -43,8 +43,10 @@ struct SimConfig {
   std::uint64_t seed = 1;
   double physics_step_s = 0.002;
   bool render_depth = true;
-  /// Optional `faults:` map: camera_stop_s, person_occluded_s, odometry_freeze_s, depth_stop_s, each
-  /// [begin, end] seconds of simulated time (each optional). For tests of the failsafes.
+  /// Optional `faults:` map: camera_stop_s, person_occluded_s, odometry_freeze_s, depth_stop_s,
+  /// gimbal_stuck_s, gimbal_silent_s, vehicle_link_lost_s, camera_late_s, detector_garbage_s,
+  /// depth_zero_s, each [begin, end] seconds of simulated time (each optional; sim::SimFaults). For
+  /// tests of the failsafes and the fault matrix.
   sim::SimFaults faults;
 };
 

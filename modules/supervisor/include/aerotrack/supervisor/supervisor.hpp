@@ -50,6 +50,7 @@ enum class Reason : std::uint8_t {
   kStaleOdometry,
   kNoDepth,
   kNoCameraFrames,
+  kNoGimbalState,  ///< The gimbal motor's encoder went silent: the camera's bearing is unknown.
   kPlannerFailures,
   kOverrunStorm,
   kVehicleLinkLost,
@@ -71,6 +72,7 @@ struct SupervisorParams {
   double odometry_timeout_s = 0.2;   ///< Newest odometry older than this: failsafe; > 0.
   double depth_timeout_s = 1.0;      ///< Newest depth image older than this: failsafe; > 0.
   double camera_timeout_s = 1.0;     ///< Newest gimbal-camera frame older than this: failsafe; > 0.
+  double gimbal_timeout_s = 0.5;     ///< Newest gimbal encoder reading older than this: failsafe; > 0.
   int max_planner_failures = 20;     ///< Failed planning cycles in a row while tracking: degraded; >= 1.
   int overrun_storm = 50;            ///< Deadline overruns within overrun_window_s: failsafe; >= 1.
   double overrun_window_s = 1.0;     ///< > 0.
@@ -88,6 +90,7 @@ struct SupervisorInputs {
   double altitude_m = 0.0;
   rt::TimeNs depth_stamp_ns = -1;
   rt::TimeNs camera_stamp_ns = -1;
+  rt::TimeNs gimbal_stamp_ns = -1;     ///< The newest gimbal encoder reading.
   bool person_live = false;            ///< The estimate is initialised and not lost.
   rt::TimeNs person_accepted_ns = -1;  ///< Capture time of its newest accepted measurement.
   int planner_failures_in_a_row = 0;

@@ -24,6 +24,7 @@ struct SupervisorChannels {
   const rt::LatestSlot<hal::OdometrySample>& odometry;
   const rt::SharedSlot<hal::DepthFrame>& depth;
   const std::atomic<rt::TimeNs>& newest_camera_frame_ns;
+  const rt::LatestSlot<hal::GimbalState>& gimbal_state;
   const rt::LatestSlot<estimation::TargetEstimate>& target;
   const std::atomic<int>& planner_failures_in_a_row;
   const std::atomic<std::uint64_t>& deadline_misses;  ///< Periods skipped by the real-time executor (0 in lockstep).
@@ -47,6 +48,7 @@ class SupervisorTask final : public rt::Task {
     }
     if (const auto depth = channels_.depth.read()) in.depth_stamp_ns = depth->stamp_ns;
     in.camera_stamp_ns = channels_.newest_camera_frame_ns.load(std::memory_order_relaxed);
+    if (const auto gimbal = channels_.gimbal_state.read()) in.gimbal_stamp_ns = gimbal->stamp_ns;
     if (const auto target = channels_.target.read(); target && target->initialised) {
       in.person_live = !target->lost;
       in.person_accepted_ns = target->last_accepted_ns;

@@ -2,7 +2,9 @@
 // so the modules cannot tell them from real devices.
 #pragma once
 
+#include <deque>
 #include <memory>
+#include <random>
 
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
@@ -27,8 +29,10 @@ class SimVehicleLink final : public VehicleLink {
   explicit SimVehicleLink(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
-  void send(const Setpoint& setpoint) override { sim_->setpointInbox().write(setpoint); }
-  VehicleStatus status(TimeNs now_ns) override { return {now_ns, true, true, FlightMode::kOffboard}; }
+  void send(const Setpoint& setpoint) override;
+  /// The link is up, armed, offboard -- down (and the flight controller holding) in a vehicle_link_lost
+  /// fault, as the MAVLink driver reports a link whose heartbeats stopped.
+  VehicleStatus status(TimeNs now_ns) override;
 
  private:
   std::shared_ptr<Simulation> sim_;
@@ -39,8 +43,8 @@ class SimGimbal final : public Gimbal {
   explicit SimGimbal(std::shared_ptr<Simulation> sim) : sim_(std::move(sim)) {}
   std::string_view backend() const override { return "sim"; }
   DeviceHealth health(TimeNs now_ns) const override;
-  void command(const GimbalCommand& command) override { sim_->gimbalInbox().write(command); }
-  std::optional<GimbalState> read(TimeNs) override { return sim_->gimbalOut().read(); }
+  void command(const GimbalCommand& command) override;
+  std::optional<GimbalState> read(TimeNs now_ns) override;
 
  private:
   std::shared_ptr<Simulation> sim_;
@@ -67,6 +71,8 @@ class SimGimbalCamera final : public GimbalCamera {
   std::shared_ptr<ImageFrame> freeFrame();
 
   std::shared_ptr<Simulation> sim_;
+  std::deque<DetectionFrame> late_;  ///< camera_late fault: frames held until 0.5 s after exposure
+  std::mt19937_64 garbage_rng_{23};  ///< detector_garbage fault
   rt::LendingPool<ImageFrame> pool_{4, ImageFrame{}};
   RenderScratch scratch_;
   TimeNs last_stamp_ns_ = 0;
@@ -82,6 +88,7 @@ class SimDepthCamera final : public DepthCamera {
  private:
   std::shared_ptr<Simulation> sim_;
   std::uint64_t version_ = 0;
+  std::shared_ptr<DepthFrame> zeros_;  ///< depth_zero fault: the frame of zeros, reused
 };
 
 }  // namespace aerotrack::hal::sim

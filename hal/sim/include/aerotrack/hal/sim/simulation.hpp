@@ -61,7 +61,19 @@ struct SimFaults {
   FaultWindow person_occluded;  ///< Frames arrive, but the person is in none (a forced occlusion).
   FaultWindow odometry_freeze;  ///< Odometry repeats the last sample from before the window.
   FaultWindow depth_stop;       ///< The depth camera delivers no frames.
+  // The wider fault matrix (issue 23; docs/modules/closed-loop.md, "Fault matrix"):
+  FaultWindow gimbal_stuck;       ///< The gimbal motor ignores commands: it stays where it is.
+  FaultWindow gimbal_silent;      ///< The gimbal motor reports nothing (its state stops arriving).
+  FaultWindow vehicle_link_lost;  ///< Setpoints no longer reach the flight controller.
+  FaultWindow camera_late;        ///< Keypoint mode: detector frames arrive 0.5 s after their exposure.
+  FaultWindow detector_garbage;   ///< Keypoint mode: every reported person has random keypoints.
+  FaultWindow depth_zero;         ///< The depth camera delivers frames of zeros (no data in any pixel).
 };
+
+/// How late camera_late delivers a frame, and how long the simulated flight controller waits for a
+/// setpoint before it holds position on its own (PX4's offboard-loss failsafe, COM_OF_LOSS_T, 1 s).
+inline constexpr double kCameraLateS = 0.5;
+inline constexpr double kOffboardLossS = 1.0;
 
 struct SimulationOptions {
   SimFaults faults;               ///< Injected device faults (none by default).
@@ -146,6 +158,8 @@ class Simulation {
   // The stepping thread's view.
   const SimTruth& truth() const { return truth_; }
   const SimMetrics& metrics() const { return metrics_; }
+  /// How often the simulated flight controller's offboard-loss failsafe made it hold (kOffboardLossS).
+  std::uint64_t offboardLosses() const { return offboard_losses_; }
   const ScenarioInstance& scenario() const { return scenario_; }
   const ObstacleWorld& obstacles() const { return obstacles_; }
   const WalkingPerson& person() const { return person_; }
@@ -240,6 +254,8 @@ class Simulation {
 
   Setpoint active_setpoint_;
   std::uint64_t setpoint_version_ = 0;
+  bool offboard_hold_ = false;  ///< The flight controller holds: no setpoint for kOffboardLossS.
+  std::uint64_t offboard_losses_ = 0;
   GimbalCommand active_gimbal_command_;
   std::uint64_t gimbal_version_ = 0;
 
