@@ -28,11 +28,16 @@ Status checkUniqueKeys(const YAML::Node& node, const std::string& source, const 
   std::map<std::string, int> first_line;
   for (const auto& entry : node) {
     const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : std::string("<complex key>");
-    const std::string key_path = path.empty() ? key : path + "." + key;
+    std::string key_path = path;
+    if (!key_path.empty()) key_path += '.';
+    key_path += key;
     const int line = entry.first.Mark().is_null() ? 0 : entry.first.Mark().line + 1;
-    if (const auto [it, inserted] = first_line.emplace(key, line); !inserted)
-      return Error{source + ":" + std::to_string(line) + ": " + key_path + ": given twice (first on line " +
-                   std::to_string(it->second) + ")"};
+    if (const auto [it, inserted] = first_line.emplace(key, line); !inserted) {
+      std::string message = source;
+      message.append(":").append(std::to_string(line)).append(": ").append(key_path);
+      message.append(": given twice (first on line ").append(std::to_string(it->second)).append(")");
+      return Error{message};
+    }
     if (auto status = checkUniqueKeys(entry.second, source, key_path); !status) return status;
   }
   return ok();
