@@ -225,8 +225,9 @@ TEST(AppConfig, GivenTheShippedConfigsThenTheChainFromDetectionToPlanningIsTrigg
 TEST(AppConfig, GivenAMissingLocalizationFileThenErrorNamesTheKeyAndTheFile) {
   const std::string yaml = simYamlWith("localization_params: " + kConfigDir + "/localization.yaml",
                                        "localization_params: /nowhere/params.yaml");
-  EXPECT_EQ(errorOf(yaml), at(yaml, "  localization_params") +
-                               ": estimation.localization_params: /nowhere/params.yaml: cannot open file: no such file or directory");
+  EXPECT_EQ(errorOf(yaml),
+            at(yaml, "  localization_params") +
+                ": estimation.localization_params: /nowhere/params.yaml: cannot open file: no such file or directory");
 }
 
 TEST(AppConfig, InImageModeTheNetworksRegressionReplacesTheKeypointCamerasOne) {
