@@ -82,11 +82,13 @@ class GimbalCameraTask final : public rt::Task {
   perception::KeypointLockOn lock_on_;
 };
 
-/// Publishes each new depth frame on the depth channel -- unless it is blank: fewer than 0.5 % of
-/// its pixels (sampled on a grid of every 8th row and column) hold a range. A camera delivering
-/// frames of zeros is as blind as one delivering none, and the supervisor's depth failsafe must see
-/// it so (issue 23's fault matrix: with them published, the drone flew on a map no longer updated).
-/// A forward camera on a flying drone always has the ground or something in range.
+/// Publishes each new depth frame on the depth channel -- unless it is blank (fewer than 0.5 % of
+/// its pixels, sampled on a grid of every 8th row and column, hold a range) after the camera has
+/// once shown data. A camera that goes on delivering frames of zeros is as blind as one delivering
+/// none, and the supervisor's depth failsafe must see it so (issue 23's fault matrix: with them
+/// published, the drone flew on a map no longer updated). Before the first frame with data they are
+/// published: on the ground in an open field everything is nearer than the minimum range or beyond
+/// the maximum, and take-off must not wait for data it cannot have. In the air the ground is in range.
 class DepthCameraTask final : public rt::Task {
  public:
   DepthCameraTask(hal::DepthCamera& device, rt::SharedSlot<hal::DepthFrame>& out) : device_(device), out_(out) {}
@@ -95,7 +97,9 @@ class DepthCameraTask final : public rt::Task {
     if (!frame) return;
     if (isBlank(*frame)) {
       ++blank_frames_;
-      return;
+      if (seen_data_) return;
+    } else {
+      seen_data_ = true;
     }
     out_.write(std::move(frame));
   }
@@ -117,6 +121,7 @@ class DepthCameraTask final : public rt::Task {
   hal::DepthCamera& device_;
   rt::SharedSlot<hal::DepthFrame>& out_;
   std::uint64_t blank_frames_ = 0;
+  bool seen_data_ = false;
 };
 
 /// Publishes the gimbal encoder's newest reading, and every new one (by stamp) on the stream that
