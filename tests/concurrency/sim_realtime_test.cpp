@@ -34,6 +34,7 @@ TEST(SimRealtime, GivenSimConfigOnThreadsThenEveryTaskRunsAndTheDroneTakesOff) {
     config->supervisor->odometry_timeout_s *= 10.0;
     config->supervisor->depth_timeout_s *= 10.0;
     config->supervisor->camera_timeout_s *= 10.0;
+    config->supervisor->gimbal_timeout_s *= 10.0;
     config->supervisor->startup_grace_s *= 10.0;
   }
 #endif
