@@ -110,24 +110,24 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
   for (Loaded& l : loaded) {
     const ComparedStream& stream = *l.stream;
     const std::string& a_path = l.a_path;
-    std::vector<CsvRecord>* a = &l.a;
-    std::vector<CsvRecord>* b = &l.b;
+    std::vector<CsvRecord>& a = l.a;
+    std::vector<CsvRecord>& b = l.b;
     StreamComparison c;
-    while (!a->empty() && a->back().stamp_ns - a_start_ns > complete_until_ns) {
-      a->pop_back();
+    while (!a.empty() && a.back().stamp_ns - a_start_ns > complete_until_ns) {
+      a.pop_back();
       ++c.past_end;
     }
-    while (!b->empty() && b->back().stamp_ns - b_start_ns > complete_until_ns) {
-      b->pop_back();
+    while (!b.empty() && b.back().stamp_ns - b_start_ns > complete_until_ns) {
+      b.pop_back();
       ++c.past_end;
     }
     c.file = stream.file;
-    c.recorded = a->size();
-    c.replayed = b->size();
-    const std::size_t n = std::min(a->size(), b->size());
+    c.recorded = a.size();
+    c.replayed = b.size();
+    const std::size_t n = std::min(a.size(), b.size());
     for (std::size_t i = 0; i < n; ++i) {
-      const CsvRecord& x = (*a)[i];
-      const CsvRecord& y = (*b)[i];
+      const CsvRecord& x = a[i];
+      const CsvRecord& y = b[i];
       const rt::TimeNs x_ns = x.stamp_ns - a_start_ns;
       const rt::TimeNs y_ns = y.stamp_ns - b_start_ns;
       bool same = x_ns == y_ns;
@@ -151,9 +151,9 @@ rt::Expected<std::vector<StreamComparison>> compareDatasets(const std::string& r
                                                  number(y.values[*column]) + " replayed";
       }
     }
-    if (c.first_difference.empty() && a->size() != b->size()) {
+    if (c.first_difference.empty() && a.size() != b.size()) {
       c.first_difference =
-          a_path + ": " + std::to_string(a->size()) + " records recorded, " + std::to_string(b->size()) + " replayed";
+          a_path + ": " + std::to_string(a.size()) + " records recorded, " + std::to_string(b.size()) + " replayed";
     }
     out.push_back(std::move(c));
   }

@@ -95,9 +95,9 @@ void noteMessage(j_common_ptr cinfo, int level) {
   std::longjmp(errors->unwind, 1);  // NOLINT(cert-err52-cpp): nothing with a destructor lives in between
 }
 
-/// Reads every DCT coefficient (the whole entropy-coded data, no inverse transform): what decoding
-/// would read, at a fraction of its cost. "" when libjpeg had nothing to say, else its first message.
-/// Only trivially destructible locals here: longjmp skips destructors.
+/// Reads every DCT coefficient (the whole entropy-coded data, no inverse transform): all that
+/// decoding would read. Its cost on a 30 Hz MJPG stream was not measured. "" when libjpeg had nothing to say, else its
+/// first message. Only trivially destructible locals here: longjmp skips destructors.
 void checkJpegData(const std::uint8_t* data, std::size_t size, char* why) {
   jpeg_decompress_struct cinfo{};
   JpegErrors errors{};
