@@ -51,6 +51,7 @@ AppConfig parseRoot(const rt::ConfigNode& root) {
 
   const rt::ConfigNode server = root.child("trajectory_server");
   c.trajectory_server.yaw_min_speed_mps = server.getDouble("yaw_min_speed_mps", 0.0, 10.0);
+  c.trajectory_server.max_late_takeover_s = server.getDouble("max_late_takeover_s", rt::Range::openClosed(0.0, 10.0));
   server.finish();
 
   if (root.has("mapping")) c.mapping = mapping::parseMapperParams(root.child("mapping"));
@@ -171,6 +172,7 @@ std::string toYaml(const AppConfig& c) {
   hal::emitYaml(out, c.sim);
   out << YAML::Key << "trajectory_server" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "yaw_min_speed_mps" << YAML::Value << c.trajectory_server.yaw_min_speed_mps;
+  out << YAML::Key << "max_late_takeover_s" << YAML::Value << c.trajectory_server.max_late_takeover_s;
   out << YAML::EndMap;
   if (c.mapping) {
     const mapping::MapperParams& m = *c.mapping;

@@ -12,6 +12,7 @@
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "commands.hpp"
 #include "report.hpp"
+#include "run_executors.hpp"
 #include "signals.hpp"
 #include "sim_report.hpp"
 #include "system.hpp"
@@ -55,7 +56,8 @@ int runCommand(const ParsedArgs& args) {
     }
     trial = std::move(loaded.value());
   }
-  auto system = System::build(*config, trial ? &*trial : nullptr, clock.now());
+  const rt::TimeNs start_ns = clock.now();  // the simulation's origin (its fault windows count from it)
+  auto system = System::build(*config, trial ? &*trial : nullptr, start_ns);
   if (!system) {
     std::fprintf(stderr, "aerotrack run: %s\n", system.error().message.c_str());
     return 1;
@@ -66,6 +68,10 @@ int runCommand(const ParsedArgs& args) {
       std::fprintf(stderr, "aerotrack run: %s\n", s.error().message.c_str());
       return 1;
     }
+  }
+  if (const rt::Status s = applyTaskOverrun(**system, executor, start_ns); !s) {
+    std::fprintf(stderr, "aerotrack run: %s\n", s.error().message.c_str());
+    return 1;
   }
   const auto warnings = executor.start();
   if (!warnings) {

@@ -239,8 +239,14 @@ System::TaskResult System::makePlanningTask(System& s, const std::string& where)
   auto planner = planning::TrackingPlanner::create(*s.config_.planning);
   if (!planner) return rt::Error{s.config_.source + ": " + planner.error().message};
   Channels& c = s.channels_;
-  const planning::PlanningChannels channels{
-      c.odometry, c.target, c.local_grid, c.octree, c.trajectories, &c.supervisor, &c.planner_failures_in_a_row};
+  const planning::PlanningChannels channels{c.odometry,
+                                            c.target,
+                                            c.local_grid,
+                                            c.octree,
+                                            c.trajectories,
+                                            &c.supervisor,
+                                            &c.planner_failures_in_a_row,
+                                            &c.refused_trajectory_start_ns};
   if (s.config_.baseline_mode) planner->setOcclusionAware(false);
   auto task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, s.stats_clock_);
   s.planning_task_ = task.get();
@@ -252,6 +258,7 @@ System::TaskResult System::makeTrajectoryServerTask(System& s, const std::string
   auto server = std::make_unique<trajectory_server::TrajectoryServerTask>(s.config_.trajectory_server, c.trajectories,
                                                                           *s.devices_.vehicle_link, c.setpoints);
   server->reportLinkLossTo(c.vehicle_link_lost);
+  server->reportLateRefusalsTo(c.refused_trajectory_start_ns);
   if (s.config_.baseline_mode) {
     // The fixed camera looks where the body looks: face the person's estimate, carried to now.
     const rt::LatestSlot<estimation::TargetEstimate>& target = c.target;

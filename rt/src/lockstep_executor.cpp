@@ -8,6 +8,7 @@
 #include <limits>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 #include "aerotrack/rt/doorbell.hpp"
 
@@ -98,9 +99,9 @@ void LockstepExecutor::joinWorker() {
   tasks_.entries()[in_flight_].stats->recordRun(in_flight_gather_ns_ + work_ns);
 }
 
-bool LockstepExecutor::startOverlapped(std::size_t index, TimeNs now_ns) {
+bool LockstepExecutor::startOverlapped(std::size_t index, TimeNs now_ns, DurationNs stall_ns) {
   TaskSet::Entry& entry = tasks_.entries()[index];
-  if (!(entry.binding.spec.latency_ms > 0.0)) return false;
+  if (!(entry.binding.spec.latency_ms > 0.0) && stall_ns <= 0) return false;
   auto* task = dynamic_cast<OverlappedTask*>(entry.binding.task);
   if (task == nullptr) return false;
   // Released again before its outputs appeared (an event task, or a latency of a whole period).
@@ -126,13 +127,22 @@ bool LockstepExecutor::startOverlapped(std::size_t index, TimeNs now_ns) {
   busy_ = true;
   in_flight_ = index;
   in_flight_gather_ns_ = gather_ns;
-  const auto latency_ns = static_cast<DurationNs>(entry.binding.spec.latency_ms * 1e6);
+  const auto latency_ns = stall_ns > 0 ? stall_ns : static_cast<DurationNs>(entry.binding.spec.latency_ms * 1e6);
   pending_.push_back({index, now_ns + latency_ns});
   return true;
 }
 
+void LockstepExecutor::reportMisses(std::size_t index) {
+  const std::uint64_t n = unreported_misses_[index];
+  if (n == 0) return;
+  unreported_misses_[index] = 0;
+  tasks_.entries()[index].stats->addMissedDeadlines(n);
+  if (deadline_misses_ != nullptr) deadline_misses_->fetch_add(n, std::memory_order_relaxed);
+}
+
 void LockstepExecutor::publish(std::size_t i, TimeNs now_ns) {
   const Publication p = pending_[i];
+  reportMisses(p.index);
   pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(i));
   if (busy_ && in_flight_ == p.index) joinWorker();
   const TimeNs publish_ns = std::max(p.publish_ns, now_ns);
@@ -143,6 +153,7 @@ void LockstepExecutor::publish(std::size_t i, TimeNs now_ns) {
 }
 
 void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
+  reportMisses(index);  // a stalled step's, now that it runs
   if (startOverlapped(index, now_ns)) return;
   TaskSet::Entry& entry = tasks_.entries()[index];
   const TimeNs begin = stats_clock_.now();
@@ -153,11 +164,69 @@ void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
   ++steps_;
 }
 
+Status LockstepExecutor::stall(const std::string& task, TimeNs from_ns, TimeNs until_ns, DurationNs run_ns) {
+  const std::vector<TaskSet::Entry>& entries = tasks_.entries();
+  std::size_t index = 0;
+  while (index < entries.size() && entries[index].binding.spec.name != task) ++index;
+  if (index == entries.size()) {
+    std::string names;
+    for (const TaskSet::Entry& e : entries) {
+      if (!names.empty()) names += ", ";
+      names += e.binding.spec.name;
+    }
+    return Error{"stall: no task named '" + task + "' (tasks: " + names + ")"};
+  }
+  if (run_ns <= 0 || until_ns <= from_ns)
+    return Error{"stall: task '" + task + "' needs a window that ends after it begins and a positive run time"};
+  for (const Stall& s : stalls_)
+    if (s.index == index) return Error{"stall: task '" + task + "' already has a stall"};
+  stalls_.push_back({index, from_ns, until_ns, run_ns});
+  return ok();
+}
+
+DurationNs LockstepExecutor::takeStall(std::size_t index, TimeNs now_ns) {
+  for (const Stall& s : stalls_)
+    if (s.index == index && now_ns >= s.from_ns && now_ns < s.until_ns) return s.run_ns;
+  return 0;
+}
+
+void LockstepExecutor::releaseStalled(std::size_t index, TimeNs now_ns, DurationNs stall_ns) {
+  TaskSet::Entry& entry = tasks_.entries()[index];
+  const TaskSpec& spec = entry.binding.spec;
+  const TimeNs end_ns = now_ns + stall_ns;
+  busy_until_ns_[index] = end_ns;
+  last_run_ns_[index] = now_ns;
+  // The periods that begin inside the stall go unserved. They are counted when the stall ends, as the
+  // real-time executor counts them when the late run returns (the supervisor sees them then, not before).
+  const std::uint64_t skipped = entry.period_ns > 0 ? static_cast<std::uint64_t>((stall_ns - 1) / entry.period_ns) : 0;
+  unreported_misses_[index] = skipped;
+  if (startOverlapped(index, now_ns, stall_ns)) {  // outputs at end_ns; released again from then on
+    if (!spec.triggered())
+      next_release_ns_[index] += static_cast<DurationNs>(skipped + 1) * entry.period_ns;  // the grid, resynchronised
+    else
+      next_release_ns_[index] = spec.periodic() ? end_ns : kNeverNs;
+    return;
+  }
+  // The step itself, at the stall's end, given the release's time as its now_ns: what the real-time
+  // executor does for a step stalled after its wake-up (a task's time base is its release, its effects
+  // are as late as the stall). Its schedule goes on from the stall's end.
+  stalled_release_ns_[index] = now_ns;
+  next_release_ns_[index] = end_ns;
+}
+
 void LockstepExecutor::release(std::size_t index, TimeNs now_ns) {
   const TaskSet::Entry& entry = tasks_.entries()[index];
   const TaskSpec& spec = entry.binding.spec;
   if (spec.triggered()) entry.binding.doorbell->consume();
-  runOne(index, now_ns);
+  // A late step (its release's time kept) runs now; else this release may be one the stall holds up.
+  const TimeNs stalled_ns = std::exchange(stalled_release_ns_[index], kNeverNs);
+  if (stalled_ns == kNeverNs) {
+    if (const DurationNs stall_ns = takeStall(index, now_ns); stall_ns > 0) {
+      releaseStalled(index, now_ns, stall_ns);
+      return;
+    }
+  }
+  runOne(index, stalled_ns == kNeverNs ? now_ns : stalled_ns);
   last_run_ns_[index] = now_ns;
   if (!spec.triggered())
     next_release_ns_[index] += entry.period_ns;  // the fixed grid (now_ns was the release on it)
@@ -171,6 +240,10 @@ Status LockstepExecutor::runPendingEvents(TimeNs now_ns) {
     for (std::size_t i = 0; i < tasks_.entries().size(); ++i) {
       const TaskSet::Entry& e = tasks_.entries()[i];
       if (!e.binding.spec.triggered() || !e.binding.doorbell->pending()) continue;
+      if (now_ns < busy_until_ns_[i]) {  // stalled: the ring is served when the stall ends
+        next_release_ns_[i] = std::min(next_release_ns_[i], busy_until_ns_[i]);
+        continue;
+      }
       // A timed release due now (a cap's end, the fallback) runs in its priority order among the
       // releases of this instant, not after whichever step came first: so that when a task runs
       // depends only on its own writers and releases, not on the other tasks in the table (a replay
@@ -195,6 +268,9 @@ Status LockstepExecutor::runUntil(TimeNs end_ns, const std::atomic<bool>* stop) 
   for (std::size_t i = next_release_ns_.size(); i < entries.size(); ++i) {  // new tasks start now
     next_release_ns_.push_back(entries[i].binding.spec.periodic() ? clock_.now() : kNeverNs);
     last_run_ns_.push_back(kNeverNs);
+    busy_until_ns_.push_back(std::numeric_limits<TimeNs>::min());
+    unreported_misses_.push_back(0);
+    stalled_release_ns_.push_back(kNeverNs);
   }
   for (;;) {
     if (stop != nullptr && stop->load(std::memory_order_acquire)) break;

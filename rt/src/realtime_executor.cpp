@@ -52,6 +52,27 @@ Status RealtimeExecutor::add(const TaskBinding& binding) {
   return tasks_.add(binding);
 }
 
+Status RealtimeExecutor::stall(const std::string& task, TimeNs from_ns, TimeNs until_ns, DurationNs run_ns) {
+  if (!threads_.empty()) return Error{"stall: cannot stall task '" + task + "' after start()"};
+  const std::vector<TaskSet::Entry>& entries = tasks_.entries();
+  std::size_t index = 0;
+  while (index < entries.size() && entries[index].binding.spec.name != task) ++index;
+  if (index == entries.size()) return Error{"stall: no task named '" + task + "'"};
+  if (run_ns <= 0 || until_ns <= from_ns)
+    return Error{"stall: task '" + task + "' needs a window that ends after it begins and a positive run time"};
+  stalls_.resize(entries.size());
+  if (stalls_[index].from_ns != kNeverNs) return Error{"stall: task '" + task + "' already has a stall"};
+  stalls_[index] = {from_ns, until_ns, run_ns};
+  return ok();
+}
+
+void RealtimeExecutor::runStep(TaskSet::Entry& e, TimeNs wake_ns) {
+  const auto index = static_cast<std::size_t>(&e - tasks_.entries().data());
+  if (index < stalls_.size() && wake_ns >= stalls_[index].from_ns && wake_ns < stalls_[index].until_ns)
+    sleepUntil(wake_ns + stalls_[index].run_ns, clock_, options_.stop_poll_ns, stop_);
+  e.binding.task->step(wake_ns);
+}
+
 Expected<std::vector<std::string>> RealtimeExecutor::start() {
   if (!threads_.empty()) return Error{"executor already started"};
   std::vector<std::string> warnings;
@@ -119,7 +140,7 @@ void RealtimeExecutor::runPeriodic(TaskSet::Entry& e, TimeNs first_release_ns) {
   while (sleepUntil(release_ns, clock_, options_.stop_poll_ns, stop_)) {
     const TimeNs wake_ns = clock_.now();
     stats.recordWakeLatency(wake_ns - release_ns);
-    e.binding.task->step(wake_ns);
+    runStep(e, wake_ns);
     const TimeNs end_ns = clock_.now();
     stats.recordRun(end_ns - wake_ns);
     release_ns += e.period_ns;
@@ -158,7 +179,7 @@ void RealtimeExecutor::runTriggered(TaskSet::Entry& e, TimeNs first_release_ns) 
     doorbell.consume();  // before the step reads its inputs: a ring during the step stays pending
     const TimeNs wake_ns = clock_.now();
     stats.recordWakeLatency(wake_ns - release_ns);
-    e.binding.task->step(wake_ns);
+    runStep(e, wake_ns);
     const TimeNs end_ns = clock_.now();
     stats.recordRun(end_ns - wake_ns);
     last_run_ns = wake_ns;

@@ -54,7 +54,7 @@ hal:
       setpoint_stale_s: 0.5
       link_timeout_s: 0.5
       odometry_timeout_s: 0.2
-trajectory_server: {yaw_min_speed_mps: 0.3}
+trajectory_server: {yaw_min_speed_mps: 0.3, max_late_takeover_s: 0.1}
 supervisor:
   takeoff_altitude_m: 1.5
   takeoff_tolerance_m: 0.3

@@ -103,6 +103,19 @@ SimConfig parseSimConfig(const rt::ConfigNode& node) {
     window("camera_late_s", c.faults.camera_late);
     window("detector_garbage_s", c.faults.detector_garbage);
     window("depth_zero_s", c.faults.depth_zero);
+    if (faults.has("task_overrun")) {
+      const rt::ConfigNode overrun = faults.child("task_overrun");
+      c.task_overrun.task = overrun.getString("task");
+      if (c.task_overrun.task.empty()) overrun.fail("task", "must name a task of the table");
+      const auto read_window = [&overrun](const char* key, sim::FaultWindow& out) {
+        const std::vector<double> w = overrun.getDoubleList(key, 2, 0.0, 1e6);
+        if (w[1] <= w[0]) overrun.fail(key, "end must be after begin");
+        out = {w[0], w[1]};
+      };
+      read_window("window_s", c.task_overrun.window);
+      if (overrun.has("run_ms")) c.task_overrun.run_ms = overrun.getDouble("run_ms", rt::Range::openClosed(0.0, 1e6));
+      overrun.finish();
+    }
     faults.finish();
   }
   node.finish();
@@ -126,13 +139,21 @@ void emitYaml(YAML::Emitter& out, const SimConfig& c) {
       {"camera_late_s", &c.faults.camera_late},
       {"detector_garbage_s", &c.faults.detector_garbage},
       {"depth_zero_s", &c.faults.depth_zero}};
-  bool any = false;
+  bool any = !c.task_overrun.task.empty();
   for (const auto& [key, w] : windows) any = any || w->begin_s >= 0.0;
   if (any) {
     out << YAML::Key << "faults" << YAML::Value << YAML::BeginMap;
     for (const auto& [key, w] : windows) {
       if (w->begin_s >= 0.0)
         out << YAML::Key << key << YAML::Value << YAML::Flow << std::vector<double>{w->begin_s, w->end_s};
+    }
+    if (!c.task_overrun.task.empty()) {
+      const sim::FaultWindow& w = c.task_overrun.window;
+      out << YAML::Key << "task_overrun" << YAML::Value << YAML::BeginMap << YAML::Key << "task" << YAML::Value
+          << c.task_overrun.task << YAML::Key << "window_s" << YAML::Value << YAML::Flow
+          << std::vector<double>{w.begin_s, w.end_s};
+      if (c.task_overrun.run_ms > 0.0) out << YAML::Key << "run_ms" << YAML::Value << c.task_overrun.run_ms;
+      out << YAML::EndMap;
     }
     out << YAML::EndMap;
   }

@@ -17,9 +17,14 @@ void TrajectoryServer::setTrajectory(const TimedTrajectory& trajectory) {
 
 std::optional<hal::Setpoint> TrajectoryServer::sample(rt::TimeNs now_ns) {
   if (pending_.trajectory && now_ns >= pending_.start_ns) {
-    current_ = std::move(pending_);
+    if (rt::nsToSeconds(now_ns - pending_.start_ns) > params_.max_late_takeover_s) {
+      ++late_refusals_;  // planned from a state the vehicle has left: keep flying the current one
+      last_refused_start_ns_ = pending_.start_ns;
+    } else {
+      current_ = std::move(pending_);
+      first_sample_ = true;
+    }
     pending_ = {};
-    first_sample_ = true;
   }
   if (!current_.trajectory) return std::nullopt;
   if (first_sample_) {

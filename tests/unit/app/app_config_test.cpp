@@ -8,6 +8,7 @@
 
 #include "aerotrack/localization/localization_io.hpp"
 #include "app_config.hpp"
+#include "run_executors.hpp"
 #include "sim_report.hpp"
 #include "support/require.hpp"
 #include "system.hpp"
@@ -328,6 +329,52 @@ TEST(System, GivenSimConfigWithoutScenarioThenError) {
   const auto s = System::build(*c, nullptr, 0);
   ASSERT_FALSE(s);
   EXPECT_EQ(s.error().message, c->source + ": hal: sim backends need a scenario");
+}
+
+/// config/sim.yaml with `faults:` holding one task_overrun line.
+std::string withTaskOverrun(const std::string& overrun) {
+  return simYamlWith("  render_depth: true\n", "  render_depth: true\n  faults:\n    task_overrun: " + overrun + "\n");
+}
+
+TEST(AppConfig, GivenATaskOverrunThenItParsesAndPrintsBack) {
+  const auto c = parseAppConfig(withTaskOverrun("{task: planning, window_s: [12.0, 14.0], run_ms: 150}"), "sim.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->sim.task_overrun.task, "planning");
+  EXPECT_EQ(c->sim.task_overrun.window.begin_s, 12.0);
+  EXPECT_EQ(c->sim.task_overrun.window.end_s, 14.0);
+  EXPECT_EQ(c->sim.task_overrun.run_ms, 150.0);
+  const auto again = parseAppConfig(toYaml(*c), "printed.yaml");
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_EQ(toYaml(*again), toYaml(*c));
+}
+
+TEST(AppConfig, GivenABadTaskOverrunThenOneLineErrorsNameTheKey) {
+  const std::string reversed = withTaskOverrun("{task: planning, window_s: [14.0, 12.0]}");
+  EXPECT_EQ(errorOf(reversed),
+            at(reversed, "task_overrun") + ": sim.faults.task_overrun.window_s: end must be after begin");
+  EXPECT_NE(errorOf(withTaskOverrun("{task: planning, window_s: [12.0, 14.0], run_ms: 0}")).find("run_ms"),
+            std::string::npos);
+  EXPECT_NE(errorOf(withTaskOverrun("{task: '', window_s: [12.0, 14.0]}")).find("task"), std::string::npos);
+  EXPECT_NE(errorOf(withTaskOverrun("{task: planning, window: [12.0, 14.0]}")).find("window_s"), std::string::npos);
+}
+
+TEST(System, GivenATaskOverrunOfNoTaskOrOfTheWorldThenTheRunRefusesIt) {
+  const auto trial = openTrial();
+  for (const auto& [task, error] :
+       {std::pair<std::string, std::string>{"planer",
+                                            "sim.faults.task_overrun: stall: no task named 'planer' (tasks: "},
+        {"sim_world", "sim.faults.task_overrun.task: sim_world is the simulated world, not a task of the drone"}}) {
+    const auto c = parseAppConfig(withTaskOverrun("{task: " + task + ", window_s: [1.0, 2.0]}"), "sim.yaml");
+    ASSERT_TRUE(c) << c.error().message;
+    auto s = System::build(*c, &trial, 0);
+    ASSERT_TRUE(s) << s.error().message;
+    rt::ManualClock clock(0);
+    const std::atomic<bool> stop{false};
+    RunInfo info;
+    const rt::Status ran = runLockstep(**s, clock, rt::secondsToNs(0.1), stop, info);
+    ASSERT_FALSE(ran);
+    EXPECT_EQ(ran.error().message.rfind(error, 0), 0U) << ran.error().message;
+  }
 }
 
 }  // namespace

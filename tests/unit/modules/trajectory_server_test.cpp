@@ -158,14 +158,36 @@ TEST(TrajectoryServer, GivenNewTrajectoryThenCurrentIsFlownUntilItsStartTime) {
   EXPECT_EQ(server.current().trajectory, second);
 }
 
-TEST(TrajectoryServer, GivenTrajectoryWhoseStartHasPassedThenItTakesOverAtOnce) {
-  TrajectoryServer server(TrajectoryServerParams{});
+TEST(TrajectoryServer, GivenTrajectoryWhoseStartHasJustPassedThenItTakesOverAtOnce) {
+  TrajectoryServer server(TrajectoryServerParams{});  // max_late_takeover_s 0.1
   server.setTrajectory({std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 10.0), 0});
   const auto late = std::make_shared<const Line>(Eigen::Vector3d(0, 5, 0), Eigen::Vector3d::Zero(), 10.0);
   server.setTrajectory({late, rt::secondsToNs(0.5)});
-  const auto s = server.sample(rt::secondsToNs(2.0));
+  const auto s = server.sample(rt::secondsToNs(0.59));
   ASSERT_TRUE(s);
   EXPECT_NEAR(s->p_W_m.y(), 5.0, 1e-12);
+  EXPECT_EQ(server.lateRefusals(), 0U);
+}
+
+TEST(TrajectoryServer, GivenTrajectoryTakingOverLongAfterItsStartThenItIsRefusedAndTheCurrentOneFlown) {
+  // A planner held up 1.5 s past its budget (issue 23's task overrun) hands over a plan that began where
+  // the vehicle was 1.5 s ago: taking it over would jump the setpoint from x = 2 m to (0, 5) m.
+  TrajectoryServer server(TrajectoryServerParams{});
+  const auto first = std::make_shared<const Line>(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0), 10.0);
+  server.setTrajectory({first, 0});
+  server.setTrajectory(
+      {std::make_shared<const Line>(Eigen::Vector3d(0, 5, 0), Eigen::Vector3d::Zero(), 10.0), rt::secondsToNs(0.5)});
+  const auto s = server.sample(rt::secondsToNs(2.0));
+  ASSERT_TRUE(s);
+  EXPECT_NEAR((s->p_W_m - Eigen::Vector3d(2.0, 0, 0)).norm(), 0.0, 1e-12);  // no jump: the first one goes on
+  EXPECT_EQ(server.current().trajectory, first);
+  EXPECT_EQ(server.lateRefusals(), 1U);
+  // The next plan, on time, takes over as usual.
+  const auto next = std::make_shared<const Line>(Eigen::Vector3d(2.05, 0, 0), Eigen::Vector3d(0, 1, 0), 10.0);
+  server.setTrajectory({next, rt::secondsToNs(2.05)});
+  ASSERT_TRUE(server.sample(rt::secondsToNs(2.05)));
+  EXPECT_EQ(server.current().trajectory, next);
+  EXPECT_EQ(server.lateRefusals(), 1U);
 }
 
 TEST(TrajectoryServer, MeasuresCaptureToFirstSetpointLatencyOncePerTrajectory) {

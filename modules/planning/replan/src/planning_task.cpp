@@ -92,6 +92,11 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   inputs.target = target ? &*target : nullptr;
   inputs.grid = grid.get();
   inputs.octree = octree.get();
+  if (channels_.refused_start_ns != nullptr && published_.trajectory &&
+      channels_.refused_start_ns->load(std::memory_order_acquire) == published_.start_ns) {
+    published_ = {};  // the server refused it (late, issue 23): what is flown is not it, start from the odometry
+    ++refused_by_server_;
+  }
   inputs.current = published_.trajectory ? &published_ : nullptr;
   if (channels_.supervisor != nullptr) {
     if (const auto state = channels_.supervisor->read()) {

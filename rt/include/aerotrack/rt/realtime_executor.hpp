@@ -42,6 +42,13 @@ class RealtimeExecutor {
   /// Adds a task before start() (see TaskSet::add).
   Status add(const TaskBinding& binding);
 
+  /// Fault injection (issue 23), before start(): each release of `task` woken in [from_ns, until_ns)
+  /// is held up run_ns between its wake-up and its step, which is then given the wake-up time: a thread
+  /// held up (LockstepExecutor::stall does the same in simulated time). The periods it overran count as
+  /// missed deadlines like any overrun's. Error: no task of that name, an empty window, run_ns <= 0, a
+  /// second stall of the task, or after start().
+  Status stall(const std::string& task, TimeNs from_ns, TimeNs until_ns, DurationNs run_ns);
+
   /// Starts one thread per task. Returns warnings (permissions refused), or an Error if a thread
   /// could not be created (then no thread is left running).
   Expected<std::vector<std::string>> start();
@@ -58,10 +65,19 @@ class RealtimeExecutor {
  private:
   void runPeriodic(TaskSet::Entry& entry, TimeNs first_release_ns);
   void runTriggered(TaskSet::Entry& entry, TimeNs first_release_ns);
+  /// step(wake_ns), after the task's stall if one is due (on the task's own thread).
+  void runStep(TaskSet::Entry& entry, TimeNs wake_ns);
+
+  struct Stall {
+    TimeNs from_ns = kNeverNs;  // kNever: none
+    TimeNs until_ns = kNeverNs;
+    DurationNs run_ns = 0;
+  };
 
   const MonotonicClock& clock_;
   RealtimeOptions options_;
   TaskSet tasks_;
+  std::vector<Stall> stalls_;  // per task; read-only once started
   std::vector<std::thread> threads_;
   std::atomic<bool> stop_{false};
   std::atomic<std::size_t> started_{0};  // threads that passed the start gate

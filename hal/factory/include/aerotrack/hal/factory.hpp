@@ -48,6 +48,14 @@ struct SimConfig {
   /// depth_zero_s, each [begin, end] seconds of simulated time (each optional; sim::SimFaults). For
   /// tests of the failsafes and the fault matrix.
   sim::SimFaults faults;
+  /// Optional `faults: task_overrun: {task: NAME, window_s: [begin, end], run_ms: R}`: each release of
+  /// the task in the window takes R ms (run_ms optional: the window's length, one stall of the whole
+  /// window); rt::LockstepExecutor::stall, rt::RealtimeExecutor::stall. Empty task: none.
+  struct TaskOverrun {
+    std::string task;
+    sim::FaultWindow window;
+    double run_ms = 0.0;  ///< 0: the window's length
+  } task_overrun;
 };
 
 /// Reads the `hal:` map (throws rt::ConfigError naming the key; use inside rt::parseConfig).

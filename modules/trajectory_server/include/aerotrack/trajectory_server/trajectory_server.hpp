@@ -7,6 +7,11 @@
 // until then and switches exactly at that time, so the setpoints stay continuous. After a
 // trajectory's end its last position is held at rest (velocity and acceleration zero): a planner that
 // stops publishing leaves the vehicle hovering, not drifting with a stale velocity feed-forward.
+// A trajectory that would take over long after its start (a planner held up past its budget: issue 23's
+// task overrun) is refused: it begins at a state the vehicle has since left, and taking it over would
+// make the setpoint jump by as far as the two trajectories drifted apart (0.53 m after a 2 s stall on
+// sharp_turn). The current one stays; the planner, told of the refusal (TrajectoryServerTask), plans the
+// next one from the vehicle's state rather than continuing the refused one.
 #pragma once
 
 #include <optional>
@@ -20,6 +25,8 @@ namespace aerotrack::trajectory_server {
 struct TrajectoryServerParams {
   double yaw_min_speed_mps = 0.3;  ///< Below this horizontal speed the yaw is held.
   double initial_yaw_rad = 0.0;    ///< Yaw held until the first motion (the vehicle's start yaw; not in YAML).
+  /// A trajectory due to take over more than this after its start is refused (while another is served).
+  double max_late_takeover_s = 0.1;
 };
 
 class TrajectoryServer {
@@ -43,6 +50,11 @@ class TrajectoryServer {
   /// the capture time of the image behind it (TimedTrajectory::source_capture_ns).
   const rt::LatencyHistogram& captureToSetpoint() const { return capture_to_setpoint_; }
 
+  /// Trajectories refused for taking over more than max_late_takeover_s after their start.
+  std::uint64_t lateRefusals() const { return late_refusals_; }
+  /// The start time of the newest refused trajectory (-1: none), for the planner to know what is flown.
+  rt::TimeNs lastRefusedStartNs() const { return last_refused_start_ns_; }
+
   /// The trajectory being served (after any switch due by the last sample()).
   const TimedTrajectory& current() const { return current_; }
 
@@ -53,6 +65,8 @@ class TrajectoryServer {
   bool first_sample_ = true;  ///< The current trajectory has not been sampled yet.
   rt::LatencyHistogram capture_to_setpoint_;
   double held_yaw_rad_;
+  std::uint64_t late_refusals_ = 0;
+  rt::TimeNs last_refused_start_ns_ = -1;
 };
 
 }  // namespace aerotrack::trajectory_server

@@ -1,7 +1,8 @@
 // Task glue for the trajectory server: reads the newest trajectory from its channel, samples it
 // and sends the setpoint to the vehicle link, and publishes it for other tasks (gimbal feed-
 // forward, recorder). Periodic (default 100 Hz in the task table). It is the link's one caller, so it
-// also reads the link's status each step and reports a lost link (up once, down now) to the supervisor.
+// also reads the link's status each step and reports a lost link (up once, down now) to the supervisor,
+// and each trajectory it refused for taking over late to the planner.
 #pragma once
 
 #include <atomic>
@@ -31,6 +32,9 @@ class TrajectoryServerTask final : public rt::Task {
   /// Where to report the link's loss (set once, before start). A link never up is not "lost": a vehicle
   /// without a link (null backend) flies nothing, and one that never connects has no odometry either.
   void reportLinkLossTo(std::atomic<bool>& link_lost) { link_lost_ = &link_lost; }
+  /// Where to report the start time of each trajectory refused for taking over late (set once, before
+  /// start): the planner must not continue a plan that is not flown.
+  void reportLateRefusalsTo(std::atomic<rt::TimeNs>& refused_start_ns) { refused_start_ns_ = &refused_start_ns; }
 
   void step(rt::TimeNs now_ns) override {
     if (trajectories_.version() != trajectory_version_) {
@@ -43,6 +47,10 @@ class TrajectoryServerTask final : public rt::Task {
       setpoint = face ? server_.sampleFacing(now_ns, *face) : server_.sample(now_ns);
     } else {
       setpoint = server_.sample(now_ns);
+    }
+    if (refused_start_ns_ != nullptr && server_.lateRefusals() != late_refusals_) {
+      late_refusals_ = server_.lateRefusals();
+      refused_start_ns_->store(server_.lastRefusedStartNs(), std::memory_order_release);
     }
     if (setpoint) {
       vehicle_.send(*setpoint);
@@ -64,6 +72,8 @@ class TrajectoryServerTask final : public rt::Task {
   FaceFn face_;
   std::atomic<bool>* link_lost_ = nullptr;
   bool link_was_up_ = false;
+  std::atomic<rt::TimeNs>* refused_start_ns_ = nullptr;
+  std::uint64_t late_refusals_ = 0;
 };
 
 }  // namespace aerotrack::trajectory_server

@@ -56,6 +56,9 @@ struct PlanningChannels {
   const rt::LatestSlot<supervisor::SupervisorState>* supervisor = nullptr;
   /// Where it counts its failed cycles in a row, for the supervisor (optional).
   std::atomic<int>* failures_in_a_row = nullptr;
+  /// The start time of the newest trajectory the server refused for taking over late (optional; -1: none).
+  /// When it is the task's own newest, that one is not flown: the next plan starts from the odometry.
+  const std::atomic<rt::TimeNs>* refused_start_ns = nullptr;
 };
 
 class PlanningTask final : public rt::Task {
@@ -68,6 +71,8 @@ class PlanningTask final : public rt::Task {
   /// Cycles by outcome (index: PlanStatus).
   std::uint64_t count(PlanStatus status) const { return counts_[static_cast<std::size_t>(status)]; }
   std::uint64_t cycles() const { return cycles_; }
+  /// Its trajectories the server refused for taking over late (seen by the next cycle).
+  std::uint64_t refusedByServer() const { return refused_by_server_; }
   /// Time of the cycles that ran the planner (a target and a map were there), measured by the stats clock.
   const rt::TimingStats& cycleStats() const { return cycle_stats_; }
   std::uint64_t searchPartial() const { return search_partial_; }
@@ -149,6 +154,7 @@ class PlanningTask final : public rt::Task {
   PlanReport last_report_;
   std::array<std::uint64_t, kPlanStatusCount> counts_{};
   std::uint64_t cycles_ = 0;
+  std::uint64_t refused_by_server_ = 0;
   std::uint64_t search_partial_ = 0;
   std::array<std::uint64_t, 5> search_failures_{};
   std::array<std::uint64_t, kCheckVerdictCount> check_failures_{};         // by final CheckVerdict
