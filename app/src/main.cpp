@@ -1,6 +1,7 @@
 // aerotrack: one binary, many commands (DESIGN.md, "The command line"). main parses the command
 // line and dispatches; every failure ends in one line on stderr and a non-zero status.
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 #include <vector>
@@ -20,6 +21,10 @@ int main(int argc, char** argv) {
   // the command's own one-line error. The fit reports its failures itself; only fatal errors print.
   FLAGS_minloglevel = google::GLOG_FATAL;
   google::InitGoogleLogging(argv[0]);
+  // FFmpeg (OpenCV's video reader) prints a line per damaged macroblock of a corrupt video
+  // ("[msmpeg4 @ 0x...] Error at MB: 317"). OpenCV reads this variable when FFmpeg first starts
+  // (cap_ffmpeg_impl.hpp): -8 is AV_LOG_QUIET. A value the user set is kept (for debugging).
+  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // NOLINT(concurrency-mt-unsafe): before any thread starts
   try {
     const std::vector<CommandSpec> table = commandTable();
     const auto args = parseArgs(std::vector<std::string>(argv + 1, argv + argc), table);

@@ -5,12 +5,15 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
+#include <utility>
+#include <vector>
 
 #include <jpeglib.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "aerotrack/rt/input_file.hpp"
 #include "aerotrack/rt/input_limits.hpp"
+#include "png_check.hpp"
 
 namespace aerotrack::hal {
 namespace {
@@ -153,8 +156,15 @@ rt::Expected<cv::Mat> decodeImage(std::span<const std::uint8_t> bytes, int flags
       reason[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(reason[0])));
       return rt::Error{"corrupt JPEG data: " + reason};
     }
-  } else if (!endsWithIend(bytes)) {
-    return rt::Error{"the PNG data is truncated (no IEND chunk at the end)"};
+  }
+  std::vector<std::uint8_t> png;  // a PNG without the chunks that do not change its pixels
+  if (isPng(bytes)) {
+    if (!endsWithIend(bytes)) return rt::Error{"the PNG data is truncated (no IEND chunk at the end)"};
+    auto pixels = detail::pngPixelChunks(bytes);
+    if (!pixels) return pixels.error();
+    png = std::move(pixels.value());
+    if (const std::string why = detail::checkPngData(png); !why.empty()) return rt::Error{"corrupt PNG data: " + why};
+    bytes = png;
   }
   cv::Mat image;
   try {
