@@ -5,6 +5,8 @@
 # failure: the input is kept in build-fuzz/crashes/ and the script exits 1. Prints one line per
 # target with its executions. With --runs N each target instead runs N inputs (the long runs of
 # tests/fuzz/README.md: --runs 1000000), however long that takes.
+# The default targets are CI's; app_config (the whole application's configuration: a long build in
+# this tree) runs only when named.
 # usage: scripts/fuzz.sh [SECONDS (default 60) | --runs N] [TARGET...]
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -27,6 +29,7 @@ scripts/build.sh --tree fuzz "${targets[@]/#/fuzz_}" >/dev/null
 seeds() {
   case $1 in
     yaml_config) ls config/*.yaml config/suites/*.yaml config/calibration/*.yaml tests/data/real/*.yaml ;;
+    app_config) ls config/*.yaml tests/data/real/*.yaml ;;
     scenario) ls config/scenarios/*.yaml tests/data/*.yaml ;;
     calibration_csv) ls tests/data/*.csv ;;
   esac
