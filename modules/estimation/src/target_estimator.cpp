@@ -131,22 +131,48 @@ void TargetEstimator::reset() {
   folded_until_ns_ = 0;
 }
 
-void TargetEstimator::start(State& state, const TargetMeasurement& m) const {
+void TargetEstimator::startAt(const TargetMeasurement& m, Vector6d& x, Matrix6d& P) const {
   const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params_.measurement_std_xy_m;
   const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params_.measurement_std_z_m;
+  x.head<3>() = m.p_WT_m;
+  x.tail<3>().setZero();
+  P.setZero();
+  P.diagonal() << std_xy * std_xy, std_xy * std_xy, std_z * std_z,
+      Eigen::Vector3d::Constant(params_.initial_speed_std_mps * params_.initial_speed_std_mps);
+}
+
+void TargetEstimator::start(State& state, const TargetMeasurement& m) const {
   state.initialised = true;
   state.stamp_ns = m.stamp_ns;
-  state.x.head<3>() = m.p_WT_m;
-  state.x.tail<3>().setZero();
-  state.P.setZero();
-  state.P.diagonal() << std_xy * std_xy, std_xy * std_xy, std_z * std_z,
-      Eigen::Vector3d::Constant(params_.initial_speed_std_mps * params_.initial_speed_std_mps);
+  startAt(m, state.x, state.P);
   state.last_accepted_ns = m.stamp_ns;
-  state.consecutive_rejections = 0;
+  state.tentative.count = 0;
   // Both models start at the measurement, weighted by the chain's stationary probabilities.
   const double manoeuvring = params_.manoeuvre_mean_s / (params_.steady_mean_s + params_.manoeuvre_mean_s);
   state.models[0] = Model{state.x, state.P, imm() ? 1.0 - manoeuvring : 1.0};
   state.models[1] = Model{state.x, state.P, imm() ? manoeuvring : 0.0};
+}
+
+int TargetEstimator::extendTentative(State::Tentative& tentative, const TargetMeasurement& m) const {
+  const Matrix3d R = measurementNoise(params_, m);
+  if (tentative.count > 0 && m.stamp_ns >= tentative.stamp_ns) {
+    Vector6d x = tentative.x;
+    Matrix6d P = tentative.P;
+    predictModel(x, P, rt::nsToSeconds(m.stamp_ns - tentative.stamp_ns), params_.accel_psd_xy_m2ps3);
+    const Eigen::Vector3d innovation = m.p_WT_m - x.head<3>();
+    const Eigen::LLT<Matrix3d> llt(P.topLeftCorner<3, 3>() + R);
+    if (llt.info() == Eigen::Success && innovation.dot(llt.solve(innovation)) <= params_.gate_chi2) {
+      kalmanUpdate(x, P, innovation, llt, R);
+      tentative.x = x;
+      tentative.P = P;
+      tentative.stamp_ns = m.stamp_ns;
+      return ++tentative.count;
+    }
+  }
+  startAt(m, tentative.x, tentative.P);  // the first of a new run
+  tentative.stamp_ns = m.stamp_ns;
+  tentative.count = 1;
+  return 1;
 }
 
 void TargetEstimator::predictModel(Vector6d& x, Matrix6d& P, double dt, double q_xy) const {
@@ -234,7 +260,7 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
   const double mahalanobis_sq = innovation.dot(llt.solve(innovation));
   if (llt.info() != Eigen::Success || !(mahalanobis_sq <= params_.gate_chi2)) {
     // A run of rejected bearings cannot restart the filter: they carry no distance to start from.
-    if (++state.consecutive_rejections >= params_.reinit_after_rejections && !m.bearingOnly()) {
+    if (!m.bearingOnly() && extendTentative(state.tentative, m) >= params_.reinit_after_rejections) {
       start(state, m);
       return MeasurementVerdict::kStarted;
     }
@@ -265,7 +291,7 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
   }
   // A bearing does not keep the track alive: without a distance for lost_after_s the range is a guess.
   if (!m.bearingOnly()) predicted.last_accepted_ns = m.stamp_ns;
-  predicted.consecutive_rejections = 0;
+  predicted.tentative.count = 0;
   state = predicted;
   return MeasurementVerdict::kAccepted;
 }

@@ -261,6 +261,34 @@ TEST(TargetEstimator, GivenRepeatedConsistentRejectionsThenTheFilterRestarts) {
   EXPECT_EQ(estimator->estimate(stampOf(34)).p_WT_m, Eigen::Vector3d(3.0, 0.0, 0.9));
 }
 
+TEST(TargetEstimator, GivenRejectionsScatteredLikeGarbageThenTheFilterNeverRestartsOnThem) {
+  // Issue 23's fault matrix: a detector returning garbage gives positions scattered over metres. Each is
+  // rejected; before, the eighth in a row restarted the filter wherever it fell (1.8 m off on sharp_turn).
+  TargetEstimatorParams params;
+  params.reinit_after_rejections = 5;
+  auto estimator = TargetEstimator::create(params);
+  ASSERT_TRUE(estimator);
+  for (int k = 0; k < 30; ++k) estimator->add({stampOf(k), Eigen::Vector3d(0.0, 0.0, 0.9), 0.0, 0.0});
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> anywhere(-10.0, 10.0);
+  int restarts = 0;
+  for (int k = 30; k < 50; ++k) {  // 0.67 s: the track is not yet lost (lost_after_s 1 s)
+    Eigen::Vector3d p(anywhere(rng), anywhere(rng), 0.9);
+    if (p.head<2>().norm() < 2.0) p.x() += 4.0;  // outside the track's gate
+    restarts += estimator->add({stampOf(k), p, 0.0, 0.0}) == MeasurementVerdict::kStarted ? 1 : 0;
+  }
+  EXPECT_EQ(restarts, 0);
+  // And a run that agrees with itself, a person walking at 1.5 m/s 3 m away, still restarts it.
+  int first_restart = -1;
+  for (int k = 50; k < 60 && first_restart < 0; ++k) {
+    const double t_s = rt::nsToSeconds(stampOf(k) - stampOf(50));
+    if (estimator->add({stampOf(k), Eigen::Vector3d(3.0 + 1.5 * t_s, 0.0, 0.9), 0.0, 0.0}) ==
+        MeasurementVerdict::kStarted)
+      first_restart = k;
+  }
+  EXPECT_EQ(first_restart, 54);  // the fifth in a row
+}
+
 TEST(TargetEstimator, GivenADropoutThenPredictionOnlyCovarianceGrowsThenLost) {
   // Given a walk until t = 2 s, then no measurement.
   TargetEstimatorParams params;

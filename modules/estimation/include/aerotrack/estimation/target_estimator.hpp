@@ -7,8 +7,12 @@
 // noise; the update uses the Joseph form.
 //  - Gating: a measurement whose squared Mahalanobis distance to the prediction exceeds
 //    gate_chi2 is rejected (a jump the person cannot make: a wrong detection, a bystander). After
-//    reinit_after_rejections rejections in a row the filter restarts at the newest measurement
-//    (it had lost the person, not the detector).
+//    reinit_after_rejections rejections in a row that agree with one another the filter restarts at
+//    the newest measurement (it had lost the person, not the detector). Agreement is a tentative track
+//    (M-of-N confirmation, Bar-Shalom et al. Sect. 3.6 on track initiation): each rejected position
+//    that the tentative track's gate admits extends it, one it refuses starts it anew. A detector
+//    returning garbage (issue 23's fault matrix: positions scattered over metres) restarted the
+//    filter at its eighth rejection in a row, 1.8 m off; scattered positions never agree.
 //  - Latency: each measurement is applied at its capture time. The estimator keeps the last
 //    replay_window_s of measurements with the filter state after each; a late (out-of-sequence)
 //    measurement is inserted in time order and the filter is re-run from the state before it, so
@@ -53,7 +57,7 @@ struct TargetEstimatorParams {
   /// Rejection threshold on the squared Mahalanobis distance (3 degrees of freedom): 16.27 is the
   /// chi-square 99.9% quantile. > 0.
   double gate_chi2 = 16.27;
-  int reinit_after_rejections = 8;  ///< Consecutive rejections that restart the filter; >= 1.
+  int reinit_after_rejections = 8;  ///< Consecutive rejections, agreeing with one another, that restart it; >= 1.
   double lost_after_s = 1.0;        ///< No accepted measurement for this long: lost; > 0.
   /// Out-of-sequence window: measurements older than the newest minus this are refused; > 0.
   double replay_window_s = 0.5;
@@ -176,7 +180,13 @@ class TargetEstimator {
     Matrix6d P = Matrix6d::Identity();  ///< Its covariance, spread of the models included.
     std::array<Model, 2> models;        ///< [0] steady, [1] manoeuvring; unused when the IMM is off.
     rt::TimeNs last_accepted_ns = 0;
-    int consecutive_rejections = 0;
+    /// The rejected positions' own constant-velocity track (steady model), and how many in a row it holds.
+    struct Tentative {
+      Vector6d x = Vector6d::Zero();
+      Matrix6d P = Matrix6d::Identity();
+      rt::TimeNs stamp_ns = 0;
+      int count = 0;
+    } tentative;
   };
   struct Entry {
     TargetMeasurement measurement;
@@ -188,6 +198,10 @@ class TargetEstimator {
   /// The filter step: state (at or before m's time) and m -> the state at m's time.
   MeasurementVerdict step(State& state, const TargetMeasurement& m) const;
   void start(State& state, const TargetMeasurement& m) const;
+  /// Position and velocity at a (re)start from m: m's position, zero velocity, their covariance.
+  void startAt(const TargetMeasurement& m, Vector6d& x, Matrix6d& P) const;
+  /// Adds a rejected position to the tentative track (or starts it anew); how many in a row it holds.
+  int extendTentative(State::Tentative& tentative, const TargetMeasurement& m) const;
   /// Predicts to t_ns; with the IMM, transitions=false skips the chain's mixing (the probabilities held).
   void predict(State& state, rt::TimeNs t_ns, bool transitions = true) const;
   bool imm() const { return params_.manoeuvre_accel_psd_xy_m2ps3 > 0.0; }
