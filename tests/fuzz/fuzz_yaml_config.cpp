@@ -23,8 +23,7 @@ void readEverything(const aerotrack::rt::ConfigNode& node, int depth) {
   bool probed_missing = false;
   for (const std::string key : kKeys) {
     if (!node.has(key)) {
-      if (!probed_missing)
-        (void)aerotrack::rt::parseConfig<int>([&] { return node.getInt(key, 0, 1); });
+      if (!probed_missing) (void)aerotrack::rt::parseConfig<int>([&] { return node.getInt(key, 0, 1); });
       probed_missing = true;
       continue;
     }
