@@ -117,11 +117,25 @@ std::shared_ptr<ImageFrame> SimGimbalCamera::freeFrame() {
 ImageFrameHandle SimGimbalCamera::grab(TimeNs now_ns) {
   const SceneRenderer* renderer = sim_->renderer();
   if (renderer == nullptr) return {};
-  std::optional<CameraExposure> newest;
-  while (auto exposure = sim_->exposuresOut().try_pop()) newest = std::move(exposure);
-  if (!newest) return {};
   const SimFaults& faults = sim_->options().faults;
   const double t_s = sim_->secondsSinceStart(now_ns);
+  std::optional<CameraExposure> newest;
+  if (faults.camera_late.active(t_s) || !late_exposures_.empty()) {
+    // As grabDetections: exposures wait until kCameraLateS after they were taken; the newest due one
+    // is rendered (the frame shows the world as it was then, stamped then).
+    while (auto exposure = sim_->exposuresOut().try_pop()) {
+      if (late_exposures_.size() >= 64) late_exposures_.pop_front();
+      late_exposures_.push_back(std::move(*exposure));
+    }
+    const TimeNs due_ns = now_ns - (faults.camera_late.active(t_s) ? rt::secondsToNs(kCameraLateS) : 0);
+    while (!late_exposures_.empty() && late_exposures_.front().stamp_ns <= due_ns) {
+      newest = std::move(late_exposures_.front());
+      late_exposures_.pop_front();
+    }
+  } else {
+    while (auto exposure = sim_->exposuresOut().try_pop()) newest = std::move(exposure);
+  }
+  if (!newest) return {};
   if (faults.camera_stop.active(t_s)) return {};
   const bool occluded = faults.person_occluded.active(t_s);
   std::shared_ptr<ImageFrame> frame = freeFrame();

@@ -204,6 +204,46 @@ TEST(ImageMode, GrabDeliversFramesAtTheCameraRateStampedAtExposure) {
   EXPECT_EQ(camera.health(2'500'000'000).last_sample_ns, frames.back()->stamp_ns);
 }
 
+TEST(ImageMode, GivenTheCameraLateFaultThenEachFrameArrivesHalfASecondAfterItsExposure) {
+  for (const PersonSpriteSpec& p : defaultCast().people) {
+    if (!std::filesystem::exists(p.image_path)) GTEST_SKIP() << p.image_path << " is missing: install opencv-doc";
+  }
+  // Given the 10 Hz camera of the test above, late from 0.5 s to 1.5 s after the start (issue 23)
+  const auto spec =
+      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "h.yaml");
+  ASSERT_TRUE(spec.has_value()) << spec.error().message;
+  auto trial = instantiate(*spec, 7);
+  ASSERT_TRUE(trial.has_value());
+  SimulationOptions options;
+  options.render_depth = false;
+  options.faults.camera_late = {0.5, 1.5};
+  const TimeNs start_ns = 1'000'000'000;
+  auto sim = Simulation::create(*trial, options, start_ns);
+  ASSERT_TRUE(sim.has_value()) << sim.error().message;
+  std::shared_ptr<Simulation> shared = std::move(sim.value());
+  SimGimbalCamera camera(shared);
+  std::vector<std::pair<TimeNs, TimeNs>> arrivals;  // (exposure, arrival), from the start
+  for (TimeNs t = start_ns; t <= start_ns + 2'000'000'000; t += 5'000'000) {
+    shared->step(t);
+    if (ImageFrameHandle frame = camera.grab(t)) arrivals.emplace_back(frame->stamp_ns - start_ns, t - start_ns);
+  }
+  // Then before the window each frame arrives at its exposure; in it, the frames exposed from 0.5 s on
+  // arrive 500 ms after their exposure (the first at 1.0 s); when it ends the camera delivers its newest
+  // exposure again, on time (those still waiting are skipped, as a camera's newest-frame rule does).
+  int late = 0;
+  for (const auto& [exposure, arrival] : arrivals) {
+    if (arrival < 500'000'000 || arrival >= 1'500'000'000) {
+      EXPECT_EQ(arrival, exposure) << arrival;
+    } else {
+      EXPECT_EQ(arrival - exposure, 500'000'000) << arrival;
+      EXPECT_GE(arrival, 1'000'000'000);
+      ++late;
+    }
+  }
+  EXPECT_EQ(late, 5);  // exposed at 0.5, 0.6, ..., 0.9 s
+  EXPECT_EQ(arrivals.back().first, 2'000'000'000);
+}
+
 TEST(ImageMode, KeypointModeDeliversNoImages) {
   const auto spec = parseScenarioSpec(scenarioYaml(""), "i.yaml");
   ASSERT_TRUE(spec.has_value());

@@ -71,8 +71,9 @@ class SimGimbalCamera final : public GimbalCamera {
   std::shared_ptr<ImageFrame> freeFrame();
 
   std::shared_ptr<Simulation> sim_;
-  std::deque<DetectionFrame> late_;  ///< camera_late fault: frames held until 0.5 s after exposure
-  std::mt19937_64 garbage_rng_{23};  ///< detector_garbage fault
+  std::deque<DetectionFrame> late_;            ///< camera_late fault: frames held until 0.5 s after exposure
+  std::deque<CameraExposure> late_exposures_;  ///< camera_late fault, image mode: the same for exposures
+  std::mt19937_64 garbage_rng_{23};            ///< detector_garbage fault
   rt::LendingPool<ImageFrame> pool_{4, ImageFrame{}};
   RenderScratch scratch_;
   TimeNs last_stamp_ns_ = 0;

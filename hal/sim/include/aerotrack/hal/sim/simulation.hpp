@@ -65,7 +65,7 @@ struct SimFaults {
   FaultWindow gimbal_stuck;       ///< The gimbal motor ignores commands: it stays where it is.
   FaultWindow gimbal_silent;      ///< The gimbal motor reports nothing (its state stops arriving).
   FaultWindow vehicle_link_lost;  ///< Setpoints no longer reach the flight controller.
-  FaultWindow camera_late;        ///< Keypoint mode: detector frames arrive 0.5 s after their exposure.
+  FaultWindow camera_late;        ///< Frames (detector output, or rendered images) arrive 0.5 s after their exposure.
   FaultWindow detector_garbage;   ///< Keypoint mode: every reported person has random keypoints.
   FaultWindow depth_zero;         ///< The depth camera delivers frames of zeros (no data in any pixel).
 };
