@@ -113,7 +113,9 @@ nlohmann::json planningSummary(const planning::PlanningTask* task) {
           {"corridor_boxes_mean", task->meanCorridorBoxes()},
           {"optimizer_max_iterations", task->optimizerMaxIterations()},
           {"optimizer_line_search", task->optimizerLineSearch()},
-          {"trajectory_pool_growths", task->poolGrowths()}};
+          {"trajectory_pool_growths", task->poolGrowths()},
+          // Its plans the trajectory server refused for taking over late (a planner held up past its budget).
+          {"refused_late_by_server", task->refusedByServer()}};
 }
 
 nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::TimeNs start_ns, double step_s) {
