@@ -157,21 +157,32 @@ TEST(ImageMode, AMissingPhotoFailsTheSimulationsCreation) {
   EXPECT_NE(sim.error().message.find("gimbal_camera"), std::string::npos) << sim.error().message;
 }
 
-TEST(ImageMode, GrabDeliversFramesAtTheCameraRateStampedAtExposure) {
-  for (const PersonSpriteSpec& p : defaultCast().people) {
-    if (!std::filesystem::exists(p.image_path)) GTEST_SKIP() << p.image_path << " is missing: install opencv-doc";
-  }
-  // Given an image-mode camera at 10 Hz, 320 x 240, and its device polled at 200 Hz for 1.5 s
+/// The cast's photo missing (opencv-doc not installed), or "".
+std::string missingCastPhoto() {
+  for (const PersonSpriteSpec& p : defaultCast().people)
+    if (!std::filesystem::exists(p.image_path)) return p.image_path;
+  return "";
+}
+
+/// A simulation of the scenario above with an image-mode camera at 10 Hz, 320 x 240, from start_ns.
+std::shared_ptr<Simulation> imageModeSimulation(SimulationOptions options, TimeNs start_ns) {
   const auto spec =
       parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "h.yaml");
-  ASSERT_TRUE(spec.has_value()) << spec.error().message;
+  EXPECT_TRUE(spec.has_value()) << spec.error().message;
   auto trial = instantiate(*spec, 7);
-  ASSERT_TRUE(trial.has_value());
-  SimulationOptions options;
+  EXPECT_TRUE(trial.has_value());
   options.render_depth = false;
-  auto sim = Simulation::create(*trial, options, 1'000'000'000);
-  ASSERT_TRUE(sim.has_value()) << sim.error().message;
-  std::shared_ptr<Simulation> shared = std::move(sim.value());
+  auto sim = Simulation::create(*trial, options, start_ns);
+  EXPECT_TRUE(sim.has_value()) << sim.error().message;
+  return sim ? std::shared_ptr<Simulation>(std::move(sim.value())) : nullptr;
+}
+
+TEST(ImageMode, GrabDeliversFramesAtTheCameraRateStampedAtExposure) {
+  if (const std::string missing = missingCastPhoto(); !missing.empty())
+    GTEST_SKIP() << missing << " is missing: install opencv-doc";
+  // Given an image-mode camera at 10 Hz, 320 x 240, and its device polled at 200 Hz for 1.5 s
+  std::shared_ptr<Simulation> shared = imageModeSimulation({}, 1'000'000'000);
+  ASSERT_NE(shared, nullptr);
   SimGimbalCamera camera(shared);
 
   std::vector<ImageFrameHandle> frames;
@@ -205,22 +216,14 @@ TEST(ImageMode, GrabDeliversFramesAtTheCameraRateStampedAtExposure) {
 }
 
 TEST(ImageMode, GivenTheCameraLateFaultThenEachFrameArrivesHalfASecondAfterItsExposure) {
-  for (const PersonSpriteSpec& p : defaultCast().people) {
-    if (!std::filesystem::exists(p.image_path)) GTEST_SKIP() << p.image_path << " is missing: install opencv-doc";
-  }
+  if (const std::string missing = missingCastPhoto(); !missing.empty())
+    GTEST_SKIP() << missing << " is missing: install opencv-doc";
   // Given the 10 Hz camera of the test above, late from 0.5 s to 1.5 s after the start (issue 23)
-  const auto spec =
-      parseScenarioSpec(scenarioYaml("sensors:\n  gimbal_camera:\n    mode: image\n" + kCameraKeys), "h.yaml");
-  ASSERT_TRUE(spec.has_value()) << spec.error().message;
-  auto trial = instantiate(*spec, 7);
-  ASSERT_TRUE(trial.has_value());
   SimulationOptions options;
-  options.render_depth = false;
   options.faults.camera_late = {0.5, 1.5};
   const TimeNs start_ns = 1'000'000'000;
-  auto sim = Simulation::create(*trial, options, start_ns);
-  ASSERT_TRUE(sim.has_value()) << sim.error().message;
-  std::shared_ptr<Simulation> shared = std::move(sim.value());
+  std::shared_ptr<Simulation> shared = imageModeSimulation(options, start_ns);
+  ASSERT_NE(shared, nullptr);
   SimGimbalCamera camera(shared);
   std::vector<std::pair<TimeNs, TimeNs>> arrivals;  // (exposure, arrival), from the start
   for (TimeNs t = start_ns; t <= start_ns + 2'000'000'000; t += 5'000'000) {
