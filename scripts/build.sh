@@ -4,10 +4,11 @@
 #   asan     build-asan/  AddressSanitizer + UndefinedBehaviorSanitizer: the whole test suite (scripts/test.sh)
 #   tsan     build-tsan/  ThreadSanitizer: the concurrency tests (scripts/check.sh tsan)
 #   fuzz     build-fuzz/  clang, libFuzzer + ASan + UBSan: the fuzz targets of tests/fuzz (scripts/fuzz.sh)
+#   fuzz-fast build-fuzz-fast/  the same with UBSan only (scripts/fuzz.sh --fast: the long runs)
 # Every tree is a CMake unity build (AEROTRACK_UNITY_BUILD, docs/testing.md: about half the cold build
 # time). ccache is used when it is installed (scripts/setup.sh --dev installs it); nothing depends on it.
 # Incremental: a second run with nothing changed takes about a second.
-# usage: scripts/build.sh [--tree release|asan|tsan|fuzz] [-DOPTION=VALUE...] [TARGET...]
+# usage: scripts/build.sh [--tree release|asan|tsan|fuzz|fuzz-fast] [-DOPTION=VALUE...] [TARGET...]
 #   TARGETs default to `aerotrack` for release and to everything for asan and tsan; -D options apply to
 #   the first configure of a tree only.
 set -euo pipefail
@@ -47,7 +48,13 @@ case $tree in
       -DBUILD_TESTING=OFF -DAEROTRACK_BUILD_BENCHMARKS=OFF -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_C_COMPILER=clang-14
       "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
     ;;
-  *) echo "build.sh: unknown tree '$tree' (release, asan, tsan, fuzz)" >&2; exit 1 ;;
+  fuzz-fast)  # the fuzz targets with UBSan only, -O2: 3-4x the executions a second, for the long runs
+    dir=build-fuzz-fast
+    options+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DAEROTRACK_SANITIZE=undefined -DAEROTRACK_FUZZ=ON
+      -DBUILD_TESTING=OFF -DAEROTRACK_BUILD_BENCHMARKS=OFF -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_C_COMPILER=clang-14
+      "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG")
+    ;;
+  *) echo "build.sh: unknown tree '$tree' (release, asan, tsan, fuzz, fuzz-fast)" >&2; exit 1 ;;
 esac
 if command -v ccache >/dev/null; then  # CCACHE_DISABLE=1 turns it off for a cold measurement
   options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
