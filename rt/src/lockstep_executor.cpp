@@ -165,22 +165,11 @@ void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
 }
 
 Status LockstepExecutor::stall(const std::string& task, TimeNs from_ns, TimeNs until_ns, DurationNs run_ns) {
-  const std::vector<TaskSet::Entry>& entries = tasks_.entries();
-  std::size_t index = 0;
-  while (index < entries.size() && entries[index].binding.spec.name != task) ++index;
-  if (index == entries.size()) {
-    std::string names;
-    for (const TaskSet::Entry& e : entries) {
-      if (!names.empty()) names += ", ";
-      names += e.binding.spec.name;
-    }
-    return Error{"stall: no task named '" + task + "' (tasks: " + names + ")"};
-  }
-  if (run_ns <= 0 || until_ns <= from_ns)
-    return Error{"stall: task '" + task + "' needs a window that ends after it begins and a positive run time"};
+  const Expected<std::size_t> index = tasks_.stallIndex(task, from_ns, until_ns, run_ns);
+  if (!index) return index.error();
   for (const Stall& s : stalls_)
-    if (s.index == index) return Error{"stall: task '" + task + "' already has a stall"};
-  stalls_.push_back({index, from_ns, until_ns, run_ns});
+    if (s.index == *index) return Error{"stall: task '" + task + "' already has a stall"};
+  stalls_.push_back({*index, from_ns, until_ns, run_ns});
   return ok();
 }
 

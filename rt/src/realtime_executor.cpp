@@ -54,15 +54,11 @@ Status RealtimeExecutor::add(const TaskBinding& binding) {
 
 Status RealtimeExecutor::stall(const std::string& task, TimeNs from_ns, TimeNs until_ns, DurationNs run_ns) {
   if (!threads_.empty()) return Error{"stall: cannot stall task '" + task + "' after start()"};
-  const std::vector<TaskSet::Entry>& entries = tasks_.entries();
-  std::size_t index = 0;
-  while (index < entries.size() && entries[index].binding.spec.name != task) ++index;
-  if (index == entries.size()) return Error{"stall: no task named '" + task + "'"};
-  if (run_ns <= 0 || until_ns <= from_ns)
-    return Error{"stall: task '" + task + "' needs a window that ends after it begins and a positive run time"};
-  stalls_.resize(entries.size());
-  if (stalls_[index].from_ns != kNeverNs) return Error{"stall: task '" + task + "' already has a stall"};
-  stalls_[index] = {from_ns, until_ns, run_ns};
+  const Expected<std::size_t> index = tasks_.stallIndex(task, from_ns, until_ns, run_ns);
+  if (!index) return index.error();
+  stalls_.resize(tasks_.entries().size());
+  if (stalls_[*index].from_ns != kNeverNs) return Error{"stall: task '" + task + "' already has a stall"};
+  stalls_[*index] = {from_ns, until_ns, run_ns};
   return ok();
 }
 

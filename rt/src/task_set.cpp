@@ -20,6 +20,23 @@ Status TaskSet::add(const TaskBinding& binding) {
   return ok();
 }
 
+Expected<std::size_t> TaskSet::stallIndex(const std::string& name, TimeNs from_ns, TimeNs until_ns,
+                                          DurationNs run_ns) const {
+  std::size_t index = 0;
+  while (index < entries_.size() && entries_[index].binding.spec.name != name) ++index;
+  if (index == entries_.size()) {
+    std::string names;
+    for (const Entry& e : entries_) {
+      if (!names.empty()) names += ", ";
+      names += e.binding.spec.name;
+    }
+    return Error{"stall: no task named '" + name + "' (tasks: " + names + ")"};
+  }
+  if (run_ns <= 0 || until_ns <= from_ns)
+    return Error{"stall: task '" + name + "' needs a window that ends after it begins and a positive run time"};
+  return index;
+}
+
 std::vector<TaskSet::NamedStats> TaskSet::stats() const {
   std::vector<NamedStats> out;
   out.reserve(entries_.size());

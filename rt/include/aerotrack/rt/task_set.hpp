@@ -33,6 +33,10 @@ class TaskSet {
 
   std::vector<Entry>& entries() { return entries_; }
   const std::vector<Entry>& entries() const { return entries_; }
+  /// Checks a stall of both executors (LockstepExecutor::stall, RealtimeExecutor::stall) and finds its task:
+  /// the index of the task named `name`. Error ("stall: ..."): no such task (the message lists those there
+  /// are), a window that does not end after it begins, or run_ns <= 0.
+  Expected<std::size_t> stallIndex(const std::string& name, TimeNs from_ns, TimeNs until_ns, DurationNs run_ns) const;
   /// Statistics in table order; pointers stay valid as long as the set.
   std::vector<NamedStats> stats() const;
 
