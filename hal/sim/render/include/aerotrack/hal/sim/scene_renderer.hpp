@@ -29,6 +29,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
 
+#include "aerotrack/hal/sim/background_shader.hpp"
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/hal/sim/obstacle_world.hpp"
 #include "aerotrack/hal/sim/person_cast.hpp"
@@ -118,12 +119,6 @@ class SceneRenderer {
   const PersonSprite& sprite(std::size_t cast_index = 0) const { return *sprites_.at(cast_index); }
 
  private:
-  /// The ground's texture: brightness factors on a 25.6 m square period, level k with 0.05 * 2^k m
-  /// texels (a mip pyramid, 512 x 512 down to 1 x 1).
-  struct GroundTexture {
-    std::vector<std::vector<float>> levels;
-  };
-
   SceneRenderer(const SceneRenderParams& params, PersonSprites sprites, std::shared_ptr<const GroundTexture> ground)
       : params_(params), sprites_(std::move(sprites)), ground_(std::move(ground)) {}
 
