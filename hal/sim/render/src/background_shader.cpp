@@ -102,31 +102,23 @@ BackgroundShader::BackgroundShader(const GroundTexture& ground, const Eigen::Vec
   haze_m_ = static_cast<float>(haze_distance_m);
 }
 
-void BackgroundShader::rowRays(const Eigen::Matrix3d& R_WC, double fx_px, double fy_px, double cx_px, double cy_px,
-                               int v, int width_px, RowRays& rays) {
-  const auto n = static_cast<std::size_t>(width_px);
-  rays.x.resize(n);
-  rays.y.resize(n);
-  rays.z.resize(n);
-  const Eigen::Vector3d d0 = R_WC * Eigen::Vector3d((0.5 - cx_px) / fx_px, (v + 0.5 - cy_px) / fy_px, 1.0);
-  const Eigen::Vector3d step = R_WC.col(0) / fx_px;
-  for (std::size_t u = 0; u < n; ++u) {
-    const auto du = static_cast<double>(u);
-    rays.x[u] = static_cast<float>(d0.x() + du * step.x());
-    rays.y[u] = static_cast<float>(d0.y() + du * step.y());
-    rays.z[u] = static_cast<float>(d0.z() + du * step.z());
-  }
+RowRays BackgroundShader::rowRays(const Eigen::Matrix3d& R_WC, double fx_px, double fy_px, double cx_px, double cy_px,
+                                  int v) {
+  RowRays rays;
+  rays.d0 = (R_WC * Eigen::Vector3d((0.5 - cx_px) / fx_px, (v + 0.5 - cy_px) / fy_px, 1.0)).cast<float>();
+  rays.step = (R_WC.col(0) / fx_px).cast<float>();
+  return rays;
 }
 
 void BackgroundShader::shadeSpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row) {
   // Ground and sky alternate at most once along a row (z is linear in u), but the split is found by
   // the per-pixel test so that each pixel gets what shadePixel() gives it.
-  const float* z = rays.z.data();
+  const auto goesDown = [&](int u) { return rays.d0.z() + static_cast<float>(u) * rays.step.z() < 0.0F; };
   int u = u0;
   while (u < u1) {
-    const bool ground = above_ground_ && z[u] < 0.0F;
+    const bool ground = above_ground_ && goesDown(u);
     int end = u + 1;
-    while (end < u1 && (above_ground_ && z[end] < 0.0F) == ground) ++end;
+    while (end < u1 && (above_ground_ && goesDown(end)) == ground) ++end;
     if (ground) {
       groundSpan(rays, u, end, row);
     } else {
@@ -140,16 +132,17 @@ void BackgroundShader::groundSpan(const RowRays& rays, int u0, int u1, cv::Vec3b
   auto& [tx, ty, lvl, keep] = buffers_;
   for (int c0 = u0; c0 < u1; c0 += kChunk) {
     const int n = std::min(kChunk, u1 - c0);
-    const float* dx = rays.x.data() + c0;
-    const float* dy = rays.y.data() + c0;
-    const float* dz = rays.z.data() + c0;
+    const float d0x = rays.d0.x(), d0y = rays.d0.y(), d0z = rays.d0.z();
+    const float sx = rays.step.x(), sy = rays.step.y(), sz = rays.step.z();
     // Pass 1, branch-free (vectorised): where the ray meets the ground, the pixel's footprint there
     // (range / f, stretched by the grazing angle range / height, at most 20x) and the haze.
     for (int k = 0; k < n; ++k) {
-      const float t = -o_z_ / dz[k];
-      const float range_m = t * std::sqrt(dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k]);
+      const auto u = static_cast<float>(c0 + k);
+      const float dx = d0x + u * sx, dy = d0y + u * sy, dz = d0z + u * sz;
+      const float t = -o_z_ / dz;
+      const float range_m = t * std::sqrt(dx * dx + dy * dy + dz * dz);
       const float t_texel = minF(t, kMaxGroundRayM);
-      const float x = o_x_ + t_texel * dx[k], y = o_y_ + t_texel * dy[k];
+      const float x = o_x_ + t_texel * dx, y = o_y_ + t_texel * dy;
       const float stretch = minF(range_m * inv_height_, 20.0F);
       lvl[k] = levelFor(range_m * stretch * footprint_scale_);
       // Level-0 texel coordinates; level l's are these shifted right by l (floor of a division by
@@ -174,8 +167,8 @@ void BackgroundShader::groundSpan(const RowRays& rays, int u0, int u1, cv::Vec3b
 
 void BackgroundShader::skySpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row) const {
   for (int u = u0; u < u1; ++u) {
-    const float dx = rays.x[static_cast<std::size_t>(u)], dy = rays.y[static_cast<std::size_t>(u)];
-    const float dz = rays.z[static_cast<std::size_t>(u)];
+    const Eigen::Vector3f d = rays.at(u);
+    const float dx = d.x(), dy = d.y(), dz = d.z();
     // Sine of the elevation, from 0 at the horizon to 1 at the zenith.
     const float s = maxF(0.0F, dz) / std::sqrt(dx * dx + dy * dy + dz * dz);
     for (std::size_t ch = 0; ch < 3; ++ch)

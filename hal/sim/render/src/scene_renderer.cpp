@@ -36,9 +36,10 @@ std::uint8_t toByteF(float c) {
   return static_cast<std::uint8_t>(std::min(c, 255.0F) + 0.5F);  // NOLINT(bugprone-incorrect-roundings): c >= 0
 }
 
-/// One row's rays, d0 + u step from o, in single precision, and the light.
+/// One row's rays from o, and the light.
 struct RowShading {
-  Eigen::Vector3f o, d0, step, sun;
+  RowRays rays;
+  Eigen::Vector3f o, sun;
   float haze_m = 0.0F;
 };
 
@@ -60,7 +61,7 @@ void shadeObstacleSpan(const ObstacleWorld& world, int id, const RowShading& fra
   const Eigen::Vector3f base = (is_box ? kConcrete : kBark).cast<float>();
   const Eigen::Vector3f horizon(kSkyHorizonBgr.data());
   const Eigen::Vector3f& sun = frame.sun;
-  const Eigen::Vector3f &o = frame.o, &d0 = frame.d0, &step = frame.step;
+  const Eigen::Vector3f &o = frame.o, &d0 = frame.rays.d0, &step = frame.rays.step;
   const float haze_m = frame.haze_m;
   const auto albedo0 = static_cast<float>(0.85 + 0.3 * hash01(id, 0, 3));
   // The texture's hashed cell (a box's panel, a trunk's furrow and band) changes every few pixels at
@@ -259,12 +260,9 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
   const CameraIntrinsics& k = params_.intrinsics;
   const Eigen::Matrix3d& R_WC = T_WC.linear();
   const Eigen::Vector3d o_W = T_WC.translation();
-  const Eigen::Vector3d step_W = R_WC.col(0) / k.fx_px;
   BackgroundShader background(*ground_, o_W, k.fx_px, params_.haze_distance_m);
-  RowRays rays;
   RowShading frame;
   frame.o = o_W.cast<float>();
-  frame.step = step_W.cast<float>();
   frame.sun = params_.sun_dir_W.cast<float>();
   frame.haze_m = static_cast<float>(params_.haze_distance_m);
   ObstacleSpanBuffers buffers{};
@@ -272,16 +270,14 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
     cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
     const float* depth_row = scratch.depth_m.ptr<float>(v);
     const int* id_row = scratch.obstacle_id.ptr<int>(v);
-    BackgroundShader::rowRays(R_WC, k.fx_px, k.fy_px, k.cx_px, k.cy_px, v, k.width_px, rays);
-    // Pixel rays (x, y, 1) in C, i.e. with camera z = 1: a hit at ray parameter t has depth t.
-    frame.d0 = (R_WC * Eigen::Vector3d((0.5 - k.cx_px) / k.fx_px, (v + 0.5 - k.cy_px) / k.fy_px, 1.0)).cast<float>();
+    frame.rays = BackgroundShader::rowRays(R_WC, k.fx_px, k.fy_px, k.cx_px, k.cy_px, v);
     int u = 0;
     while (u < k.width_px) {  // runs of one obstacle, or of background, shaded together
       const int id = id_row[u];
       int end = u + 1;
       while (end < k.width_px && (id < 0 ? id_row[end] < 0 : id_row[end] == id)) ++end;
       if (id < 0) {
-        background.shadeSpan(rays, u, end, row);
+        background.shadeSpan(frame.rays, u, end, row);
       } else {
         shadeObstacleSpan(world, id, frame, depth_row, u, end, row, buffers);
       }

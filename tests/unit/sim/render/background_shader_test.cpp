@@ -38,15 +38,15 @@ struct Mismatch {
 
 Mismatch compareFrame(const GroundTexture& ground, const Eigen::Vector3d& o_W, const Eigen::Matrix3d& R_WC) {
   BackgroundShader shader(ground, o_W, kFxPx, kHazeM);
-  RowRays rays;
   std::vector<cv::Vec3b> row(kWidthPx);
   Mismatch m;
   for (int v = 0; v < kHeightPx; ++v) {
-    BackgroundShader::rowRays(R_WC, kFxPx, kFxPx, kCxPx, kCyPx, v, kWidthPx, rays);
+    const RowRays rays = BackgroundShader::rowRays(R_WC, kFxPx, kFxPx, kCxPx, kCyPx, v);
     shader.shadeSpan(rays, 0, kWidthPx, row.data());
     for (int u = 0; u < kWidthPx; ++u) {
       const auto i = static_cast<std::size_t>(u);
-      const cv::Vec3b want = shader.shadePixel(rays.x[i], rays.y[i], rays.z[i]);
+      const Eigen::Vector3f d = rays.at(u);
+      const cv::Vec3b want = shader.shadePixel(d.x(), d.y(), d.z());
       int diff = 0;
       for (int ch = 0; ch < 3; ++ch) diff = std::max(diff, std::abs(int{row[i][ch]} - int{want[ch]}));
       if (diff > 0) ++m.pixels;
@@ -84,12 +84,11 @@ TEST(BackgroundShader, ARowCutIntoRunsIsShadedAsAWhole) {
   const auto ground = GroundTexture::make();
   BackgroundShader shader(*ground, {5.0, 7.0, 1.8}, kFxPx, kHazeM);
   const Eigen::Matrix3d R_WC = cameraRotation(0.8, -0.05, 0.35);  // the horizon crosses the rows
-  RowRays rays;
   std::vector<cv::Vec3b> whole(kWidthPx), cut(kWidthPx);
   std::mt19937_64 rng(3);
   std::uniform_int_distribution<int> run(1, 90);
   for (int v = 0; v < kHeightPx; v += 7) {
-    BackgroundShader::rowRays(R_WC, kFxPx, kFxPx, kCxPx, kCyPx, v, kWidthPx, rays);
+    const RowRays rays = BackgroundShader::rowRays(R_WC, kFxPx, kFxPx, kCxPx, kCyPx, v);
     shader.shadeSpan(rays, 0, kWidthPx, whole.data());
     for (int u = 0; u < kWidthPx;) {
       const int end = std::min(kWidthPx, u + run(rng));

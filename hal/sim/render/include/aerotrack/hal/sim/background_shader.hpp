@@ -32,9 +32,10 @@ struct GroundTexture {
 };
 
 /// One row's pixel rays in the world frame, scaled so that camera z = 1 (a hit at ray parameter t
-/// has depth t): x, y, z of pixel u's ray at [u].
+/// has depth t): pixel u's ray is d0 + u step.
 struct RowRays {
-  std::vector<float> x, y, z;
+  Eigen::Vector3f d0 = Eigen::Vector3f::Zero(), step = Eigen::Vector3f::Zero();
+  Eigen::Vector3f at(int u) const { return d0 + static_cast<float>(u) * step; }
 };
 
 /// The background seen from one camera position. Cheap to make (once per frame); holds the spans'
@@ -48,15 +49,14 @@ class BackgroundShader {
   /// haze_distance_m: range at which haze is half of a colour. ground must outlive the shader.
   BackgroundShader(const GroundTexture& ground, const Eigen::Vector3d& o_W, double fx_px, double haze_distance_m);
 
-  /// Fills rays with the rays of row v (R_WC: the camera's rotation; pixel centres at +0.5).
-  static void rowRays(const Eigen::Matrix3d& R_WC, double fx_px, double fy_px, double cx_px, double cy_px, int v,
-                      int width_px, RowRays& rays);
+  /// The rays of row v (R_WC: the camera's rotation; pixel centres at +0.5).
+  static RowRays rowRays(const Eigen::Matrix3d& R_WC, double fx_px, double fy_px, double cx_px, double cy_px, int v);
 
   /// Shades pixels [u0, u1) of a row with rays `rays` into row[u0, u1): ground where the ray goes
   /// down from a camera above it, else sky.
   void shadeSpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row);
 
-  /// The colour of one ray (x, y, z as in RowRays), computed the obvious way: the reference.
+  /// The colour of one ray (x, y, z: RowRays::at), computed the obvious way: the reference.
   cv::Vec3b shadePixel(float dx, float dy, float dz) const;
 
  private:
