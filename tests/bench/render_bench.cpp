@@ -46,11 +46,7 @@ void BM_RenderFrame(benchmark::State& state, const std::string& scenario) {
     t_s = std::fmod(t_s + 0.5, walker->durationS());
     const Eigen::Vector3d forward(std::cos(person.heading_rad), std::sin(person.heading_rad), 0.0);
     const Eigen::Vector3d eye = person.p_W_m - 2.5 * forward + Eigen::Vector3d(0, 0, 1.5);
-    const Eigen::Vector3d z = (person.p_W_m + Eigen::Vector3d(0, 0, 0.9) - eye).normalized();
-    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-    Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
-    T_WC.linear() << x, z.cross(x), z;
-    T_WC.translation() = eye;
+    const Eigen::Isometry3d T_WC = cameraLookingAt(eye, person.p_W_m + Eigen::Vector3d(0, 0, 0.9));
     states[0] = person;
     for (std::size_t i = 0; i < bystanders.size(); ++i) states[i + 1] = bystanders[i].state(t_s);
     for (std::size_t i = 0; i < states.size(); ++i)

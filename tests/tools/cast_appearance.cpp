@@ -24,11 +24,7 @@ int main() {
     std::fprintf(stderr, "cast_appearance: %s\n", renderer ? "world" : renderer.error().message.c_str());
     return 1;
   }
-  const Eigen::Vector3d eye(0.0, 0.0, 1.6), target(4.0, 0.0, 0.9);
-  const Eigen::Vector3d z = (target - eye).normalized(), x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
-  T_WC.linear() << x, z.cross(x), z;
-  T_WC.translation() = eye;
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.0, 1.6}, {4.0, 0.0, 0.9});
   const hal::CameraIntrinsics& k = renderer->params().intrinsics;
   std::vector<perception::Appearance> front, back;
   cv::Mat bgr;

@@ -28,6 +28,15 @@ Eigen::Matrix3d opticalAxesInFlu() {
   return R;
 }
 
+Eigen::Isometry3d cameraLookingAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {
+  const Eigen::Vector3d z = (target_W - eye_W).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  T_WC.linear() << x, z.cross(x), z;
+  T_WC.translation() = eye_W;
+  return T_WC;
+}
+
 CameraIntrinsics pinholeIntrinsics(int width_px, int height_px, double horizontal_fov_rad) {
   CameraIntrinsics k;
   k.width_px = width_px;

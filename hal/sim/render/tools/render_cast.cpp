@@ -24,15 +24,6 @@ namespace {
 
 using namespace aerotrack::hal::sim;
 
-Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {
-  const Eigen::Vector3d z = (target_W - eye_W).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() << x, z.cross(x), z;
-  T.translation() = eye_W;
-  return T;
-}
-
 /// The person mid-walk at about (4, 0), heading `heading_rad`, `phase_s` into their stride.
 PersonState walkingAt(double heading_rad, double phase_s) {
   const Eigen::Vector2d dir(std::cos(heading_rad), std::sin(heading_rad));
@@ -63,7 +54,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const auto world = ObstacleWorld::create({}, {});
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.6}, {4.0, 0.0, 0.9});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.0, 1.6}, {4.0, 0.0, 0.9});
   constexpr double kPi = 3.14159265358979;
   const std::array<std::pair<double, double>, 5> poses = {
       {{kPi, 0.0}, {kPi, 0.28}, {0.0, 0.0}, {0.0, 0.28}, {kPi / 2.0, 0.14}}};

@@ -106,11 +106,7 @@ int main(int argc, char** argv) {
     {
       const Eigen::Vector3d forward(std::cos(person.heading_rad), std::sin(person.heading_rad), 0.0);
       const Eigen::Vector3d eye = person.p_W_m - 9.0 * forward + Eigen::Vector3d(0.0, 0.0, 1.6);
-      const Eigen::Vector3d z = (person.p_W_m + Eigen::Vector3d(0.0, 0.0, 0.9) - eye).normalized();
-      const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-      Eigen::Isometry3d T_far = Eigen::Isometry3d::Identity();
-      T_far.linear() << x, z.cross(x), z;
-      T_far.translation() = eye;
+      const Eigen::Isometry3d T_far = hal::sim::cameraLookingAt(eye, person.p_W_m + Eigen::Vector3d(0.0, 0.0, 0.9));
       renderer->render((*sim)->obstacles(), T_far, everyone, bgr, scratch);
       std::snprintf(name, sizeof(name), "/frame_%02d_far.png", frame);
       cv::imwrite(out_dir + name, bgr);

@@ -22,19 +22,6 @@ using K = CocoKeypoint;
 using Keypoints = std::array<Eigen::Vector3d, kNumKeypoints>;
 constexpr double kPi = std::numbers::pi;
 
-// Camera at eye_W looking at target_W, OpenCV axes (x right, y down, z forward), world z up.
-Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {
-  const Eigen::Vector3d z = (target_W - eye_W).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = y;
-  T.linear().col(2) = z;
-  T.translation() = eye_W;
-  return T;
-}
-
 // A person standing at the origin facing -x (towards a camera on the -x axis).
 Keypoints standingFacingMinusX() {
   const WalkingPerson w =
@@ -52,6 +39,20 @@ KeypointCameraParams noiseless() {
 std::optional<Eigen::Vector2d> trueUv(const Keypoints& kps, std::size_t i, const Eigen::Isometry3d& T_WC,
                                       const CameraIntrinsics& k) {
   return project(T_WC.inverse() * kps[i], k);
+}
+
+TEST(CameraLookingAt, TheTargetIsOnTheOpticalAxisWithNoRoll) {
+  const Eigen::Vector3d eye(-3.0, 2.0, 1.6), target(1.0, -1.0, 0.4);
+  const Eigen::Isometry3d T_WC = cameraLookingAt(eye, target);
+  const Eigen::Matrix3d& R = T_WC.linear();
+  EXPECT_NEAR((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
+  const Eigen::Vector3d p_C = T_WC.inverse() * target;  // straight ahead, at the target's distance
+  EXPECT_NEAR(p_C.x(), 0.0, 1e-12);
+  EXPECT_NEAR(p_C.y(), 0.0, 1e-12);
+  EXPECT_NEAR(p_C.z(), (target - eye).norm(), 1e-12);
+  EXPECT_NEAR(R.col(0).z(), 0.0, 1e-12);  // image rows level
+  EXPECT_LT(R.col(1).z(), 0.0);           // image y points down the world
 }
 
 TEST(KeypointCamera, GivenDefaultParamsThenIntrinsicsAre640x480With87DegreeFov) {
@@ -105,7 +106,7 @@ TEST(KeypointCamera, GivenPointBehindOrAtTheCameraWhenProjectingThenNothing) {
 
 TEST(KeypointCamera, GivenNoiselessCameraFacingPersonWhenObservingThenReportsExactProjections) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.5});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-6, 0, 1.5}, {0, 0, 1.5});
   const KeypointCameraParams p = noiseless();
   std::mt19937_64 rng(1);
   const auto det = observe(kps, T_WC, p, {}, rng);
@@ -136,7 +137,7 @@ TEST(KeypointCamera, GivenNoiselessCameraFacingPersonWhenObservingThenReportsExa
 
 TEST(KeypointCamera, GivenHeadAboveTheImageAndNoGuessesWhenObservingThenHeadKeypointsHaveScoreZero) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
   KeypointCameraParams p = noiseless();
   p.cut_guess_reach_torso = 0.0;
   std::mt19937_64 rng(2);
@@ -166,7 +167,7 @@ TEST(KeypointCamera, GivenHeadAboveTheImageAndNoGuessesWhenObservingThenHeadKeyp
 // middling score; the simulated detector does the same for joints within reach of the edge.
 TEST(KeypointCamera, GivenHeadAboveTheImageWhenObservingThenNearJointsAreGuessedInsideTheEdgeAndFarOnesDropped) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-1.5, 0, 0.8}, {0, 0, 0.3});  // close, pitched down
   KeypointCameraParams p = noiseless();
   p.cut_guess_reach_torso = 0.5;  // the shoulders (0.37 torso out) within it, the head (0.81-0.98) beyond
   const std::size_t ls = index(K::kLeftShoulder), rs = index(K::kRightShoulder);
@@ -204,7 +205,7 @@ TEST(KeypointCamera, GivenHeadAboveTheImageWhenObservingThenNearJointsAreGuessed
 TEST(KeypointCamera, GivenLegsOccludedWhenObservingThenOnlyLegKeypointsHaveScoreZero) {
   const Keypoints kps = standingFacingMinusX();
   const Eigen::Vector3d eye(-6, 0, 1.5);
-  const Eigen::Isometry3d T_WC = lookAt(eye, {0, 0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt(eye, {0, 0, 1.0});
   std::mt19937_64 rng(3);
   int calls = 0;
   const LineOfSight below_0_7_blocked = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
@@ -223,7 +224,7 @@ TEST(KeypointCamera, GivenLegsOccludedWhenObservingThenOnlyLegKeypointsHaveScore
 
 TEST(KeypointCamera, GivenFewerThanMinVisibleWhenObservingThenNoDetection) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-6, 0, 1.5}, {0, 0, 1.0});
   // Only the head (nose, eyes, ears: 5 keypoints) above 1.55 m is visible: exactly the minimum.
   std::mt19937_64 rng(4);
   const auto five = observe(
@@ -237,12 +238,12 @@ TEST(KeypointCamera, GivenFewerThanMinVisibleWhenObservingThenNoDetection) {
       kps, T_WC, noiseless(), [](const auto&, const auto& to) { return to.z() > 1.612; }, rng);
   EXPECT_FALSE(four.has_value());
   // All behind the camera.
-  EXPECT_FALSE(observe(kps, lookAt({-6, 0, 1.5}, {-12, 0, 1.5}), noiseless(), {}, rng).has_value());
+  EXPECT_FALSE(observe(kps, cameraLookingAt({-6, 0, 1.5}, {-12, 0, 1.5}), noiseless(), {}, rng).has_value());
 }
 
 TEST(KeypointCamera, GivenStaticPersonWhenObservedManyTimesThenNoiseAndMissesMatchParameters) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-5, 0.5, 1.6}, {0, 0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-5, 0.5, 1.6}, {0, 0, 1.0});
   const KeypointCameraParams p;  // defaults: 0.028 torso, 3 % misses, scores 0.5-0.95
   std::array<Eigen::Vector2d, kNumKeypoints> uv;
   for (std::size_t i = 0; i < kNumKeypoints; ++i) uv[i] = *trueUv(kps, i, T_WC, p.intrinsics);
@@ -286,7 +287,7 @@ TEST(KeypointCamera, GivenStaticPersonWhenObservedManyTimesThenNoiseAndMissesMat
 
 TEST(KeypointCamera, GivenSameSeedWhenObservingThenSameDetection) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-5, 1, 1.6}, {0, 0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-5, 1, 1.6}, {0, 0, 1.0});
   const KeypointCameraParams p;
   std::mt19937_64 a(7), b(7), c(8);
   for (int k = 0; k < 20; ++k) {
@@ -309,8 +310,8 @@ TEST(KeypointCamera, GivenSameSeedWhenObservingThenSameDetection) {
 TEST(KeypointCamera, GivenAnyVisibilityWhenObservingThenDrawsTheSameAmountOfRandomness) {
   const Keypoints kps = standingFacingMinusX();
   std::mt19937_64 seen(9), unseen(9);
-  EXPECT_TRUE(observe(kps, lookAt({-5, 0, 1.5}, {0, 0, 1.0}), {}, {}, seen).has_value());
-  EXPECT_FALSE(observe(kps, lookAt({-5, 0, 1.5}, {-10, 0, 1.0}), {}, {}, unseen).has_value());
+  EXPECT_TRUE(observe(kps, cameraLookingAt({-5, 0, 1.5}, {0, 0, 1.0}), {}, {}, seen).has_value());
+  EXPECT_FALSE(observe(kps, cameraLookingAt({-5, 0, 1.5}, {-10, 0, 1.0}), {}, {}, unseen).has_value());
   EXPECT_EQ(seen(), unseen());  // the stream stays aligned: 4 draws per keypoint either way
 }
 
@@ -322,7 +323,7 @@ Keypoints inCamera(const Keypoints& kps_W, const Eigen::Isometry3d& T_WC) {
 
 TEST(KeypointMatch, GivenTheExactProjectionThenErrorIsZeroAndGrowsAsAFractionOfTheTorso) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.2});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-6, 0, 1.5}, {0, 0, 1.2});
   const KeypointCameraParams p = noiseless();
   std::mt19937_64 rng(1);
   auto det = observe(kps, T_WC, p, {}, rng);
@@ -345,7 +346,7 @@ TEST(KeypointMatch, GivenTheExactProjectionThenErrorIsZeroAndGrowsAsAFractionOfT
 
 TEST(KeypointMatch, GivenLeftAndRightReadExchangedThenTheSamePersonStillMatchesExactly) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-4, 0, 1.5}, {0, 0, 1.2});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-4, 0, 1.5}, {0, 0, 1.2});
   const KeypointCameraParams p = noiseless();
   std::mt19937_64 rng(1);
   const auto det = observe(kps, T_WC, p, {}, rng);
@@ -359,7 +360,7 @@ TEST(KeypointMatch, GivenLeftAndRightReadExchangedThenTheSamePersonStillMatchesE
 
 TEST(KeypointMatch, GivenAPersonAtTheCameraPlaneOrOutsideTheImageThenNoMatch) {
   const Keypoints kps = standingFacingMinusX();
-  const Eigen::Isometry3d T_WC = lookAt({-6, 0, 1.5}, {0, 0, 1.2});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({-6, 0, 1.5}, {0, 0, 1.2});
   const KeypointCameraParams p = noiseless();
   std::mt19937_64 rng(1);
   const auto det = observe(kps, T_WC, p, {}, rng);

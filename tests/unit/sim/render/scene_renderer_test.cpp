@@ -21,18 +21,6 @@ namespace {
 
 using K = CocoKeypoint;
 
-// Camera at eye_W looking at target_W, OpenCV axes (x right, y down, z forward), world z up.
-Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {
-  const Eigen::Vector3d z = (target_W - eye_W).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = z.cross(x);
-  T.linear().col(2) = z;
-  T.translation() = eye_W;
-  return T;
-}
-
 // A person standing at (x, 0) facing -x, towards a camera on the -x side.
 PersonState standingAt(double x_m) {
   const WalkingPerson walker = aerotrack::test::require(
@@ -113,7 +101,7 @@ class SceneRendererTest : public testing::Test {
 TEST_F(SceneRendererTest, SpriteTorsoAndMidHipMatchTheProjectedKeypoints) {
   // Given a person 4 m in front of a camera at 1.5 m, seen slightly from the side and rolled by 5 deg
   const PersonState person = standingAt(4.0);
-  Eigen::Isometry3d T_WC = lookAt({0.0, 0.7, 1.5}, {4.0, 0.0, 1.0});
+  Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.7, 1.5}, {4.0, 0.0, 1.0});
   T_WC.linear() = T_WC.linear() * Eigen::AngleAxisd(0.087, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const CameraIntrinsics& k = renderer_->params().intrinsics;
   // (the midpoints of the projected joints, as the detector reports them)
@@ -163,7 +151,7 @@ TEST_F(SceneRendererTest, SpriteTorsoAndMidHipMatchTheProjectedKeypoints) {
 TEST_F(SceneRendererTest, AnObstacleBetweenCameraAndPersonHidesTheirPixels) {
   // Given a person 5 m away and a pole between them and the camera covering the left half of the body
   const PersonState person = standingAt(5.0);
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.2}, {5.0, 0.0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.0, 1.2}, {5.0, 0.0, 1.0});
   const ObstacleWorld pole = world({Box{{2.4, -0.05, 0.0}, {2.6, 0.4, 3.0}}});
   const ObstacleWorld empty = world({});
 
@@ -192,7 +180,7 @@ TEST_F(SceneRendererTest, AnObstacleBetweenCameraAndPersonHidesTheirPixels) {
 
 TEST_F(SceneRendererTest, NothingBehindTheCameraIsDrawn) {
   // Given a camera looking along +x, and a wall, a tree and a person all behind it (x < 0)
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.5}, {10.0, 0.0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.0, 1.5}, {10.0, 0.0, 1.0});
   const PersonState person = standingAt(-3.0);
   const ObstacleWorld behind =
       world({Box{{-4.0, -5.0, 0.0}, {-3.8, 5.0, 4.0}}}, {Cylinder{{-2.0, 1.0}, 0.3, 0.0, 6.0}});
@@ -210,7 +198,7 @@ TEST_F(SceneRendererTest, RenderingIsDeterministic) {
   for (int i = 0; i < 30; ++i) trees.push_back(Cylinder{{3.0 + 0.9 * i, -6.0 + 0.43 * i}, 0.25, 0.0, 8.0});
   const ObstacleWorld forest = world({Box{{10.0, 3.0, 0.0}, {14.0, 9.0, 4.0}}}, std::move(trees));
   const PersonState person = standingAt(6.0);
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.5, 1.6}, {6.0, 0.0, 1.0});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.5, 1.6}, {6.0, 0.0, 1.0});
 
   // When it is rendered twice by one renderer and once by a second one built from the same photo
   const cv::Mat first = render(forest, T_WC, &person);
@@ -228,7 +216,7 @@ TEST_F(SceneRendererTest, RenderingIsDeterministic) {
 
 TEST_F(SceneRendererTest, EveryPartOfEveryPersonLandsOnItsProjectedBone) {
   // Given each person of the cast walking towards, away from and across a camera 5 m away
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.3, 1.6}, {5.0, 0.0, 0.9});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.3, 1.6}, {5.0, 0.0, 0.9});
   const CameraIntrinsics& k = renderer_->params().intrinsics;
   const ObstacleWorld empty = world({});
   const cv::Mat background = render(empty, T_WC, nullptr);
@@ -269,7 +257,7 @@ TEST_F(SceneRendererTest, EveryPartOfEveryPersonLandsOnItsProjectedBone) {
 
 TEST_F(SceneRendererTest, ArmsAndLegsMoveWithTheGait) {
   // Given a person walking across the image, at two instants a quarter stride apart
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.5}, {5.0, 0.0, 0.9});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.0, 1.5}, {5.0, 0.0, 0.9});
   const ObstacleWorld empty = world({});
   const cv::Mat background = render(empty, T_WC, nullptr);
   const PersonState early = walkingThrough(5.0, M_PI / 2.0, 0.0);
@@ -295,7 +283,7 @@ TEST_F(SceneRendererTest, ArmsAndLegsMoveWithTheGait) {
 }
 
 TEST_F(SceneRendererTest, APersonWalkingAwayShowsTheirBack) {
-  const Eigen::Isometry3d T_WC = lookAt({0.0, 0.0, 1.6}, {5.0, 0.0, 0.9});
+  const Eigen::Isometry3d T_WC = cameraLookingAt({0.0, 0.0, 1.6}, {5.0, 0.0, 0.9});
   const PersonState towards = walkingThrough(5.0, M_PI, 0.0);
   const PersonState away = walkingThrough(5.0, 0.0, 0.0);
   for (std::size_t who = 0; who < renderer_->castSize(); ++who) {

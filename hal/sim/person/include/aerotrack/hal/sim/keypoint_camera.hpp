@@ -60,6 +60,10 @@ rt::Status validate(const KeypointCameraParams& params);
 /// frame (the gimbal's, the body's): R_FLU_optical. Pure.
 Eigen::Matrix3d opticalAxesInFlu();
 
+/// A camera at eye_W looking at target_W with no roll (x right and level, y down, z forward; world z
+/// up): T_WC for renderings and tests. target_W must not be straight above or below eye_W. Pure.
+Eigen::Isometry3d cameraLookingAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W);
+
 /// True if the straight segment between the two world points (metres) is unobstructed. Supplied by
 /// the obstacle world; an empty function means nothing is ever obstructed.
 using LineOfSight = std::function<bool(const Eigen::Vector3d& from_W_m, const Eigen::Vector3d& to_W_m)>;
