@@ -15,8 +15,8 @@ namespace {
 constexpr int kTopLevel = BackgroundShader::kTopLevel;
 constexpr float kInvTexel0 = 20.0F;  // 1 / GroundTexture::kTexelM, exact in float
 // Texel coordinates are taken at most this far along a ray, so that they fit an int (near the
-// horizon the ray meets the ground arbitrarily far away): no pixel changes, since beyond ~100 m only
-// the top level (one texel) is read.
+// horizon the ray meets the ground arbitrarily far away). No pixel changes: a level finer than the
+// top one (a single texel) is read only within a few hundred metres (80 m from 1.5 m high).
 constexpr float kMaxGroundRayM = 1e6F;
 constexpr int kChunk = BackgroundShader::kChunk;
 
