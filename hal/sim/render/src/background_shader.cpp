@@ -111,20 +111,37 @@ RowRays BackgroundShader::rowRays(const Eigen::Matrix3d& R_WC, double fx_px, dou
 }
 
 void BackgroundShader::shadeSpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row) {
-  // Ground and sky alternate at most once along a row (z is linear in u), but the split is found by
-  // the per-pixel test so that each pixel gets what shadePixel() gives it.
-  const auto goesDown = [&](int u) { return rays.d0.z() + static_cast<float>(u) * rays.step.z() < 0.0F; };
-  int u = u0;
-  while (u < u1) {
-    const bool ground = above_ground_ && goesDown(u);
-    int end = u + 1;
-    while (end < u1 && (above_ground_ && goesDown(end)) == ground) ++end;
-    if (ground) {
-      groundSpan(rays, u, end, row);
+  if (u0 >= u1) return;
+  // A ray goes down where its z, d0.z + u step.z, is negative: monotonic in u (so in float too), so
+  // ground and sky split a span at most once, found by bisection with the same per-pixel test
+  // shadePixel() makes.
+  const auto ground = [&](int u) {
+    return above_ground_ && rays.d0.z() + static_cast<float>(u) * rays.step.z() < 0.0F;
+  };
+  const bool first = ground(u0);
+  if (ground(u1 - 1) == first) {
+    if (first) {
+      groundSpan(rays, u0, u1, row);
     } else {
-      skySpan(rays, u, end, row);
+      skySpan(rays, u0, u1, row);
     }
-    u = end;
+    return;
+  }
+  int lo = u0, hi = u1 - 1;  // ground(lo) == first, ground(hi) != first
+  while (hi - lo > 1) {
+    const int mid = lo + (hi - lo) / 2;
+    if (ground(mid) == first) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  if (first) {
+    groundSpan(rays, u0, hi, row);
+    skySpan(rays, hi, u1, row);
+  } else {
+    skySpan(rays, u0, hi, row);
+    groundSpan(rays, hi, u1, row);
   }
 }
 
@@ -165,14 +182,23 @@ void BackgroundShader::groundSpan(const RowRays& rays, int u0, int u1, cv::Vec3b
   }
 }
 
-void BackgroundShader::skySpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row) const {
-  for (int u = u0; u < u1; ++u) {
-    const Eigen::Vector3f d = rays.at(u);
-    const float dx = d.x(), dy = d.y(), dz = d.z();
-    // Sine of the elevation, from 0 at the horizon to 1 at the zenith.
-    const float s = maxF(0.0F, dz) / std::sqrt(dx * dx + dy * dy + dz * dz);
-    for (std::size_t ch = 0; ch < 3; ++ch)
-      row[u][static_cast<int>(ch)] = toByte(kSkyHorizonBgr[ch] + s * (kSkyZenith[ch] - kSkyHorizonBgr[ch]));
+void BackgroundShader::skySpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row) {
+  auto& elevation = buffers_.keep;  // the sky's pass needs one buffer: groundSpan's 1 - haze
+  const float d0x = rays.d0.x(), d0y = rays.d0.y(), d0z = rays.d0.z();
+  const float sx = rays.step.x(), sy = rays.step.y(), sz = rays.step.z();
+  for (int c0 = u0; c0 < u1; c0 += kChunk) {
+    const int n = std::min(kChunk, u1 - c0);
+    for (int k = 0; k < n; ++k) {  // vectorised: sine of the elevation, 0 at the horizon, 1 at the zenith
+      const auto u = static_cast<float>(c0 + k);
+      const float dx = d0x + u * sx, dy = d0y + u * sy, dz = d0z + u * sz;
+      elevation[static_cast<std::size_t>(k)] = maxF(0.0F, dz) / std::sqrt(dx * dx + dy * dy + dz * dz);
+    }
+    cv::Vec3b* out = row + c0;
+    for (int k = 0; k < n; ++k) {
+      const float s = elevation[static_cast<std::size_t>(k)];
+      for (std::size_t ch = 0; ch < 3; ++ch)
+        out[k][static_cast<int>(ch)] = toByte(kSkyHorizonBgr[ch] + s * (kSkyZenith[ch] - kSkyHorizonBgr[ch]));
+    }
   }
 }
 

@@ -61,7 +61,7 @@ class BackgroundShader {
 
  private:
   void groundSpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row);
-  void skySpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row) const;
+  void skySpan(const RowRays& rays, int u0, int u1, cv::Vec3b* row);
 
   const GroundTexture* ground_;
   bool above_ground_;
@@ -72,7 +72,7 @@ class BackgroundShader {
   float footprint_scale_;  ///< a ray's range times this: its pixel's footprint in level-0 texels
   float haze_m_;
   std::array<const float*, kTopLevel + 1> level_data_{};
-  /// groundSpan's per-pass buffers: level-0 texel coordinates, the level, 1 - haze.
+  /// The spans' per-pass buffers: level-0 texel coordinates, the level, 1 - haze (or the sky's elevation).
   struct {
     std::array<int, kChunk> tx, ty, level;
     std::array<float, kChunk> keep;
