@@ -38,6 +38,17 @@ RUN --mount=type=secret,id=build-ca,mode=0444 \
  && scripts/models/provision.sh \
  && rm -rf .cache /var/lib/apt/lists/* /etc/apt/apt.conf.d/99build-ca
 
+# Foxglove's message schemas for the flight log (npm package -> .proto files in .cache/foxglove/proto,
+# tools/foxglove/provision.sh), compiled into the binary by protoc; their own layer too.
+COPY tools/foxglove/package.json tools/foxglove/package-lock.json tools/foxglove/generate_protos.js \
+     tools/foxglove/provision.sh /src/tools/foxglove/
+RUN --mount=type=secret,id=build-ca,mode=0444 \
+    if [ -s /run/secrets/build-ca ]; then \
+      export NODE_EXTRA_CA_CERTS=/run/secrets/build-ca; \
+      echo 'Acquire::https::CAInfo "/run/secrets/build-ca";' > /etc/apt/apt.conf.d/99build-ca; fi \
+ && tools/foxglove/provision.sh \
+ && rm -rf tools/foxglove/node_modules /var/lib/apt/lists/* /etc/apt/apt.conf.d/99build-ca
+
 # Only what the binary is compiled from, so that an edit to docs, tests, tools or config/ does not
 # recompile it (config/ goes straight into the runtime stage).
 #

@@ -28,3 +28,5 @@ fi
 
 # The MoveNet models in models/: fetched and converted once, checked against their sha256 sums.
 scripts/models/provision.sh
+# Foxglove's message schemas (the flight log's .proto files) and the MCAP reader of the tests, from npm.
+tools/foxglove/provision.sh

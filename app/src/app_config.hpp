@@ -52,6 +52,10 @@ struct AppConfig {
   std::string record_dir;
   /// The run is on the lockstep executor: the recorder waits for the disk instead of dropping records.
   bool record_lossless = false;
+  /// `--mcap FILE` (run, sim, replay): the flight log for Foxglove (flight_log.hpp). Empty: none.
+  std::string mcap_path;
+  /// `--mcap-compression zstd|lz4|none`.
+  std::string mcap_compression = "zstd";
   VehicleConfig vehicle;
   hal::HalConfig hal;
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.

@@ -157,6 +157,7 @@ int replayCommand(const ParsedArgs& args) {
   }
   std::fputs(deviceHealthReport((*system)->devices(), end_ns - 1).c_str(), stdout);
   auto recorded = (*system)->finishRecording(realtime ? mono_clock.now() : replay_clock.now());
+  if (const std::string logged = (*system)->finishFlightLog(); !logged.empty()) std::printf("%s\n", logged.c_str());
   if (!recorded) return failCommand("replay", recorded.error().message);
   if (!recorded->empty()) std::printf("%s\n", recorded->c_str());
   if (stop.load()) return signals.stoppedStatus();

@@ -24,6 +24,8 @@ int runCommand(const ParsedArgs& args) {
   auto config = loadAppConfig(args.values.at("config"));
   if (config) {
     config->record_dir = args.valueOr("record", "");
+    config->mcap_path = args.valueOr("mcap", "");
+    config->mcap_compression = args.valueOr("mcap-compression", "zstd");
     config->hal.replay.start_at_first_use = true;  // a replayed device starts with the tasks, not at build
   }
   if (!config) {
@@ -126,6 +128,7 @@ int runCommand(const ParsedArgs& args) {
   } else if (!recorded->empty()) {
     std::printf("%s\n", recorded->c_str());
   }
+  if (const std::string logged = (*system)->finishFlightLog(); !logged.empty()) std::printf("%s\n", logged.c_str());
   if (signals.received() == 0) return 0;
   std::fprintf(stderr, "aerotrack run: stopped by signal %d\n", signals.received());
   return signals.stoppedStatus();  // systemd's unit lists 143 as a clean stop (SuccessExitStatus)

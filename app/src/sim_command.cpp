@@ -38,6 +38,8 @@ int simCommand(const ParsedArgs& args) {
   if (!config->hal.usesSim()) return failCommand("sim", config->source + ": hal: no device uses the sim backend");
   config->baseline_mode = mode == "baseline";
   config->record_dir = args.valueOr("record", "");
+  config->mcap_path = args.valueOr("mcap", "");
+  config->mcap_compression = args.valueOr("mcap-compression", "zstd");
   const std::string scenario_name = args.values.at("scenario");
   auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
   if (!trial) return failCommand("sim", trial.error().message);
@@ -134,6 +136,7 @@ int simCommand(const ParsedArgs& args) {
   } else if (!recorded->empty()) {
     std::printf("%s\n", recorded->c_str());
   }
+  if (const std::string logged = (*system)->finishFlightLog(); !logged.empty()) std::printf("%s\n", logged.c_str());
   std::printf("results: %s, %s%s%s\n", summary_path.c_str(), topdown_path.c_str(), strip_path.empty() ? "" : ", ",
               strip_path.c_str());
   return info.interrupted ? signals.stoppedStatus() : 0;

@@ -8,6 +8,7 @@
 #include "aerotrack/gimbal_control/gimbal_control_task.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
 #include "device_tasks.hpp"
+#include "flight_log.hpp"
 #include "paths.hpp"
 
 namespace aerotrack::app {
@@ -70,7 +71,39 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
     spec.budget_ms = 2.0;
     system->bindings_.push_back({spec, system->tasks_.back().get(), nullptr});
   }
+  if (!config.mcap_path.empty()) {
+    if (rt::Status s = system->addFlightLog(); !s) return s.error();
+  }
   return system;
+}
+
+System::~System() = default;
+
+rt::Status System::addFlightLog() {
+  FlightLogOptions options;
+  options.path = config_.mcap_path;
+  auto compression = hal::replay::parseMcapCompression(config_.mcap_compression);
+  if (!compression) return rt::Error{"--mcap-compression: " + compression.error().message};
+  options.writer.compression = *compression;
+  const estimation::GimbalCameraExtrinsics* extrinsics =
+      config_.estimation ? &config_.estimation->task.extrinsics : nullptr;
+  auto log = FlightLogTask::create(options, FlightLogSources{channels_, extrinsics, devices_.simulation});
+  if (!log) return rt::Error{"--mcap: " + log.error().message};
+  flight_log_ = log->get();
+  tasks_.push_back(std::move(log.value()));
+  rt::TaskSpec spec;
+  spec.name = "flight_log";
+  spec.rate_hz = kOutputRecordRateHz;  // as fast as the target task publishes (see kOutputRecordRateHz)
+  spec.budget_ms = 5.0;
+  spec.observer = true;
+  bindings_.push_back({spec, tasks_.back().get(), nullptr});
+  return rt::ok();
+}
+
+std::string System::finishFlightLog() {
+  if (flight_log_ == nullptr) return std::string();
+  (void)flight_log_->finish();  // an early stop is in the summary
+  return flight_log_->summary();
 }
 
 namespace {

@@ -31,6 +31,7 @@
 namespace aerotrack::app {
 
 class TargetTruthCheckTask;
+class FlightLogTask;
 
 /// With --record, the modules' outputs are polled this often: the target task's fastest (its 10 ms rate
 /// cap in the shipped tables; it runs on each detection and at 50 Hz), so estimates are seen as they come.
@@ -74,6 +75,9 @@ class System {
  public:
   /// Builds devices and tasks. scenario: the trial the sim backends fly (needed only if a
   /// backend is "sim"). start_ns: the executor clock's time at start (the simulation's epoch).
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+  ~System();
   static rt::Expected<std::unique_ptr<System>> build(const AppConfig& config,
                                                      const hal::sim::ScenarioInstance* scenario, rt::TimeNs start_ns);
 
@@ -84,6 +88,10 @@ class System {
   /// ("" without --record). The Error is a write failure; what was written before it stays readable.
   /// end_ns: the run's last instant (into the manifest, so a replay runs as long).
   rt::Expected<std::string> finishRecording(rt::TimeNs end_ns);
+  /// After the executor has stopped: closes the flight log (if any) and says what it holds, in one line
+  /// ("" without --mcap). A log that stopped early (a full disk) says so in that line; the Error is only
+  /// for a file that could not be closed.
+  std::string finishFlightLog();
   const AppConfig& config() const { return config_; }
   /// The real-time executor's options from the config, reporting missed deadlines to the supervisor.
   rt::RealtimeOptions realtimeOptions() {
@@ -134,6 +142,8 @@ class System {
   static TaskResult makeTrajectoryServerTask(System& s, const std::string& where);
 
   explicit System(AppConfig config) : config_(std::move(config)) {}
+  /// Adds the flight log (--mcap) after every other task, as an observer.
+  rt::Status addFlightLog();
   rt::Status addTask(const rt::TaskSpec& spec, std::size_t index);
   /// Rings doorbell on every write to the named channel (one triggered task per channel).
   rt::Status attachTrigger(const std::string& channel, rt::Doorbell* doorbell);
@@ -155,6 +165,7 @@ class System {
   const trajectory_server::TrajectoryServerTask* server_task_ = nullptr;
   const CameraStripTask* camera_strip_task_ = nullptr;
   OutputRecorderTask* output_recorder_ = nullptr;  // with --record
+  FlightLogTask* flight_log_ = nullptr;            // with --mcap
   rt::TimeNs start_ns_ = 0;                        ///< The executor clock's time at start.
   rt::MonotonicClock stats_clock_;                 ///< Measures work inside tasks for statistics only.
 };

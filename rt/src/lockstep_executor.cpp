@@ -148,7 +148,10 @@ void LockstepExecutor::publish(std::size_t i, TimeNs now_ns) {
   const TimeNs publish_ns = std::max(p.publish_ns, now_ns);
   if (publish_ns > clock_.now()) clock_.set(publish_ns);
   static_cast<OverlappedTask*>(tasks_.entries()[p.index].binding.task)->publish(publish_ns);
-  hashMix(trace_hash_, p.index + tasks_.entries().size());
+  // Numbered after the flight's tasks (observers, which come last, left out of the count).
+  std::size_t flight_tasks = 0;
+  for (const TaskSet::Entry& e : tasks_.entries()) flight_tasks += e.binding.spec.observer ? 0 : 1;
+  hashMix(trace_hash_, p.index + flight_tasks);
   hashMix(trace_hash_, static_cast<std::uint64_t>(publish_ns));
 }
 
@@ -159,6 +162,7 @@ void LockstepExecutor::runOne(std::size_t index, TimeNs now_ns) {
   const TimeNs begin = stats_clock_.now();
   entry.binding.task->step(now_ns);
   entry.stats->recordRun(stats_clock_.now() - begin);
+  if (entry.binding.spec.observer) return;  // not part of the flight: not in its trace
   hashMix(trace_hash_, index);
   hashMix(trace_hash_, static_cast<std::uint64_t>(now_ns));
   ++steps_;

@@ -67,7 +67,8 @@ class LockstepExecutor {
   Status runUntil(TimeNs end_ns, const std::atomic<bool>* stop = nullptr);
 
   /// FNV-1a hash over every (task index, release time) step so far, and every (task index + number of
-  /// tasks, publish time) publication of an overlapped task.
+  /// tasks, publish time) publication of an overlapped task. An observer's steps are left out (and
+  /// its index must come after every other task's, as the app adds it: the indices hashed stay the same).
   std::uint64_t traceHash() const { return trace_hash_; }
   std::uint64_t steps() const { return steps_; }
 

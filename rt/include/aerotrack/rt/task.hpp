@@ -37,6 +37,10 @@ struct TaskSpec {
   /// work runs on a second thread meanwhile. 0: it runs inline, outputs at the release. At most the
   /// period (a task delivers before it is released again) and at most budget_ms (the contract).
   double latency_ms = 0.0;
+  /// A recorder (the flight log, issue 24): it only reads channels, and nothing the flight's tasks do
+  /// depends on it. Lockstep leaves its steps out of the trace hash, so a run with an observer hashes
+  /// as the same run without it (set by the app, never by the task table).
+  bool observer = false;
 
   /// Released by a timer (alone, or as the fallback of a trigger).
   bool periodic() const { return rate_hz > 0.0; }

@@ -1,0 +1,287 @@
+// The flight log: see flight_log.hpp.
+#include "flight_log.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+
+#include "foxglove_messages.hpp"
+#include "system.hpp"
+
+namespace aerotrack::app {
+namespace {
+
+/// A JSON schema that accepts any object: what Foxglove needs to plot a JSON topic's fields.
+constexpr const char* kAnyObject = R"({"type":"object"})";
+
+std::span<const std::uint8_t> bytesOf(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+double seconds(rt::TimeNs ns) {
+  return rt::nsToSeconds(ns);
+}
+
+}  // namespace
+
+/// The MCAP channel of every topic (docs/flight-log.md).
+struct FlightLogTask::Topics {
+  std::uint16_t tf = 0;
+  std::uint16_t image = 0;
+  std::uint16_t calibration = 0;
+  std::uint16_t detections = 0;
+  std::uint16_t estimate = 0;
+  std::uint16_t estimate_values = 0;
+  std::uint16_t trajectory = 0;
+  std::uint16_t path = 0;
+  std::uint16_t map = 0;
+  std::uint16_t supervisor = 0;
+  std::uint16_t obstacles = 0;
+  std::uint16_t truth = 0;
+  std::uint16_t truth_values = 0;
+};
+
+FlightLogTask::FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources,
+                             std::unique_ptr<hal::replay::McapWriter> writer)
+    : options_(options), sources_(sources), writer_(std::move(writer)), topics_(std::make_unique<Topics>()) {
+  buffer_.reserve(1U << 16);
+  path_W_m_.reserve(256);
+}
+
+FlightLogTask::~FlightLogTask() = default;
+
+rt::Expected<std::unique_ptr<FlightLogTask>> FlightLogTask::create(const FlightLogOptions& options,
+                                                                   const FlightLogSources& sources) {
+  auto writer = hal::replay::McapWriter::open(options.path, options.writer);
+  if (!writer) return writer.error();
+  std::unique_ptr<FlightLogTask> task(new FlightLogTask(options, sources, std::move(writer.value())));
+  if (rt::Status s = task->registerTopics(); !s) return s.error();
+  return task;
+}
+
+rt::Status FlightLogTask::registerTopics() {
+  hal::replay::McapWriter& w = *writer_;
+  // One schema per protobuf type, registered once.
+  std::map<std::string, std::uint16_t> schemas;
+  auto proto = [&](const google::protobuf::Descriptor& d, const char* topic) -> rt::Expected<std::uint16_t> {
+    auto it = schemas.find(d.full_name());
+    if (it == schemas.end()) {
+      const std::string fds = foxglove_log::fileDescriptorSet(d);
+      auto id = w.addSchema(d.full_name(), "protobuf", bytesOf(fds));
+      if (!id) return id.error();
+      it = schemas.emplace(d.full_name(), *id).first;
+    }
+    return w.addChannel(it->second, topic, "protobuf");
+  };
+  auto json = [&](const char* name, const char* topic) -> rt::Expected<std::uint16_t> {
+    auto id = w.addSchema(name, "jsonschema", bytesOf(kAnyObject));
+    if (!id) return id.error();
+    return w.addChannel(*id, topic, "json");
+  };
+  const bool sim = sources_.simulation != nullptr;
+  const std::pair<std::uint16_t*, rt::Expected<std::uint16_t>> all[] = {
+      {&topics_->tf, proto(*foxglove::FrameTransforms::descriptor(), "/tf")},
+      {&topics_->image, proto(*foxglove::CompressedImage::descriptor(), "/gimbal_camera/image")},
+      {&topics_->calibration, proto(*foxglove::CameraCalibration::descriptor(), "/gimbal_camera/calibration")},
+      {&topics_->detections, proto(*foxglove::ImageAnnotations::descriptor(), "/gimbal_camera/detections")},
+      {&topics_->estimate, proto(*foxglove::SceneUpdate::descriptor(), "/person/estimate")},
+      {&topics_->estimate_values, json("aerotrack.TargetEstimate", "/person/estimate/values")},
+      {&topics_->trajectory, proto(*foxglove::SceneUpdate::descriptor(), "/planning/trajectory")},
+      {&topics_->path, proto(*foxglove::SceneUpdate::descriptor(), "/drone/path")},
+      {&topics_->map, proto(*foxglove::SceneUpdate::descriptor(), "/map/occupied")},
+      {&topics_->supervisor, json("aerotrack.SupervisorState", "/supervisor")},
+  };
+  for (const auto& [id, result] : all) {
+    if (!result) return result.error();
+    *id = *result;
+  }
+  if (sim) {
+    const std::pair<std::uint16_t*, rt::Expected<std::uint16_t>> truth[] = {
+        {&topics_->obstacles, proto(*foxglove::SceneUpdate::descriptor(), "/sim/obstacles")},
+        {&topics_->truth, proto(*foxglove::SceneUpdate::descriptor(), "/sim/truth")},
+        {&topics_->truth_values, json("aerotrack.SimTruth", "/sim/truth/values")},
+    };
+    for (const auto& [id, result] : truth) {
+      if (!result) return result.error();
+      *id = *result;
+    }
+  }
+  return rt::ok();
+}
+
+void FlightLogTask::write(std::uint16_t channel, rt::TimeNs stamp_ns, const google::protobuf::Message& message) {
+  const std::size_t size = message.ByteSizeLong();
+  if (buffer_.size() < size) buffer_.resize(size);
+  if (!message.SerializeToArray(buffer_.data(), static_cast<int>(size))) {
+    ++errors_;
+    return;
+  }
+  const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
+  if (!writer_->write(channel, t, t, std::span<const std::uint8_t>(buffer_.data(), size))) ++errors_;
+}
+
+void FlightLogTask::writeJson(std::uint16_t channel, rt::TimeNs stamp_ns, const std::string& json) {
+  const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
+  if (!writer_->write(channel, t, t, bytesOf(json))) ++errors_;
+}
+
+void FlightLogTask::step(rt::TimeNs now_ns) {
+  if (!writer_->failure()) return;  // the log has ended; the flight goes on
+  logOdometry(now_ns);
+  logCamera();
+  logEstimate();
+  logPlanning(now_ns);
+  logSim(now_ns);
+}
+
+void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
+  const auto odometry = sources_.channels.odometry.read();
+  if (!odometry || odometry->stamp_ns <= last_odometry_ns_) return;
+  last_odometry_ns_ = odometry->stamp_ns;
+  const auto gimbal = sources_.channels.gimbal_state.read();
+  const auto depth = sources_.channels.depth.read();
+  foxglove_log::fillTransforms(transforms_, *odometry, gimbal ? gimbal->angle_rad : 0.0, sources_.extrinsics,
+                               depth ? &depth->T_BC : nullptr);
+  write(topics_->tf, odometry->stamp_ns, transforms_);
+  // The flown path, a stretch at a time (each stretch starts where the last ended).
+  if (path_segment_start_ns_ < 0) path_segment_start_ns_ = odometry->stamp_ns;
+  path_W_m_.push_back(odometry->p_WB_m);
+  if (seconds(odometry->stamp_ns - path_segment_start_ns_) >= options_.path_segment_s && path_W_m_.size() > 1) {
+    foxglove_log::fillPathSegment(scene_, now_ns, path_segments_++, path_W_m_);
+    write(topics_->path, odometry->stamp_ns, scene_);
+    path_W_m_.erase(path_W_m_.begin(), path_W_m_.end() - 1);
+    path_segment_start_ns_ = odometry->stamp_ns;
+  }
+}
+
+void FlightLogTask::logCamera() {
+  // New values are told apart by address and time, without holding them (a held handle would pin a
+  // slot of its producer's pool).
+  if (const auto image = sources_.channels.images.read();
+      image && (image.get() != last_image_ || image->stamp_ns != last_image_ns_)) {
+    last_image_ = image.get();
+    last_image_ns_ = image->stamp_ns;
+    if (!image->bgr.empty() &&
+        cv::imencode(".jpg", image->bgr, jpeg_, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
+      image_.Clear();
+      foxglove_log::setTime(*image_.mutable_timestamp(), image->stamp_ns);
+      image_.set_frame_id("camera_optical");
+      image_.set_data(jpeg_.data(), jpeg_.size());
+      image_.set_format("jpeg");
+      write(topics_->image, image->stamp_ns, image_);
+    }
+  }
+  const auto detection = sources_.channels.newest_detection.read();
+  if (!detection || (detection->sequence == last_detection_sequence_ && detection->stamp_ns == last_detection_ns_) ||
+      detection->stamp_ns < last_detection_ns_) {
+    return;
+  }
+  last_detection_sequence_ = detection->sequence;
+  last_detection_ns_ = detection->stamp_ns;
+  // The followed person as the target task decided, when it has decided on this very frame.
+  hal::DetectionFrame frame = *detection;
+  if (const auto followed = sources_.channels.followed_detection.read();
+      followed && followed->stamp_ns == frame.stamp_ns && followed->sequence == frame.sequence) {
+    frame.target_index = followed->target_index;
+  }
+  foxglove_log::fillAnnotations(annotations_, frame, options_.keypoint_min_score);
+  write(topics_->detections, frame.stamp_ns, annotations_);
+  foxglove_log::fillCalibration(calibration_, frame.stamp_ns, frame.intrinsics);
+  write(topics_->calibration, frame.stamp_ns, calibration_);
+}
+
+void FlightLogTask::logEstimate() {
+  const auto estimate = sources_.channels.target.read();
+  if (!estimate || estimate->stamp_ns <= last_estimate_ns_) return;
+  last_estimate_ns_ = estimate->stamp_ns;
+  foxglove_log::fillEstimate(scene_, *estimate);
+  write(topics_->estimate, estimate->stamp_ns, scene_);
+  if (!estimate->initialised) return;
+  const Eigen::Matrix3d p_cov = estimate->covariance.topLeftCorner<3, 3>();
+  const nlohmann::json values = {{"lost", estimate->lost},
+                                 {"p_WT_m", {estimate->p_WT_m.x(), estimate->p_WT_m.y(), estimate->p_WT_m.z()}},
+                                 {"v_WT_mps", {estimate->v_WT_mps.x(), estimate->v_WT_mps.y(), estimate->v_WT_mps.z()}},
+                                 {"sigma_p_m", std::sqrt(std::max(0.0, p_cov.trace()))},
+                                 {"manoeuvre_probability", estimate->manoeuvre_probability},
+                                 {"measurement_age_s", seconds(estimate->stamp_ns - estimate->last_accepted_ns)},
+                                 {"other_people", estimate->other_count}};
+  writeJson(topics_->estimate_values, estimate->stamp_ns, values.dump());
+}
+
+void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
+  if (const auto trajectory = sources_.channels.trajectories.read();
+      trajectory && trajectory->trajectory &&
+      (trajectory->trajectory.get() != last_trajectory_ || trajectory->start_ns != last_trajectory_ns_)) {
+    last_trajectory_ = trajectory->trajectory.get();
+    last_trajectory_ns_ = trajectory->start_ns;
+    foxglove_log::fillTrajectory(scene_, now_ns, *trajectory, 40);
+    write(topics_->trajectory, now_ns, scene_);
+  }
+  if (now_ns >= next_map_ns_) {
+    if (const auto grid = sources_.channels.local_grid.read(); grid) {
+      next_map_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.map_rate_hz);
+      foxglove_log::fillOccupied(scene_, now_ns, *grid);
+      write(topics_->map, now_ns, scene_);
+    }
+  }
+  if (const auto state = sources_.channels.supervisor.read(); state && state->transitions != last_transitions_) {
+    last_transitions_ = state->transitions;
+    const nlohmann::json values = {{"mode", std::string(supervisor::toString(state->mode))},
+                                   {"reason", std::string(supervisor::toString(state->reason))},
+                                   {"since_s", seconds(state->since_ns)},
+                                   {"transitions", state->transitions}};
+    writeJson(topics_->supervisor, now_ns, values.dump());
+  }
+}
+
+void FlightLogTask::logSim(rt::TimeNs now_ns) {
+  if (!sources_.simulation) return;
+  if (!obstacles_written_) {
+    obstacles_written_ = true;
+    foxglove_log::fillObstacles(scene_, now_ns, sources_.simulation->obstacles());
+    write(topics_->obstacles, now_ns, scene_);
+  }
+  if (now_ns < next_truth_ns_) return;
+  const auto truth = sources_.simulation->truthOut().read();
+  if (!truth) return;
+  next_truth_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.truth_rate_hz);
+  foxglove_log::fillTruth(scene_, *truth);
+  write(topics_->truth, truth->stamp_ns, scene_);
+  nlohmann::json values = {
+      {"person_p_W_m", {truth->person_p_W_m.x(), truth->person_p_W_m.y(), truth->person_p_W_m.z()}},
+      {"drone_p_W_m", {truth->drone_p_W_m.x(), truth->drone_p_W_m.y(), truth->drone_p_W_m.z()}},
+      {"distance_m", (truth->drone_p_W_m - truth->person_p_W_m).head<2>().norm()}};
+  // The estimate's error against the truth, when there is a live estimate: what a plot wants most.
+  if (const auto estimate = sources_.channels.target.read(); estimate && estimate->initialised && !estimate->lost) {
+    values["estimate_error_m"] = (estimate->p_WT_m - truth->person_p_W_m).head<2>().norm();
+  }
+  writeJson(topics_->truth_values, truth->stamp_ns, values.dump());
+}
+
+rt::Status FlightLogTask::finish() {
+  if (!path_W_m_.empty() && path_W_m_.size() > 1 && writer_->failure()) {
+    foxglove_log::fillPathSegment(scene_, last_odometry_ns_, path_segments_++, path_W_m_);
+    write(topics_->path, last_odometry_ns_, scene_);
+  }
+  return writer_->close();
+}
+
+std::string FlightLogTask::summary() const {
+  const hal::replay::McapWriterStats& s = writer_->stats();
+  char line[512];
+  std::snprintf(line, sizeof(line), "flight log %s: %llu messages, %.1f MB in %llu chunks (%s)",
+                writer_->path().c_str(), static_cast<unsigned long long>(s.messages), s.bytes_written / 1e6,
+                static_cast<unsigned long long>(s.chunks),
+                hal::replay::mcapCompressionName(options_.writer.compression)[0] != '\0'
+                    ? hal::replay::mcapCompressionName(options_.writer.compression)
+                    : "uncompressed");
+  std::string out = line;
+  if (!writer_->failure()) {
+    out += "; stopped early, " + std::to_string(s.dropped) +
+           " messages not written: " + writer_->failure().error().message;
+  }
+  return out;
+}
+
+}  // namespace aerotrack::app

@@ -1,0 +1,72 @@
+// Our types as Foxglove's well-known messages (issue 24 item 1; the schemas: @foxglove/schemas,
+// compiled by hal/replay/foxglove). Pure functions: each fills a message it is given (cleared first)
+// from a value, so the flight log can reuse its messages. Frames (Foxglove's frame ids):
+//   world            the world, ENU (odometry's frame)
+//   base_link        the body, FLU
+//   gimbal           base_link turned by the gimbal's encoder angle about z, at its rotation centre
+//   camera           the gimbal camera, FLU (estimation's frame C)
+//   camera_optical   the gimbal camera, OpenCV axes (x right, y down, z forward): images and calibration
+//   depth_optical    the depth camera, OpenCV axes
+#pragma once
+
+#include <foxglove/CameraCalibration.pb.h>
+#include <foxglove/CompressedImage.pb.h>
+#include <foxglove/FrameTransforms.pb.h>
+#include <foxglove/ImageAnnotations.pb.h>
+#include <foxglove/SceneUpdate.pb.h>
+
+#include <span>
+#include <string>
+
+#include "aerotrack/estimation/camera_to_world.hpp"
+#include "aerotrack/estimation/target_estimator.hpp"
+#include "aerotrack/hal/sim/obstacle_world.hpp"
+#include "aerotrack/hal/sim/simulation.hpp"
+#include "aerotrack/hal/types.hpp"
+#include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/rt/time.hpp"
+#include "aerotrack/trajectory_server/trajectory.hpp"
+
+namespace aerotrack::app::foxglove_log {
+
+/// The serialized FileDescriptorSet of a message type and every file it imports: an MCAP protobuf
+/// schema's data.
+std::string fileDescriptorSet(const google::protobuf::Descriptor& descriptor);
+
+void setTime(google::protobuf::Timestamp& t, rt::TimeNs ns);
+
+/// world -> base_link from the odometry; base_link -> gimbal -> camera -> camera_optical when the
+/// extrinsics are known (the gimbal angle is the newest encoder reading); base_link -> depth_optical
+/// when T_BD is given.
+void fillTransforms(foxglove::FrameTransforms& m, const hal::OdometrySample& odometry, double gimbal_angle_rad,
+                    const estimation::GimbalCameraExtrinsics* extrinsics, const Eigen::Isometry3d* T_BD);
+
+/// The pinhole model of a frame's intrinsics (plumb_bob distortion), in camera_optical.
+void fillCalibration(foxglove::CameraCalibration& m, rt::TimeNs stamp_ns, const hal::CameraIntrinsics& intrinsics);
+
+/// Every person's skeleton (COCO limbs whose both ends scored >= min_score) and keypoints; the followed
+/// person (target_index) in green with a label, bystanders in orange.
+void fillAnnotations(foxglove::ImageAnnotations& m, const hal::DetectionFrame& frame, double min_score);
+
+/// The person's estimate: a sphere at p_WT, an ellipsoid of its 2-sigma position uncertainty, its
+/// velocity as an arrow (green while tracked, grey when lost), and the other people tracked (blue).
+void fillEstimate(foxglove::SceneUpdate& m, const estimation::TargetEstimate& estimate);
+
+/// The trajectory being flown from its start: a line through `samples` points.
+void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const trajectory_server::TimedTrajectory& t,
+                    int samples);
+
+/// A stretch of the flown path (entity "path/<index>", kept for the whole log).
+void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
+                     std::span<const Eigen::Vector3d> points_W_m);
+
+/// The occupied cells of the local grid's window, as cubes.
+void fillOccupied(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const mapping::LocalGrid& grid);
+
+/// The simulator's obstacles (ground truth), kept for the whole log.
+void fillObstacles(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const hal::sim::ObstacleWorld& world);
+
+/// The simulator's truth: the person (a yellow cylinder of a person's size) and the drone's true position.
+void fillTruth(foxglove::SceneUpdate& m, const hal::sim::TruthSnapshot& truth);
+
+}  // namespace aerotrack::app::foxglove_log
