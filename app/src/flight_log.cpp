@@ -31,9 +31,12 @@ struct FlightLogTask::Topics {
   std::uint16_t image = 0;
   std::uint16_t calibration = 0;
   std::uint16_t detections = 0;
+  std::uint16_t depth = 0;
   std::uint16_t estimate = 0;
   std::uint16_t estimate_values = 0;
   std::uint16_t trajectory = 0;
+  std::uint16_t plan = 0;
+  std::uint16_t plan_values = 0;
   std::uint16_t path = 0;
   std::uint16_t map = 0;
   std::uint16_t supervisor = 0;
@@ -85,9 +88,12 @@ rt::Status FlightLogTask::registerTopics() {
       {&topics_->image, proto(*foxglove::CompressedImage::descriptor(), "/gimbal_camera/image")},
       {&topics_->calibration, proto(*foxglove::CameraCalibration::descriptor(), "/gimbal_camera/calibration")},
       {&topics_->detections, proto(*foxglove::ImageAnnotations::descriptor(), "/gimbal_camera/detections")},
+      {&topics_->depth, proto(*foxglove::PointCloud::descriptor(), "/depth_camera/points")},
       {&topics_->estimate, proto(*foxglove::SceneUpdate::descriptor(), "/person/estimate")},
       {&topics_->estimate_values, json("aerotrack.TargetEstimate", "/person/estimate/values")},
       {&topics_->trajectory, proto(*foxglove::SceneUpdate::descriptor(), "/planning/trajectory")},
+      {&topics_->plan, proto(*foxglove::SceneUpdate::descriptor(), "/planning/plan")},
+      {&topics_->plan_values, json("aerotrack.PlanCycle", "/planning/cycle")},
       {&topics_->path, proto(*foxglove::SceneUpdate::descriptor(), "/drone/path")},
       {&topics_->map, proto(*foxglove::SceneUpdate::descriptor(), "/map/occupied")},
       {&topics_->supervisor, json("aerotrack.SupervisorState", "/supervisor")},
@@ -130,6 +136,7 @@ void FlightLogTask::step(rt::TimeNs now_ns) {
   if (!writer_->failure()) return;  // the log has ended; the flight goes on
   logOdometry(now_ns);
   logCamera();
+  logDepth(now_ns);
   logEstimate();
   logPlanning(now_ns);
   logSim(now_ns);
@@ -191,6 +198,16 @@ void FlightLogTask::logCamera() {
   write(topics_->calibration, frame.stamp_ns, calibration_);
 }
 
+void FlightLogTask::logDepth(rt::TimeNs now_ns) {
+  if (now_ns < next_depth_ns_) return;
+  const auto depth = sources_.channels.depth.read();
+  if (!depth || depth->stamp_ns <= last_depth_ns_) return;
+  last_depth_ns_ = depth->stamp_ns;
+  next_depth_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.depth_rate_hz);
+  foxglove_log::fillDepthPoints(points_, *depth, options_.depth_step_px);
+  write(topics_->depth, depth->stamp_ns, points_);
+}
+
 void FlightLogTask::logEstimate() {
   const auto estimate = sources_.channels.target.read();
   if (!estimate || estimate->stamp_ns <= last_estimate_ns_) return;
@@ -217,6 +234,22 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
     last_trajectory_ns_ = trajectory->start_ns;
     foxglove_log::fillTrajectory(scene_, now_ns, *trajectory, 40);
     write(topics_->trajectory, now_ns, scene_);
+  }
+  if (const auto plan = sources_.channels.plan_snapshots.read(); plan && plan->stamp_ns > last_plan_ns_) {
+    last_plan_ns_ = plan->stamp_ns;
+    foxglove_log::fillPlan(scene_, *plan);
+    write(topics_->plan, plan->stamp_ns, scene_);
+    const planning::PlanReport& r = plan->report;
+    const nlohmann::json values = {{"status", std::string(planning::toString(r.status))},
+                                   {"search", std::string(planning::toString(r.search_status))},
+                                   {"search_expansions", r.search_expansions},
+                                   {"corridor_boxes", r.corridor_boxes},
+                                   {"optimizer_iterations", r.optimizer_iterations},
+                                   {"check", std::string(planning::toString(r.check))},
+                                   {"repair_stretch", r.repair_stretch},
+                                   {"predicted", r.predicted},
+                                   {"cycle_ms", plan->cycle_ms}};
+    writeJson(topics_->plan_values, plan->stamp_ns, values.dump());
   }
   if (now_ns >= next_map_ns_) {
     if (const auto grid = sources_.channels.local_grid.read(); grid) {

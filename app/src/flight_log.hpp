@@ -19,6 +19,7 @@
 #include <foxglove/CompressedImage.pb.h>
 #include <foxglove/FrameTransforms.pb.h>
 #include <foxglove/ImageAnnotations.pb.h>
+#include <foxglove/PointCloud.pb.h>
 #include <foxglove/SceneUpdate.pb.h>
 
 #include <memory>
@@ -40,6 +41,8 @@ struct FlightLogOptions {
   hal::replay::McapWriterOptions writer;
   double map_rate_hz = 1.0;         ///< The occupied cells (a whole window each time).
   double truth_rate_hz = 20.0;      ///< The simulator's truth.
+  double depth_rate_hz = 5.0;       ///< Depth images as point clouds.
+  int depth_step_px = 8;            ///< One depth pixel in this many along each axis.
   double path_segment_s = 1.0;      ///< The flown path is written in stretches this long.
   int jpeg_quality = 80;            ///< Gimbal-camera images (image mode, or a real camera).
   double keypoint_min_score = 0.2;  ///< Keypoints drawn in the image annotations.
@@ -74,6 +77,7 @@ class FlightLogTask final : public rt::Task {
   void writeJson(std::uint16_t channel, rt::TimeNs stamp_ns, const std::string& json);
   void logOdometry(rt::TimeNs now_ns);
   void logCamera();
+  void logDepth(rt::TimeNs now_ns);
   void logEstimate();
   void logPlanning(rt::TimeNs now_ns);
   void logSim(rt::TimeNs now_ns);
@@ -89,6 +93,7 @@ class FlightLogTask final : public rt::Task {
   foxglove::CameraCalibration calibration_;
   foxglove::ImageAnnotations annotations_;
   foxglove::SceneUpdate scene_;
+  foxglove::PointCloud points_;
   std::vector<Eigen::Vector3d> path_W_m_;
   int path_segments_ = 0;
   rt::TimeNs path_segment_start_ns_ = -1;
@@ -100,7 +105,10 @@ class FlightLogTask final : public rt::Task {
   rt::TimeNs last_image_ns_ = INT64_MIN;
   const void* last_trajectory_ = nullptr;
   rt::TimeNs last_trajectory_ns_ = INT64_MIN;
+  rt::TimeNs last_plan_ns_ = INT64_MIN;
   rt::TimeNs next_map_ns_ = INT64_MIN;
+  rt::TimeNs next_depth_ns_ = INT64_MIN;
+  rt::TimeNs last_depth_ns_ = INT64_MIN;
   rt::TimeNs next_truth_ns_ = INT64_MIN;
   std::uint64_t last_transitions_ = UINT64_MAX;
   bool obstacles_written_ = false;

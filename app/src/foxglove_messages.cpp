@@ -221,6 +221,29 @@ void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const traject
   }
 }
 
+void fillPlan(foxglove::SceneUpdate& m, const planning::PlanSnapshot& plan) {
+  m.Clear();
+  foxglove::SceneEntity& corridor = addEntity(m, plan.stamp_ns, "planning/corridor");
+  for (std::size_t i = 0; i < plan.box_count; ++i) {
+    foxglove::CubePrimitive& cube = *corridor.add_cubes();
+    setPose(*cube.mutable_pose(), 0.5 * (plan.box_lo_W_m[i] + plan.box_hi_W_m[i]));
+    setVector(*cube.mutable_size(), plan.box_hi_W_m[i] - plan.box_lo_W_m[i]);
+    setColor(*cube.mutable_color(), Rgba{0.4, 0.6, 1.0, 0.12});
+  }
+  auto polyline = [&](const char* id, std::span<const Eigen::Vector3d> points, const Rgba& colour) {
+    foxglove::SceneEntity& entity = addEntity(m, plan.stamp_ns, id);
+    if (points.size() < 2) return;
+    foxglove::LinePrimitive& line = *entity.add_lines();
+    line.set_type(foxglove::LinePrimitive::LINE_STRIP);
+    setPose(*line.mutable_pose(), Eigen::Vector3d::Zero());
+    line.set_thickness(0.04);
+    setColor(*line.mutable_color(), colour);
+    for (const Eigen::Vector3d& p : points) setPoint(*line.add_points(), p);
+  };
+  polyline("planning/search", std::span(plan.search_W_m.data(), plan.search_count), Rgba{1.0, 0.3, 0.9, 1.0});
+  polyline("person/prediction", std::span(plan.prediction_W_m.data(), plan.prediction_count), kYellow);
+}
+
 void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
                      std::span<const Eigen::Vector3d> points_W_m) {
   m.Clear();
@@ -231,6 +254,34 @@ void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
   line.set_thickness(0.04);
   setColor(*line.mutable_color(), Rgba{0.3, 0.9, 0.3, 1.0});
   for (const Eigen::Vector3d& p : points_W_m) setPoint(*line.add_points(), p);
+}
+
+void fillDepthPoints(foxglove::PointCloud& m, const hal::DepthFrame& frame, int step) {
+  m.Clear();
+  setTime(*m.mutable_timestamp(), frame.stamp_ns);
+  m.set_frame_id("depth_optical");
+  setPose(*m.mutable_pose(), Eigen::Vector3d::Zero());
+  m.set_point_stride(12);
+  const char* names[] = {"x", "y", "z"};
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    foxglove::PackedElementField& field = *m.add_fields();
+    field.set_name(names[i]);
+    field.set_offset(4 * i);
+    field.set_type(foxglove::PackedElementField::FLOAT32);
+  }
+  const hal::CameraIntrinsics& k = frame.intrinsics;
+  if (frame.depth_m.type() != CV_32FC1 || k.fx_px <= 0.0 || k.fy_px <= 0.0) return;
+  std::string& data = *m.mutable_data();
+  for (int v = 0; v < frame.depth_m.rows; v += step) {
+    const float* row = frame.depth_m.ptr<float>(v);
+    for (int u = 0; u < frame.depth_m.cols; u += step) {
+      const float z = row[u];
+      if (!(z > 0.0F) || !std::isfinite(z)) continue;
+      const float xyz[3] = {static_cast<float>((u - k.cx_px) / k.fx_px * static_cast<double>(z)),
+                            static_cast<float>((v - k.cy_px) / k.fy_px * static_cast<double>(z)), z};
+      data.append(reinterpret_cast<const char*>(xyz), sizeof(xyz));
+    }
+  }
 }
 
 void fillOccupied(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const mapping::LocalGrid& grid) {

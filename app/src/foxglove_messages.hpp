@@ -13,6 +13,7 @@
 #include <foxglove/CompressedImage.pb.h>
 #include <foxglove/FrameTransforms.pb.h>
 #include <foxglove/ImageAnnotations.pb.h>
+#include <foxglove/PointCloud.pb.h>
 #include <foxglove/SceneUpdate.pb.h>
 
 #include <span>
@@ -24,6 +25,7 @@
 #include "aerotrack/hal/sim/simulation.hpp"
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/planning/plan_snapshot.hpp"
 #include "aerotrack/rt/time.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
 
@@ -56,9 +58,17 @@ void fillEstimate(foxglove::SceneUpdate& m, const estimation::TargetEstimate& es
 void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const trajectory_server::TimedTrajectory& t,
                     int samples);
 
+/// A planning cycle: its corridor's boxes (entity "planning/corridor"), the kinodynamic search's path
+/// ("planning/search") and the person's Bezier prediction ("person/prediction").
+void fillPlan(foxglove::SceneUpdate& m, const planning::PlanSnapshot& plan);
+
 /// A stretch of the flown path (entity "path/<index>", kept for the whole log).
 void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
                      std::span<const Eigen::Vector3d> points_W_m);
+
+/// A depth image as points in depth_optical (x, y, z float32), one pixel in `step` along each axis;
+/// pixels without a return are left out.
+void fillDepthPoints(foxglove::PointCloud& m, const hal::DepthFrame& frame, int step);
 
 /// The occupied cells of the local grid's window, as cubes.
 void fillOccupied(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const mapping::LocalGrid& grid);

@@ -107,6 +107,8 @@ int replayCommand(const ParsedArgs& args) {
     config->record_dir = args.valueOr("record", "");
   }
   config->record_lossless = !realtime;
+  config->mcap_path = args.valueOr("mcap", "");
+  config->mcap_compression = args.valueOr("mcap-compression", "zstd");
 
   const rt::MonotonicClock mono_clock;
   rt::ManualClock replay_clock(manifest->start_ns);  // lockstep: on the recording's own clock

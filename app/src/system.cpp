@@ -279,7 +279,8 @@ System::TaskResult System::makePlanningTask(System& s, const std::string& where)
                                             c.trajectories,
                                             &c.supervisor,
                                             &c.planner_failures_in_a_row,
-                                            &c.refused_trajectory_start_ns};
+                                            &c.refused_trajectory_start_ns,
+                                            s.config_.mcap_path.empty() ? nullptr : &c.plan_snapshots};
   if (s.config_.baseline_mode) planner->setOcclusionAware(false);
   auto task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, s.stats_clock_);
   s.planning_task_ = task.get();

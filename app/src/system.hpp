@@ -67,6 +67,7 @@ struct Channels {
   rt::LatestSlot<hal::DetectionFrame> followed_detection;  ///< each frame the estimator took, with whom (target task)
   std::atomic<std::uint64_t> deadline_misses{0};           ///< periods skipped, fed by the real-time executor only
   std::atomic<bool> vehicle_link_lost{false};              ///< the vehicle link was up and is down (trajectory server)
+  rt::LatestSlot<planning::PlanSnapshot> plan_snapshots;   ///< What each planning cycle found (for the flight log)
   std::atomic<rt::TimeNs> refused_trajectory_start_ns{
       -1};  ///< the newest trajectory refused as late (trajectory server)
 };

@@ -4,7 +4,9 @@
 // messages read, and every message decoded with its own schema (protobuf through protobufjs from the
 // FileDescriptorSet in the file; JSON parsed). One line out: what it read, or the first disagreement
 // (status 1). With --json: {"messages":N,"chunks":C,"topics":{"/topic":{"schema":..,"encoding":..,"count":n}}}.
-// usage: node check_mcap.js FILE [--json]
+// With --cut: a log that stopped early (a full disk) and has no summary: it is streamed, every chunk's CRC
+// checked, and it must end after a whole record.
+// usage: node check_mcap.js FILE [--json | --cut]
 "use strict";
 const fs = require("fs");
 const { McapIndexedReader, McapStreamReader } = require("@mcap/core");
@@ -26,6 +28,7 @@ async function main() {
     fail(`${file}: ${e.message}`);
   }
   const decompressHandlers = await loadDecompressHandlers();
+  if (flag === "--cut") return checkCut(file, bytes, decompressHandlers);
   const readable = {
     size: async () => BigInt(bytes.length),
     read: async (offset, length) => bytes.subarray(Number(offset), Number(offset + length)),
@@ -91,6 +94,23 @@ async function main() {
     console.log(`mcap check: ${indexed} messages on ${channels} channels in ${reader.chunkIndexes.length} chunks; ` +
       "all decoded; indexes, CRCs and statistics agree");
   }
+}
+
+function checkCut(file, bytes, decompressHandlers) {
+  const stream = new McapStreamReader({ decompressHandlers, validateCrcs: true });
+  stream.append(bytes);
+  let messages = 0;
+  let chunks = 0;
+  let record;
+  while ((record = stream.nextRecord()) != undefined) {
+    if (record.type === "Message") ++messages;
+    if (record.type === "Footer") fail(`${file}: has a footer: not a cut log`);
+  }
+  if (stream.bytesRemaining() !== 0) fail(`${file}: ends inside a record (${stream.bytesRemaining()} bytes left over)`);
+  const reader = new McapStreamReader({ includeChunks: true, decompressHandlers });
+  reader.append(bytes);
+  while ((record = reader.nextRecord()) != undefined) if (record.type === "Chunk") ++chunks;
+  console.log(`mcap check: a cut log, ${messages} messages in ${chunks} whole chunks, every CRC valid`);
 }
 
 main().catch((e) => fail(e.message));

@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <lz4frame.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 #include <zstd.h>
@@ -141,8 +142,20 @@ McapWriter::~McapWriter() {
 
 rt::Expected<std::unique_ptr<McapWriter>> McapWriter::open(const std::string& path, const McapWriterOptions& options) {
   if (options.chunk_bytes == 0) return rt::Error{"mcap: " + path + ": chunk size 0"};
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // O_NONBLOCK: a FIFO without a reader must not hang the start (it is refused below, as any file that
+  // is not a regular one: the log seeks nothing, but a device or a pipe cannot hold a summary to read).
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NONBLOCK, 0644);
   if (fd < 0) return rt::Error{"mcap: " + path + ": cannot create: " + std::strerror(errno)};
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    return rt::Error{"mcap: " + path + ": not a regular file"};
+  }
+  if (::ftruncate(fd, 0) != 0) {
+    const int err = errno;
+    ::close(fd);
+    return rt::Error{"mcap: " + path + ": cannot truncate: " + std::strerror(err)};
+  }
   std::unique_ptr<McapWriter> writer(new McapWriter(path, fd, options));
   std::vector<std::uint8_t> head(kMagic.begin(), kMagic.end());
   Out out(head);

@@ -112,7 +112,14 @@ void PlanningTask::step(rt::TimeNs now_ns) {
   last_report_ = report;
   const bool ran = report.status != PlanStatus::kNoOdometry && report.status != PlanStatus::kNoMap &&
                    report.status != PlanStatus::kNoTarget && report.status != PlanStatus::kTakeOff;
-  if (ran) cycle_stats_.recordRun(stats_clock_.now() - begin_ns);
+  if (ran) {
+    const rt::DurationNs cycle_ns = stats_clock_.now() - begin_ns;
+    cycle_stats_.recordRun(cycle_ns);
+    if (channels_.snapshots != nullptr) {
+      takeSnapshot(planner_, report, now_ns, rt::nsToSeconds(cycle_ns) * 1e3, snapshot_);
+      channels_.snapshots->write(snapshot_);
+    }
+  }
 
   ++counts_[static_cast<std::size_t>(report.status)];
   if (report.search_status == SearchStatus::kPartial) ++search_partial_;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -112,9 +113,14 @@ TEST(McapWriter, AnUnwritablePathIsOneLineAtOpen) {
   const auto writer = McapWriter::open("/nonexistent/dir/log.mcap", McapWriterOptions{});
   ASSERT_FALSE(writer);
   EXPECT_EQ(writer.error().message, "mcap: /nonexistent/dir/log.mcap: cannot create: No such file or directory");
-  const auto full = McapWriter::open("/dev/full", McapWriterOptions{});
-  ASSERT_FALSE(full);
-  EXPECT_EQ(full.error().message, "mcap: /dev/full: write failed: No space left on device");
+  const auto device = McapWriter::open("/dev/full", McapWriterOptions{});
+  ASSERT_FALSE(device);
+  EXPECT_EQ(device.error().message, "mcap: /dev/full: not a regular file");
+  const TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  const auto fifo = McapWriter::open(dir.file("fifo"), McapWriterOptions{});  // no reader: must not hang
+  ASSERT_FALSE(fifo);
+  EXPECT_EQ(fifo.error().message, "mcap: " + dir.file("fifo") + ": cannot create: No such device or address");
   EXPECT_FALSE(parseMcapCompression("gzip"));
 }
 

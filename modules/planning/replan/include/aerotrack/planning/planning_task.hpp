@@ -28,6 +28,7 @@
 #include "aerotrack/estimation/target_estimator.hpp"
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/mapping/local_grid.hpp"
+#include "aerotrack/planning/plan_snapshot.hpp"
 #include "aerotrack/planning/tracking_planner.hpp"
 #include "aerotrack/rt/clock.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
@@ -59,6 +60,8 @@ struct PlanningChannels {
   /// The start time of the newest trajectory the server refused for taking over late (optional; -1: none).
   /// When it is the task's own newest, that one is not flown: the next plan starts from the odometry.
   const std::atomic<rt::TimeNs>* refused_start_ns = nullptr;
+  /// Where each cycle that ran the planner publishes what it found, for the flight log (optional).
+  rt::LatestSlot<PlanSnapshot>* snapshots = nullptr;
 };
 
 class PlanningTask final : public rt::Task {
@@ -152,6 +155,7 @@ class PlanningTask final : public rt::Task {
   const Eigen::VectorXd no_durations_ = Eigen::VectorXd(0);
   trajectory_server::TimedTrajectory published_;
   PlanReport last_report_;
+  PlanSnapshot snapshot_;  ///< Filled, then published (kept here: 3.5 kB is too much for the stack of every cycle).
   std::array<std::uint64_t, kPlanStatusCount> counts_{};
   std::uint64_t cycles_ = 0;
   std::uint64_t refused_by_server_ = 0;

@@ -207,6 +207,8 @@ class TrackingPlanner {
   const std::vector<Eigen::Vector3d>& polyline() const { return polyline_; }
   const Corridor& corridor() const { return corridor_; }
   const SearchPath& searchPath() const { return path_; }
+  /// The newest Bezier prediction of a live person (the one relocation flies along), if any.
+  const std::optional<prediction::TargetPrediction>& lastPrediction() const { return last_prediction_; }
 
   /// Evasion's candidate directions, evenly spaced round the horizontal plane (22.5 degrees apart: fine
   /// enough to find a gap between trees, few enough that scoring all costs a few hundred samples).
