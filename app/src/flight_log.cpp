@@ -40,6 +40,8 @@ struct FlightLogTask::Topics {
   std::uint16_t path = 0;
   std::uint16_t map = 0;
   std::uint16_t supervisor = 0;
+  std::uint16_t timing = 0;
+  std::uint16_t health = 0;
   std::uint16_t obstacles = 0;
   std::uint16_t truth = 0;
   std::uint16_t truth_values = 0;
@@ -97,6 +99,8 @@ rt::Status FlightLogTask::registerTopics() {
       {&topics_->path, proto(*foxglove::SceneUpdate::descriptor(), "/drone/path")},
       {&topics_->map, proto(*foxglove::SceneUpdate::descriptor(), "/map/occupied")},
       {&topics_->supervisor, json("aerotrack.SupervisorState", "/supervisor")},
+      {&topics_->timing, json("aerotrack.TaskTimings", "/timing")},
+      {&topics_->health, json("aerotrack.DeviceHealth", "/health")},
   };
   for (const auto& [id, result] : all) {
     if (!result) return result.error();
@@ -140,6 +144,7 @@ void FlightLogTask::step(rt::TimeNs now_ns) {
   logEstimate();
   logPlanning(now_ns);
   logSim(now_ns);
+  logStatus(now_ns);
 }
 
 void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
@@ -290,6 +295,38 @@ void FlightLogTask::logSim(rt::TimeNs now_ns) {
     values["estimate_error_m"] = (estimate->p_WT_m - truth->person_p_W_m).head<2>().norm();
   }
   writeJson(topics_->truth_values, truth->stamp_ns, values.dump());
+}
+
+void FlightLogTask::logStatus(rt::TimeNs now_ns) {
+  if (now_ns < next_status_ns_) return;
+  next_status_ns_ = now_ns + rt::secondsToNs(1.0);
+  if (!timings_.empty()) {
+    nlohmann::json tasks = nlohmann::json::object();
+    for (const rt::TaskSet::NamedStats& t : timings_) {
+      const rt::TimingSnapshot s = t.stats->snapshot();
+      tasks[t.name] = {{"runs", s.runs},         {"overruns", s.overruns}, {"missed_deadlines", s.missed_deadlines},
+                       {"p50_ms", s.p50_ms},     {"p99_ms", s.p99_ms},     {"max_ms", s.max_ms},
+                       {"mean_ms", s.mean_ms}};
+    }
+    writeJson(topics_->timing, now_ns, tasks.dump());
+  }
+  if (sources_.devices != nullptr) {
+    const hal::Devices& d = *sources_.devices;
+    nlohmann::json devices = nlohmann::json::object();
+    const std::pair<const char*, const hal::Device*> all[] = {{"gimbal_camera", d.gimbal_camera.get()},
+                                                               {"depth_camera", d.depth_camera.get()},
+                                                               {"gimbal", d.gimbal.get()},
+                                                               {"odometry", d.odometry.get()},
+                                                               {"vehicle_link", d.vehicle_link.get()}};
+    for (const auto& [name, device] : all) {
+      if (device == nullptr) continue;
+      const hal::DeviceHealth h = device->health(now_ns);
+      devices[name] = {{"backend", std::string(device->backend())},
+                       {"state", std::string(hal::toString(h.state))},
+                       {"detail", h.detail}};
+    }
+    writeJson(topics_->health, now_ns, devices.dump());
+  }
 }
 
 rt::Status FlightLogTask::finish() {

@@ -30,7 +30,9 @@
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/hal/replay/mcap_writer.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
+#include "aerotrack/hal/factory.hpp"
 #include "aerotrack/rt/task.hpp"
+#include "aerotrack/rt/task_set.hpp"
 
 namespace aerotrack::app {
 
@@ -53,6 +55,7 @@ struct FlightLogSources {
   const Channels& channels;
   const estimation::GimbalCameraExtrinsics* extrinsics = nullptr;  ///< The gimbal camera's mounting.
   std::shared_ptr<const hal::sim::Simulation> simulation;          ///< Truth and obstacles (sim only).
+  const hal::Devices* devices = nullptr;                           ///< Their health (health() is thread-safe).
 };
 
 class FlightLogTask final : public rt::Task {
@@ -62,6 +65,8 @@ class FlightLogTask final : public rt::Task {
                                                              const FlightLogSources& sources);
   ~FlightLogTask() override;
   void step(rt::TimeNs now_ns) override;
+  /// The executor's per-task statistics, to log as /timing (their snapshots may be taken from any thread).
+  void watchTimings(std::vector<rt::TaskSet::NamedStats> timings) { timings_ = std::move(timings); }
   /// Closes the file (summary and index); the log's first error, if any.
   rt::Status finish();
   /// One line: the file, its messages, size, chunks, and any error.
@@ -81,6 +86,7 @@ class FlightLogTask final : public rt::Task {
   void logEstimate();
   void logPlanning(rt::TimeNs now_ns);
   void logSim(rt::TimeNs now_ns);
+  void logStatus(rt::TimeNs now_ns);
 
   FlightLogOptions options_;
   FlightLogSources sources_;
@@ -112,6 +118,8 @@ class FlightLogTask final : public rt::Task {
   rt::TimeNs next_truth_ns_ = INT64_MIN;
   std::uint64_t last_transitions_ = UINT64_MAX;
   bool obstacles_written_ = false;
+  std::vector<rt::TaskSet::NamedStats> timings_;
+  rt::TimeNs next_status_ns_ = INT64_MIN;
   std::uint64_t errors_ = 0;  ///< Messages refused (the log failed, or one did not serialize).
 };
 

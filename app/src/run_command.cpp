@@ -71,6 +71,7 @@ int runCommand(const ParsedArgs& args) {
       return 1;
     }
   }
+  (*system)->watchTimings(executor.stats());
   if (const rt::Status s = applyTaskOverrun(**system, executor, start_ns); !s) {
     std::fprintf(stderr, "aerotrack run: %s\n", s.error().message.c_str());
     return 1;

@@ -12,9 +12,10 @@
 namespace aerotrack::app {
 namespace {
 
-rt::Status addAll(const System& system, auto& executor) {
+rt::Status addAll(System& system, auto& executor) {
   for (const rt::TaskBinding& b : system.bindings())
     if (rt::Status s = executor.add(b); !s) return s;
+  system.watchTimings(executor.stats());
   return rt::ok();
 }
 

@@ -87,17 +87,21 @@ rt::Status System::addFlightLog() {
   options.writer.compression = *compression;
   const estimation::GimbalCameraExtrinsics* extrinsics =
       config_.estimation ? &config_.estimation->task.extrinsics : nullptr;
-  auto log = FlightLogTask::create(options, FlightLogSources{channels_, extrinsics, devices_.simulation});
+  auto log = FlightLogTask::create(options, FlightLogSources{channels_, extrinsics, devices_.simulation, &devices_});
   if (!log) return rt::Error{"--mcap: " + log.error().message};
   flight_log_ = log->get();
   tasks_.push_back(std::move(log.value()));
   rt::TaskSpec spec;
   spec.name = "flight_log";
   spec.rate_hz = kOutputRecordRateHz;  // as fast as the target task publishes (see kOutputRecordRateHz)
-  spec.budget_ms = 5.0;
+  spec.budget_ms = 50.0;  // a full chunk's compression (zstd level 1, 1 MB) takes 5-15 ms of one step
   spec.observer = true;
   bindings_.push_back({spec, tasks_.back().get(), nullptr});
   return rt::ok();
+}
+
+void System::watchTimings(std::vector<rt::TaskSet::NamedStats> timings) {
+  if (flight_log_ != nullptr) flight_log_->watchTimings(std::move(timings));
 }
 
 std::string System::finishFlightLog() {

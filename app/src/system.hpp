@@ -93,6 +93,8 @@ class System {
   /// ("" without --mcap). A log that stopped early (a full disk) says so in that line; the Error is only
   /// for a file that could not be closed.
   std::string finishFlightLog();
+  /// Hands the executor's per-task statistics to the flight log (if any), once every task is added.
+  void watchTimings(std::vector<rt::TaskSet::NamedStats> timings);
   const AppConfig& config() const { return config_; }
   /// The real-time executor's options from the config, reporting missed deadlines to the supervisor.
   rt::RealtimeOptions realtimeOptions() {

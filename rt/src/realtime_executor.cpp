@@ -144,7 +144,9 @@ void RealtimeExecutor::runPeriodic(TaskSet::Entry& e, TimeNs first_release_ns) {
       // Overran into later periods: skip them and resynchronise to the next future release.
       const auto skipped = static_cast<std::uint64_t>((end_ns - release_ns) / e.period_ns) + 1;
       stats.addMissedDeadlines(skipped);
-      if (options_.deadline_misses != nullptr) options_.deadline_misses->fetch_add(skipped, std::memory_order_relaxed);
+      // An observer's misses are its own (a recorder starved by the flight): the flight is not told.
+      if (options_.deadline_misses != nullptr && !e.binding.spec.observer)
+        options_.deadline_misses->fetch_add(skipped, std::memory_order_relaxed);
       release_ns += static_cast<DurationNs>(skipped) * e.period_ns;
     }
   }
@@ -184,7 +186,7 @@ void RealtimeExecutor::runTriggered(TaskSet::Entry& e, TimeNs first_release_ns) 
       if (end_ns > fallback_ns) {
         const auto skipped = static_cast<std::uint64_t>((end_ns - fallback_ns) / e.period_ns) + 1;
         stats.addMissedDeadlines(skipped);
-        if (options_.deadline_misses != nullptr)
+        if (options_.deadline_misses != nullptr && !e.binding.spec.observer)
           options_.deadline_misses->fetch_add(skipped, std::memory_order_relaxed);
         fallback_ns += static_cast<DurationNs>(skipped) * e.period_ns;
       }

@@ -359,6 +359,36 @@ OverlapRun runOverlapped(double latency_ms, unsigned seed) {
   return {ex.traceHash(), watcher.seen, watcher.results, mapper.publish_times};
 }
 
+TEST(LockstepExecutor, GivenAnObserverAddedLastThenTheTraceHashIsTheRunsWithoutIt) {
+  // The overlapped pipeline of runOverlapped, with and without a 1 kHz observer reading its slot.
+  auto run = [](bool with_observer) {
+    ManualClock clock(0);
+    MonotonicClock stats;
+    LockstepExecutor ex(clock, stats);
+    LatestSlot<Result> slot;
+    SlowSquareTask mapper(slot, 3);
+    WatcherTask watcher(slot);
+    WatcherTask observer(slot);
+    TaskSpec spec = periodic("mapper", 10, 50);
+    spec.budget_ms = 40.0;
+    spec.latency_ms = 30.0;
+    EXPECT_TRUE(ex.add({spec, &mapper, nullptr}));
+    EXPECT_TRUE(ex.add({periodic("watcher", 1000, 10), &watcher, nullptr}));
+    if (with_observer) {
+      TaskSpec o = periodic("recorder", 1000, 0);
+      o.observer = true;
+      EXPECT_TRUE(ex.add({o, &observer, nullptr}));
+    }
+    EXPECT_TRUE(ex.runUntil(kNsPerSecond / 2));
+    EXPECT_EQ(observer.seen.size(), with_observer ? 501U : 0U);  // it ran, at every release
+    return std::make_pair(ex.traceHash(), watcher.seen);
+  };
+  const auto without = run(false);
+  const auto with = run(true);
+  EXPECT_EQ(without.first, with.first);
+  EXPECT_EQ(without.second, with.second);
+}
+
 TEST(LockstepExecutor, GivenAnOverlappedTaskThenItsResultsAppearExactlyItsLatencyAfterTheRelease) {
   const OverlapRun run = runOverlapped(30.0, 1);
   ASSERT_EQ(run.publish_times.size(), 10U);  // releases at 0, 100, ..., 900 ms (1000's is due after the end)
@@ -606,6 +636,25 @@ TEST(RealtimeExecutor, GivenTaskSlowerThanItsPeriodThenOverrunsAndMissedDeadline
   EXPECT_EQ(s.overruns, s.runs);
   EXPECT_GE(s.missed_deadlines, 2 * s.runs - 2);                    // each run spans at least two more periods
   EXPECT_EQ(misses_seen_by_supervisor.load(), s.missed_deadlines);  // the sink sees every one
+}
+
+TEST(RealtimeExecutor, GivenASlowObserverThenItsMissedDeadlinesAreItsOwnNotTheFlights) {
+  MonotonicClock clock;
+  std::atomic<std::uint64_t> misses_seen_by_supervisor{0};
+  RealtimeOptions options = unprivileged();
+  options.deadline_misses = &misses_seen_by_supervisor;
+  RealtimeExecutor ex(clock, options);
+  CountingTask slow(std::chrono::microseconds(12'000));  // a recorder starved: 12 ms at 200 Hz
+  TaskSpec spec = periodic("recorder", 200);
+  spec.budget_ms = 2.0;
+  spec.observer = true;
+  ASSERT_TRUE(ex.add({spec, &slow, nullptr}));
+  ASSERT_TRUE(ex.start());
+  std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  ex.requestStop();
+  ex.join();
+  EXPECT_GE(ex.stats()[0].stats->snapshot().missed_deadlines, 2U);  // counted in its own statistics
+  EXPECT_EQ(misses_seen_by_supervisor.load(), 0U);                  // the supervisor is not told
 }
 
 /// Records the time of every step (the executor's wake-up time), for the real-time executor.
