@@ -6,18 +6,12 @@
 
 #include <cmath>
 
+#include "flight_log_writer.hpp"
 #include "foxglove_messages.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
 namespace {
-
-/// A JSON schema that accepts any object: what Foxglove needs to plot a JSON topic's fields.
-constexpr const char* kAnyObject = R"({"type":"object"})";
-
-std::span<const std::uint8_t> bytesOf(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
 
 double seconds(rt::TimeNs ns) {
   return rt::nsToSeconds(ns);
@@ -25,32 +19,9 @@ double seconds(rt::TimeNs ns) {
 
 }  // namespace
 
-/// The MCAP channel of every topic (docs/flight-log.md).
-struct FlightLogTask::Topics {
-  std::uint16_t tf = 0;
-  std::uint16_t image = 0;
-  std::uint16_t calibration = 0;
-  std::uint16_t detections = 0;
-  std::uint16_t depth = 0;
-  std::uint16_t estimate = 0;
-  std::uint16_t estimate_values = 0;
-  std::uint16_t trajectory = 0;
-  std::uint16_t plan = 0;
-  std::uint16_t plan_values = 0;
-  std::uint16_t path = 0;
-  std::uint16_t map = 0;
-  std::uint16_t supervisor = 0;
-  std::uint16_t timing = 0;
-  std::uint16_t health = 0;
-  std::uint16_t obstacles = 0;
-  std::uint16_t truth = 0;
-  std::uint16_t truth_values = 0;
-};
-
 FlightLogTask::FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources,
-                             std::unique_ptr<hal::replay::McapWriter> writer)
-    : options_(options), sources_(sources), writer_(std::move(writer)), topics_(std::make_unique<Topics>()) {
-  buffer_.reserve(1U << 16);
+                             std::unique_ptr<FlightLogWriter> log)
+    : options_(options), sources_(sources), log_(std::move(log)) {
   path_W_m_.reserve(256);
 }
 
@@ -58,87 +29,15 @@ FlightLogTask::~FlightLogTask() = default;
 
 rt::Expected<std::unique_ptr<FlightLogTask>> FlightLogTask::create(const FlightLogOptions& options,
                                                                    const FlightLogSources& sources) {
-  auto writer = hal::replay::McapWriter::open(options.path, options.writer);
-  if (!writer) return writer.error();
-  std::unique_ptr<FlightLogTask> task(new FlightLogTask(options, sources, std::move(writer.value())));
-  if (rt::Status s = task->registerTopics(); !s) return s.error();
-  return task;
-}
-
-rt::Status FlightLogTask::registerTopics() {
-  hal::replay::McapWriter& w = *writer_;
-  // One schema per protobuf type, registered once.
-  std::map<std::string, std::uint16_t> schemas;
-  auto proto = [&](const google::protobuf::Descriptor& d, const char* topic) -> rt::Expected<std::uint16_t> {
-    auto it = schemas.find(d.full_name());
-    if (it == schemas.end()) {
-      const std::string fds = foxglove_log::fileDescriptorSet(d);
-      auto id = w.addSchema(d.full_name(), "protobuf", bytesOf(fds));
-      if (!id) return id.error();
-      it = schemas.emplace(d.full_name(), *id).first;
-    }
-    return w.addChannel(it->second, topic, "protobuf");
-  };
-  auto json = [&](const char* name, const char* topic) -> rt::Expected<std::uint16_t> {
-    auto id = w.addSchema(name, "jsonschema", bytesOf(kAnyObject));
-    if (!id) return id.error();
-    return w.addChannel(*id, topic, "json");
-  };
-  const bool sim = sources_.simulation != nullptr;
-  const std::pair<std::uint16_t*, rt::Expected<std::uint16_t>> all[] = {
-      {&topics_->tf, proto(*foxglove::FrameTransforms::descriptor(), "/tf")},
-      {&topics_->image, proto(*foxglove::CompressedImage::descriptor(), "/gimbal_camera/image")},
-      {&topics_->calibration, proto(*foxglove::CameraCalibration::descriptor(), "/gimbal_camera/calibration")},
-      {&topics_->detections, proto(*foxglove::ImageAnnotations::descriptor(), "/gimbal_camera/detections")},
-      {&topics_->depth, proto(*foxglove::PointCloud::descriptor(), "/depth_camera/points")},
-      {&topics_->estimate, proto(*foxglove::SceneUpdate::descriptor(), "/person/estimate")},
-      {&topics_->estimate_values, json("aerotrack.TargetEstimate", "/person/estimate/values")},
-      {&topics_->trajectory, proto(*foxglove::SceneUpdate::descriptor(), "/planning/trajectory")},
-      {&topics_->plan, proto(*foxglove::SceneUpdate::descriptor(), "/planning/plan")},
-      {&topics_->plan_values, json("aerotrack.PlanCycle", "/planning/cycle")},
-      {&topics_->path, proto(*foxglove::SceneUpdate::descriptor(), "/drone/path")},
-      {&topics_->map, proto(*foxglove::SceneUpdate::descriptor(), "/map/occupied")},
-      {&topics_->supervisor, json("aerotrack.SupervisorState", "/supervisor")},
-      {&topics_->timing, json("aerotrack.TaskTimings", "/timing")},
-      {&topics_->health, json("aerotrack.DeviceHealth", "/health")},
-  };
-  for (const auto& [id, result] : all) {
-    if (!result) return result.error();
-    *id = *result;
-  }
-  if (sim) {
-    const std::pair<std::uint16_t*, rt::Expected<std::uint16_t>> truth[] = {
-        {&topics_->obstacles, proto(*foxglove::SceneUpdate::descriptor(), "/sim/obstacles")},
-        {&topics_->truth, proto(*foxglove::SceneUpdate::descriptor(), "/sim/truth")},
-        {&topics_->truth_values, json("aerotrack.SimTruth", "/sim/truth/values")},
-    };
-    for (const auto& [id, result] : truth) {
-      if (!result) return result.error();
-      *id = *result;
-    }
-  }
-  return rt::ok();
-}
-
-void FlightLogTask::write(std::uint16_t channel, rt::TimeNs stamp_ns, const google::protobuf::Message& message) {
-  const std::size_t size = message.ByteSizeLong();
-  if (buffer_.size() < size) buffer_.resize(size);
-  if (!message.SerializeToArray(buffer_.data(), static_cast<int>(size))) {
-    ++errors_;
-    return;
-  }
-  const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
-  if (!writer_->write(channel, t, t, std::span<const std::uint8_t>(buffer_.data(), size))) ++errors_;
-}
-
-void FlightLogTask::writeJson(std::uint16_t channel, rt::TimeNs stamp_ns, const std::string& json) {
-  const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
-  if (!writer_->write(channel, t, t, bytesOf(json))) ++errors_;
+  auto log = FlightLogWriter::open(options.path, options.writer, sources.simulation != nullptr);
+  if (!log) return log.error();
+  return std::unique_ptr<FlightLogTask>(new FlightLogTask(options, sources, std::move(log.value())));
 }
 
 void FlightLogTask::step(rt::TimeNs now_ns) {
-  if (!writer_->failure()) return;  // the log has ended; the flight goes on
+  if (!log_->healthy()) return;  // the log has ended; the flight goes on
   logOdometry(now_ns);
+  logSetpoint();
   logCamera();
   logDepth(now_ns);
   logEstimate();
@@ -155,16 +54,23 @@ void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
   const auto depth = sources_.channels.depth.read();
   foxglove_log::fillTransforms(transforms_, *odometry, gimbal ? gimbal->angle_rad : 0.0, sources_.extrinsics,
                                depth ? &depth->T_BC : nullptr);
-  write(topics_->tf, odometry->stamp_ns, transforms_);
+  log_->write(Topic::kTf, odometry->stamp_ns, transforms_);
   // The flown path, a stretch at a time (each stretch starts where the last ended).
   if (path_segment_start_ns_ < 0) path_segment_start_ns_ = odometry->stamp_ns;
   path_W_m_.push_back(odometry->p_WB_m);
   if (seconds(odometry->stamp_ns - path_segment_start_ns_) >= options_.path_segment_s && path_W_m_.size() > 1) {
     foxglove_log::fillPathSegment(scene_, now_ns, path_segments_++, path_W_m_);
-    write(topics_->path, odometry->stamp_ns, scene_);
+    log_->write(Topic::kPath, odometry->stamp_ns, scene_);
     path_W_m_.erase(path_W_m_.begin(), path_W_m_.end() - 1);
     path_segment_start_ns_ = odometry->stamp_ns;
   }
+}
+
+void FlightLogTask::logSetpoint() {
+  const auto setpoint = sources_.channels.setpoints.read();
+  if (!setpoint || setpoint->stamp_ns <= last_setpoint_ns_) return;
+  last_setpoint_ns_ = setpoint->stamp_ns;
+  log_->writeJson(Topic::kSetpoint, setpoint->stamp_ns, foxglove_log::setpointJson(*setpoint));
 }
 
 void FlightLogTask::logCamera() {
@@ -181,7 +87,7 @@ void FlightLogTask::logCamera() {
       image_.set_frame_id("camera_optical");
       image_.set_data(jpeg_.data(), jpeg_.size());
       image_.set_format("jpeg");
-      write(topics_->image, image->stamp_ns, image_);
+      log_->write(Topic::kImage, image->stamp_ns, image_);
     }
   }
   const auto detection = sources_.channels.newest_detection.read();
@@ -198,9 +104,9 @@ void FlightLogTask::logCamera() {
     frame.target_index = followed->target_index;
   }
   foxglove_log::fillAnnotations(annotations_, frame, options_.keypoint_min_score);
-  write(topics_->detections, frame.stamp_ns, annotations_);
+  log_->write(Topic::kDetections, frame.stamp_ns, annotations_);
   foxglove_log::fillCalibration(calibration_, frame.stamp_ns, frame.intrinsics);
-  write(topics_->calibration, frame.stamp_ns, calibration_);
+  log_->write(Topic::kCalibration, frame.stamp_ns, calibration_);
 }
 
 void FlightLogTask::logDepth(rt::TimeNs now_ns) {
@@ -210,7 +116,7 @@ void FlightLogTask::logDepth(rt::TimeNs now_ns) {
   last_depth_ns_ = depth->stamp_ns;
   next_depth_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.depth_rate_hz);
   foxglove_log::fillDepthPoints(points_, *depth, options_.depth_step_px);
-  write(topics_->depth, depth->stamp_ns, points_);
+  log_->write(Topic::kDepth, depth->stamp_ns, points_);
 }
 
 void FlightLogTask::logEstimate() {
@@ -218,7 +124,7 @@ void FlightLogTask::logEstimate() {
   if (!estimate || estimate->stamp_ns <= last_estimate_ns_) return;
   last_estimate_ns_ = estimate->stamp_ns;
   foxglove_log::fillEstimate(scene_, *estimate);
-  write(topics_->estimate, estimate->stamp_ns, scene_);
+  log_->write(Topic::kEstimate, estimate->stamp_ns, scene_);
   if (!estimate->initialised) return;
   const Eigen::Matrix3d p_cov = estimate->covariance.topLeftCorner<3, 3>();
   const nlohmann::json values = {{"lost", estimate->lost},
@@ -228,7 +134,7 @@ void FlightLogTask::logEstimate() {
                                  {"manoeuvre_probability", estimate->manoeuvre_probability},
                                  {"measurement_age_s", seconds(estimate->stamp_ns - estimate->last_accepted_ns)},
                                  {"other_people", estimate->other_count}};
-  writeJson(topics_->estimate_values, estimate->stamp_ns, values.dump());
+  log_->writeJson(Topic::kEstimateValues, estimate->stamp_ns, values.dump());
 }
 
 void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
@@ -238,12 +144,12 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
     last_trajectory_ = trajectory->trajectory.get();
     last_trajectory_ns_ = trajectory->start_ns;
     foxglove_log::fillTrajectory(scene_, now_ns, *trajectory, 40);
-    write(topics_->trajectory, now_ns, scene_);
+    log_->write(Topic::kTrajectory, now_ns, scene_);
   }
   if (const auto plan = sources_.channels.plan_snapshots.read(); plan && plan->stamp_ns > last_plan_ns_) {
     last_plan_ns_ = plan->stamp_ns;
     foxglove_log::fillPlan(scene_, *plan);
-    write(topics_->plan, plan->stamp_ns, scene_);
+    log_->write(Topic::kPlan, plan->stamp_ns, scene_);
     const planning::PlanReport& r = plan->report;
     const nlohmann::json values = {{"status", std::string(planning::toString(r.status))},
                                    {"search", std::string(planning::toString(r.search_status))},
@@ -254,13 +160,13 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
                                    {"repair_stretch", r.repair_stretch},
                                    {"predicted", r.predicted},
                                    {"cycle_ms", plan->cycle_ms}};
-    writeJson(topics_->plan_values, plan->stamp_ns, values.dump());
+    log_->writeJson(Topic::kPlanValues, plan->stamp_ns, values.dump());
   }
   if (now_ns >= next_map_ns_) {
     if (const auto grid = sources_.channels.local_grid.read(); grid) {
       next_map_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.map_rate_hz);
       foxglove_log::fillOccupied(scene_, now_ns, *grid);
-      write(topics_->map, now_ns, scene_);
+      log_->write(Topic::kMap, now_ns, scene_);
     }
   }
   if (const auto state = sources_.channels.supervisor.read(); state && state->transitions != last_transitions_) {
@@ -269,7 +175,7 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
                                    {"reason", std::string(supervisor::toString(state->reason))},
                                    {"since_s", seconds(state->since_ns)},
                                    {"transitions", state->transitions}};
-    writeJson(topics_->supervisor, now_ns, values.dump());
+    log_->writeJson(Topic::kSupervisor, now_ns, values.dump());
   }
 }
 
@@ -278,14 +184,14 @@ void FlightLogTask::logSim(rt::TimeNs now_ns) {
   if (!obstacles_written_) {
     obstacles_written_ = true;
     foxglove_log::fillObstacles(scene_, now_ns, sources_.simulation->obstacles());
-    write(topics_->obstacles, now_ns, scene_);
+    log_->write(Topic::kObstacles, now_ns, scene_);
   }
   if (now_ns < next_truth_ns_) return;
   const auto truth = sources_.simulation->truthOut().read();
   if (!truth) return;
   next_truth_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.truth_rate_hz);
   foxglove_log::fillTruth(scene_, *truth);
-  write(topics_->truth, truth->stamp_ns, scene_);
+  log_->write(Topic::kTruth, truth->stamp_ns, scene_);
   nlohmann::json values = {
       {"person_p_W_m", {truth->person_p_W_m.x(), truth->person_p_W_m.y(), truth->person_p_W_m.z()}},
       {"drone_p_W_m", {truth->drone_p_W_m.x(), truth->drone_p_W_m.y(), truth->drone_p_W_m.z()}},
@@ -294,7 +200,7 @@ void FlightLogTask::logSim(rt::TimeNs now_ns) {
   if (const auto estimate = sources_.channels.target.read(); estimate && estimate->initialised && !estimate->lost) {
     values["estimate_error_m"] = (estimate->p_WT_m - truth->person_p_W_m).head<2>().norm();
   }
-  writeJson(topics_->truth_values, truth->stamp_ns, values.dump());
+  log_->writeJson(Topic::kTruthValues, truth->stamp_ns, values.dump());
 }
 
 void FlightLogTask::logStatus(rt::TimeNs now_ns) {
@@ -308,7 +214,7 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
                        {"p50_ms", s.p50_ms},     {"p99_ms", s.p99_ms},     {"max_ms", s.max_ms},
                        {"mean_ms", s.mean_ms}};
     }
-    writeJson(topics_->timing, now_ns, tasks.dump());
+    log_->writeJson(Topic::kTiming, now_ns, tasks.dump());
   }
   if (sources_.devices != nullptr) {
     const hal::Devices& d = *sources_.devices;
@@ -325,33 +231,20 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
                        {"state", std::string(hal::toString(h.state))},
                        {"detail", h.detail}};
     }
-    writeJson(topics_->health, now_ns, devices.dump());
+    log_->writeJson(Topic::kHealth, now_ns, devices.dump());
   }
 }
 
 rt::Status FlightLogTask::finish() {
-  if (!path_W_m_.empty() && path_W_m_.size() > 1 && writer_->failure()) {
+  if (!path_W_m_.empty() && path_W_m_.size() > 1 && log_->healthy()) {
     foxglove_log::fillPathSegment(scene_, last_odometry_ns_, path_segments_++, path_W_m_);
-    write(topics_->path, last_odometry_ns_, scene_);
+    log_->write(Topic::kPath, last_odometry_ns_, scene_);
   }
-  return writer_->close();
+  return log_->close();
 }
 
 std::string FlightLogTask::summary() const {
-  const hal::replay::McapWriterStats& s = writer_->stats();
-  char line[512];
-  std::snprintf(line, sizeof(line), "flight log %s: %llu messages, %.1f MB in %llu chunks (%s)",
-                writer_->path().c_str(), static_cast<unsigned long long>(s.messages), s.bytes_written / 1e6,
-                static_cast<unsigned long long>(s.chunks),
-                hal::replay::mcapCompressionName(options_.writer.compression)[0] != '\0'
-                    ? hal::replay::mcapCompressionName(options_.writer.compression)
-                    : "uncompressed");
-  std::string out = line;
-  if (!writer_->failure()) {
-    out += "; stopped early, " + std::to_string(s.dropped) +
-           " messages not written: " + writer_->failure().error().message;
-  }
-  return out;
+  return log_->summary();
 }
 
 }  // namespace aerotrack::app

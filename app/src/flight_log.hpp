@@ -33,6 +33,7 @@
 #include "aerotrack/hal/factory.hpp"
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/rt/task_set.hpp"
+#include "flight_log_writer.hpp"
 
 namespace aerotrack::app {
 
@@ -71,16 +72,12 @@ class FlightLogTask final : public rt::Task {
   rt::Status finish();
   /// One line: the file, its messages, size, chunks, and any error.
   std::string summary() const;
-  const hal::replay::McapWriterStats& stats() const { return writer_->stats(); }
+  const hal::replay::McapWriterStats& stats() const { return log_->stats(); }
 
  private:
-  struct Topics;
-  FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources,
-                std::unique_ptr<hal::replay::McapWriter> writer);
-  rt::Status registerTopics();
-  void write(std::uint16_t channel, rt::TimeNs stamp_ns, const google::protobuf::Message& message);
-  void writeJson(std::uint16_t channel, rt::TimeNs stamp_ns, const std::string& json);
+  FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources, std::unique_ptr<FlightLogWriter> log);
   void logOdometry(rt::TimeNs now_ns);
+  void logSetpoint();
   void logCamera();
   void logDepth(rt::TimeNs now_ns);
   void logEstimate();
@@ -90,9 +87,7 @@ class FlightLogTask final : public rt::Task {
 
   FlightLogOptions options_;
   FlightLogSources sources_;
-  std::unique_ptr<hal::replay::McapWriter> writer_;
-  std::unique_ptr<Topics> topics_;
-  std::vector<std::uint8_t> buffer_;  ///< One serialized message (keeps its capacity).
+  std::unique_ptr<FlightLogWriter> log_;
   std::vector<std::uint8_t> jpeg_;
   foxglove::FrameTransforms transforms_;
   foxglove::CompressedImage image_;
@@ -112,6 +107,7 @@ class FlightLogTask final : public rt::Task {
   const void* last_trajectory_ = nullptr;
   rt::TimeNs last_trajectory_ns_ = INT64_MIN;
   rt::TimeNs last_plan_ns_ = INT64_MIN;
+  rt::TimeNs last_setpoint_ns_ = INT64_MIN;
   rt::TimeNs next_map_ns_ = INT64_MIN;
   rt::TimeNs next_depth_ns_ = INT64_MIN;
   rt::TimeNs last_depth_ns_ = INT64_MIN;
@@ -120,7 +116,6 @@ class FlightLogTask final : public rt::Task {
   bool obstacles_written_ = false;
   std::vector<rt::TaskSet::NamedStats> timings_;
   rt::TimeNs next_status_ns_ = INT64_MIN;
-  std::uint64_t errors_ = 0;  ///< Messages refused (the log failed, or one did not serialize).
 };
 
 }  // namespace aerotrack::app

@@ -3,6 +3,8 @@
 
 #include <google/protobuf/descriptor.pb.h>
 
+#include <nlohmann/json.hpp>
+
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <set>
@@ -342,6 +344,25 @@ void fillTruth(foxglove::SceneUpdate& m, const hal::sim::TruthSnapshot& truth) {
   setPose(*drone.mutable_pose(), truth.drone_p_W_m);
   setVector(*drone.mutable_size(), Eigen::Vector3d::Constant(0.3));
   setColor(*drone.mutable_color(), Rgba{1.0, 1.0, 1.0, 0.5});
+}
+
+std::string setpointJson(const hal::Setpoint& s) {
+  const auto v3 = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+  return nlohmann::json{{"p_W_m", v3(s.p_W_m)},
+                        {"v_W_mps", v3(s.v_W_mps)},
+                        {"a_W_mps2", v3(s.a_W_mps2)},
+                        {"speed_mps", s.v_W_mps.norm()},
+                        {"yaw_rad", s.yaw_rad},
+                        {"yaw_rate_radps", s.yaw_rate_radps}}
+      .dump();
+}
+
+std::string gimbalCommandJson(const hal::GimbalCommand& c) {
+  return nlohmann::json{{"mode", c.mode == hal::GimbalCommand::Mode::kRate ? "rate" : "angle"},
+                        {"rate_radps", c.rate_radps},
+                        {"angle_rad", c.angle_rad},
+                        {"max_rate_radps", c.max_rate_radps}}
+      .dump();
 }
 
 }  // namespace aerotrack::app::foxglove_log

@@ -32,7 +32,7 @@ missing=$(/usr/bin/python3 -c '
 import json, sys
 topics = json.loads(sys.argv[1])["topics"]
 want = ["/tf", "/gimbal_camera/calibration", "/gimbal_camera/detections", "/depth_camera/points", "/person/estimate",
-        "/person/estimate/values", "/planning/trajectory", "/planning/plan", "/planning/cycle", "/drone/path",
+        "/person/estimate/values", "/setpoint", "/timing", "/health", "/planning/trajectory", "/planning/plan", "/planning/cycle", "/drone/path",
         "/map/occupied", "/supervisor", "/sim/obstacles", "/sim/truth", "/sim/truth/values"]
 print(" ".join(t for t in want if topics.get(t, {}).get("count", 0) == 0))' "$counts")
 [[ -z $missing ]] || fail "topics without messages: $missing"
