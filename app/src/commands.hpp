@@ -12,6 +12,7 @@ int runCommand(const ParsedArgs& args);
 int simCommand(const ParsedArgs& args);
 int replayCommand(const ParsedArgs& args);
 int importVideoCommand(const ParsedArgs& args);
+int exportMcapCommand(const ParsedArgs& args);
 int benchCommand(const ParsedArgs& args);
 int detectCommand(const ParsedArgs& args);
 int datasetCommand(const ParsedArgs& args);

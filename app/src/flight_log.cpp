@@ -126,15 +126,7 @@ void FlightLogTask::logEstimate() {
   foxglove_log::fillEstimate(scene_, *estimate);
   log_->write(Topic::kEstimate, estimate->stamp_ns, scene_);
   if (!estimate->initialised) return;
-  const Eigen::Matrix3d p_cov = estimate->covariance.topLeftCorner<3, 3>();
-  const nlohmann::json values = {{"lost", estimate->lost},
-                                 {"p_WT_m", {estimate->p_WT_m.x(), estimate->p_WT_m.y(), estimate->p_WT_m.z()}},
-                                 {"v_WT_mps", {estimate->v_WT_mps.x(), estimate->v_WT_mps.y(), estimate->v_WT_mps.z()}},
-                                 {"sigma_p_m", std::sqrt(std::max(0.0, p_cov.trace()))},
-                                 {"manoeuvre_probability", estimate->manoeuvre_probability},
-                                 {"measurement_age_s", seconds(estimate->stamp_ns - estimate->last_accepted_ns)},
-                                 {"other_people", estimate->other_count}};
-  log_->writeJson(Topic::kEstimateValues, estimate->stamp_ns, values.dump());
+  log_->writeJson(Topic::kEstimateValues, estimate->stamp_ns, foxglove_log::estimateJson(*estimate));
 }
 
 void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
@@ -210,8 +202,8 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
     nlohmann::json tasks = nlohmann::json::object();
     for (const rt::TaskSet::NamedStats& t : timings_) {
       const rt::TimingSnapshot s = t.stats->snapshot();
-      tasks[t.name] = {{"runs", s.runs},         {"overruns", s.overruns}, {"missed_deadlines", s.missed_deadlines},
-                       {"p50_ms", s.p50_ms},     {"p99_ms", s.p99_ms},     {"max_ms", s.max_ms},
+      tasks[t.name] = {{"runs", s.runs},      {"overruns", s.overruns}, {"missed_deadlines", s.missed_deadlines},
+                       {"p50_ms", s.p50_ms},  {"p99_ms", s.p99_ms},     {"max_ms", s.max_ms},
                        {"mean_ms", s.mean_ms}};
     }
     log_->writeJson(Topic::kTiming, now_ns, tasks.dump());
@@ -220,10 +212,10 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
     const hal::Devices& d = *sources_.devices;
     nlohmann::json devices = nlohmann::json::object();
     const std::pair<const char*, const hal::Device*> all[] = {{"gimbal_camera", d.gimbal_camera.get()},
-                                                               {"depth_camera", d.depth_camera.get()},
-                                                               {"gimbal", d.gimbal.get()},
-                                                               {"odometry", d.odometry.get()},
-                                                               {"vehicle_link", d.vehicle_link.get()}};
+                                                              {"depth_camera", d.depth_camera.get()},
+                                                              {"gimbal", d.gimbal.get()},
+                                                              {"odometry", d.odometry.get()},
+                                                              {"vehicle_link", d.vehicle_link.get()}};
     for (const auto& [name, device] : all) {
       if (device == nullptr) continue;
       const hal::DeviceHealth h = device->health(now_ns);

@@ -28,9 +28,9 @@
 #include <vector>
 
 #include "aerotrack/estimation/camera_to_world.hpp"
+#include "aerotrack/hal/factory.hpp"
 #include "aerotrack/hal/replay/mcap_writer.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
-#include "aerotrack/hal/factory.hpp"
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/rt/task_set.hpp"
 #include "flight_log_writer.hpp"

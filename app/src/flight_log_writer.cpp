@@ -82,8 +82,8 @@ rt::Expected<std::unique_ptr<FlightLogWriter>> FlightLogWriter::open(const std::
     const std::string schema_name = spec.proto != nullptr ? spec.proto()->full_name() : spec.json_schema;
     auto it = schemas.find(schema_name);
     if (it == schemas.end()) {
-      const std::string data = spec.proto != nullptr ? foxglove_log::fileDescriptorSet(*spec.proto())
-                                                     : std::string(kAnyObject);
+      const std::string data =
+          spec.proto != nullptr ? foxglove_log::fileDescriptorSet(*spec.proto()) : std::string(kAnyObject);
       auto id = w.addSchema(schema_name, spec.proto != nullptr ? "protobuf" : "jsonschema", bytesOf(data));
       if (!id) return id.error();
       it = schemas.emplace(schema_name, *id).first;
@@ -121,12 +121,13 @@ std::string FlightLogWriter::summary() const {
   const char* compression = hal::replay::mcapCompressionName(compression_);
   char line[512];
   std::snprintf(line, sizeof(line), "flight log %s: %llu messages, %.1f MB in %llu chunks (%s)",
-                writer_->path().c_str(), static_cast<unsigned long long>(s.messages), static_cast<double>(s.bytes_written) / 1e6,
-                static_cast<unsigned long long>(s.chunks), compression[0] != '\0' ? compression : "uncompressed");
+                writer_->path().c_str(), static_cast<unsigned long long>(s.messages),
+                static_cast<double>(s.bytes_written) / 1e6, static_cast<unsigned long long>(s.chunks),
+                compression[0] != '\0' ? compression : "uncompressed");
   std::string out = line;
   if (!writer_->failure()) {
-    out += "; stopped early, " + std::to_string(s.dropped) + " messages not written: " +
-           writer_->failure().error().message;
+    out += "; stopped early, " + std::to_string(s.dropped) +
+           " messages not written: " + writer_->failure().error().message;
   }
   return out;
 }

@@ -346,14 +346,24 @@ void fillTruth(foxglove::SceneUpdate& m, const hal::sim::TruthSnapshot& truth) {
   setColor(*drone.mutable_color(), Rgba{1.0, 1.0, 1.0, 0.5});
 }
 
+std::string estimateJson(const estimation::TargetEstimate& e) {
+  const auto v3 = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+  return nlohmann::json{{"initialised", e.initialised},
+                        {"lost", e.lost},
+                        {"p_WT_m", v3(e.p_WT_m)},
+                        {"v_WT_mps", v3(e.v_WT_mps)},
+                        {"sigma_p_m", std::sqrt(std::max(0.0, e.covariance.topLeftCorner<3, 3>().trace()))},
+                        {"manoeuvre_probability", e.manoeuvre_probability},
+                        {"measurement_age_s", rt::nsToSeconds(e.stamp_ns - e.last_accepted_ns)},
+                        {"other_people", e.other_count}}
+      .dump();
+}
+
 std::string setpointJson(const hal::Setpoint& s) {
   const auto v3 = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
-  return nlohmann::json{{"p_W_m", v3(s.p_W_m)},
-                        {"v_W_mps", v3(s.v_W_mps)},
-                        {"a_W_mps2", v3(s.a_W_mps2)},
-                        {"speed_mps", s.v_W_mps.norm()},
-                        {"yaw_rad", s.yaw_rad},
-                        {"yaw_rate_radps", s.yaw_rate_radps}}
+  return nlohmann::json{{"p_W_m", v3(s.p_W_m)},       {"v_W_mps", v3(s.v_W_mps)},
+                        {"a_W_mps2", v3(s.a_W_mps2)}, {"speed_mps", s.v_W_mps.norm()},
+                        {"yaw_rad", s.yaw_rad},       {"yaw_rate_radps", s.yaw_rate_radps}}
       .dump();
 }
 

@@ -79,7 +79,9 @@ void fillObstacles(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const hal::sim
 /// The simulator's truth: the person (a yellow cylinder of a person's size) and the drone's true position.
 void fillTruth(foxglove::SceneUpdate& m, const hal::sim::TruthSnapshot& truth);
 
-/// JSON values for plots: a setpoint (p, v, a, yaw) and a gimbal command.
+/// JSON values for plots: an estimate (p, v, sigma, lost, age of its newest measurement, people tracked),
+/// a setpoint (p, v, a, yaw) and a gimbal command.
+std::string estimateJson(const estimation::TargetEstimate& estimate);
 std::string setpointJson(const hal::Setpoint& setpoint);
 std::string gimbalCommandJson(const hal::GimbalCommand& command);
 

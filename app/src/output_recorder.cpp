@@ -1,6 +1,7 @@
 // Output streams: see output_recorder.hpp.
 #include "output_recorder.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
@@ -46,6 +47,27 @@ std::vector<double> EstimateCodec::encode(const estimation::TargetEstimate& e) {
   for (int r = 0; r < 6; ++r)
     for (int k = r; k < 6; ++k) out.push_back(e.covariance(r, k));
   return out;
+}
+
+rt::Expected<estimation::TargetEstimate> EstimateCodec::decode(const hal::replay::CsvRecord& record,
+                                                               const std::string& path) {
+  const std::vector<double>& v = record.values;
+  if (v.size() != columns().size()) return rt::Error{path + ":" + std::to_string(record.line) + ": wrong field count"};
+  for (const double x : v) {
+    if (!std::isfinite(x)) return rt::Error{path + ":" + std::to_string(record.line) + ": a value is not finite"};
+  }
+  estimation::TargetEstimate e;
+  e.stamp_ns = record.stamp_ns;
+  e.initialised = v[0] != 0.0;
+  e.lost = v[1] != 0.0;
+  e.p_WT_m = {v[2], v[3], v[4]};
+  e.v_WT_mps = {v[5], v[6], v[7]};
+  e.last_accepted_ns = static_cast<rt::TimeNs>(v[8]);
+  std::size_t i = 9;
+  for (int r = 0; r < 6; ++r) {
+    for (int k = r; k < 6; ++k) e.covariance(r, k) = e.covariance(k, r) = v[i++];
+  }
+  return e;
 }
 
 const std::vector<std::string>& TrajectoryCodec::columns() {

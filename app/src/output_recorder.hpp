@@ -30,6 +30,9 @@ namespace aerotrack::app {
 struct EstimateCodec {
   static const std::vector<std::string>& columns();
   static std::vector<double> encode(const estimation::TargetEstimate& estimate);
+  /// A row of estimates.csv back (the bystander tracks it does not carry stay empty). Error naming the
+  /// file and line for a value out of range.
+  static rt::Expected<estimation::TargetEstimate> decode(const hal::replay::CsvRecord& record, const std::string& path);
 };
 
 /// outputs/trajectories.csv, stamped when this task saw it published: its start, its duration, the capture time of

@@ -94,7 +94,7 @@ rt::Status System::addFlightLog() {
   rt::TaskSpec spec;
   spec.name = "flight_log";
   spec.rate_hz = kOutputRecordRateHz;  // as fast as the target task publishes (see kOutputRecordRateHz)
-  spec.budget_ms = 50.0;  // a full chunk's compression (zstd level 1, 1 MB) takes 5-15 ms of one step
+  spec.budget_ms = 50.0;               // a full chunk's compression (zstd level 1, 1 MB) takes 5-15 ms of one step
   spec.observer = true;
   bindings_.push_back({spec, tasks_.back().get(), nullptr});
   return rt::ok();

@@ -2,7 +2,8 @@
 # The flight log end to end (issue 24): `sim --mcap` on a short scenario, read back by @mcap/core
 # (tools/foxglove/check_mcap.js: summary, indexes, CRCs, every message decoded with its own schema),
 # every topic the simulator can fill present; the lockstep trace hash and the flight's results the
-# same with and without the log; a replay of a recording logs too; and a disk that fills mid-run
+# same with and without the log; a replay of a recording logs too, and `export-mcap` turns the
+# recording into the same kind of file (a corrupt frame skipped and counted); and a disk that fills mid-run
 # (a file size limit) stops the log with a counted error while the flight goes on.
 # One line out: "flight log ok: ..." or what is wrong (status 1).
 # usage: tests/cli/flight_log.sh AEROTRACK_BINARY SCENARIO_YAML
@@ -43,6 +44,21 @@ messages=$(/usr/bin/python3 -c 'import json, sys; print(json.loads(sys.argv[1])[
 "$bin" replay "$work/rec" --mcap "$work/replay.mcap" > "$work/replay.log" 2>&1 || fail "replay --mcap failed: $(tail -1 "$work/replay.log")"
 node "$check" "$work/replay.mcap" > /dev/null || fail "replay log: $(node "$check" "$work/replay.mcap")"
 
+# The recording exported: the same file format, read back; a corrupt depth frame is skipped and counted.
+first_depth=$(ls "$work/rec/depth_camera/"*.png | head -1)
+printf 'not a png' > "$first_depth"
+"$bin" export-mcap "$work/rec" --out "$work/export.mcap" > "$work/export.log" 2>&1 || fail "export-mcap failed: $(tail -1 "$work/export.log")"
+grep -q 'flight log .*export.mcap: [1-9][0-9]* messages.*(0 bad rows and 1 unreadable frames skipped)' "$work/export.log" \
+  || fail "export-mcap did not count the corrupt frame: $(tail -1 "$work/export.log")"
+exported=$(node "$check" "$work/export.mcap" --json) || fail "export: $exported"
+missing=$(/usr/bin/python3 -c '
+import json, sys
+topics = json.loads(sys.argv[1])["topics"]
+want = ["/tf", "/gimbal_camera/detections", "/depth_camera/points", "/person/estimate", "/planning/trajectory",
+        "/drone/path", "/setpoint", "/gimbal/command"]
+print(" ".join(t for t in want if topics.get(t, {}).get("count", 0) == 0))' "$exported")
+[[ -z $missing ]] || fail "exported topics without messages: $missing"
+
 # A full disk mid-run (the file size limit: EFBIG after the first chunk): the flight ends as usual.
 (ulimit -f 400; trap '' XFSZ; "$bin" sim --scenario "$scenario" --out "$work/full" --mcap "$work/full.mcap") > "$work/full.log" 2>&1 \
   || fail "the flight failed with the disk full: $(tail -1 "$work/full.log")"
@@ -50,4 +66,4 @@ grep -q 'stopped early, [1-9][0-9]* messages not written: .*File too large' "$wo
   || fail "no counted error with the disk full: $(grep 'flight log' "$work/full.log")"
 node "$check" "$work/full.mcap" > /dev/null || node "$check" "$work/full.mcap" --cut > /dev/null \
   || fail "the log cut by a full disk does not read: $(node "$check" "$work/full.mcap" --cut)"
-echo "flight log ok: $messages messages read back by @mcap/core, trace hash unchanged, replay logged, full disk survived"
+echo "flight log ok: $messages messages read back by @mcap/core, trace hash unchanged, replay logged, recording exported, full disk survived"
