@@ -38,6 +38,21 @@ want = ["/tf", "/gimbal_camera/calibration", "/gimbal_camera/detections", "/dept
 print(" ".join(t for t in want if topics.get(t, {}).get("count", 0) == 0))' "$counts")
 [[ -z $missing ]] || fail "topics without messages: $missing"
 messages=$(/usr/bin/python3 -c 'import json, sys; print(json.loads(sys.argv[1])["messages"])' "$counts")
+# Every topic the Foxglove layout shows is one the log has.
+unknown=$(/usr/bin/python3 -c '
+import json, sys
+topics = json.loads(sys.argv[1])["topics"]
+layout = json.load(open(sys.argv[2]))
+named = set()
+for config in layout["configById"].values():
+    named.update(config.get("topics", {}))
+    mode = config.get("imageMode", {})
+    named.update(t for t in (mode.get("imageTopic"), mode.get("calibrationTopic")) if t)
+    named.update(mode.get("annotations", {}))
+    named.update(p["value"].split(".")[0] for p in config.get("paths", []))
+    if "topicPath" in config: named.add(config["topicPath"].split(".")[0])
+print(" ".join(sorted(t for t in named if t not in topics)))' "$counts" "$here/../../tools/foxglove/layout.json")
+[[ -z $unknown ]] || fail "tools/foxglove/layout.json shows topics the log lacks: $unknown"
 
 # A replay of a recording logs the same way.
 "$bin" sim --scenario "$scenario" --out "$work/recorded" --record "$work/rec" > "$work/record.log" 2>&1 || fail "sim --record failed"
