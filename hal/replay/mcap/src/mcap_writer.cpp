@@ -109,7 +109,8 @@ struct McapWriter::ChunkIndex {
   std::uint64_t end_ns;
   std::uint64_t offset;
   std::uint64_t length;
-  std::vector<std::pair<std::uint16_t, std::uint64_t>> index_offsets;
+  std::size_t first_offset;  ///< Its Message Index offsets: index_offsets_[first_offset, +offset_count).
+  std::size_t offset_count;
   std::uint64_t index_length;
   std::uint64_t compressed_size;
   std::uint64_t uncompressed_size;
@@ -134,6 +135,8 @@ McapWriter::McapWriter(std::string path, int fd, const McapWriterOptions& option
     : path_(std::move(path)), fd_(fd), options_(options), codec_(std::make_unique<Codec>()) {
   if (options_.compression == McapCompression::kZstd) codec_->zstd = ZSTD_createCCtx();
   chunk_.reserve(options_.chunk_bytes + (options_.chunk_bytes >> 2));
+  chunk_indexes_.reserve(1024);  // a GB of log at the default chunk size before the first growth
+  index_offsets_.reserve(8192);
 }
 
 McapWriter::~McapWriter() {
@@ -305,7 +308,8 @@ rt::Status McapWriter::flushChunk() {
   }
   // The chunk record and its Message Index records, handed to the file in one write: a failure
   // cuts the whole of it off.
-  ChunkIndex index{chunk_start_ns_, chunk_end_ns_, offset_, 0, {}, 0, records.size(), chunk_.size()};
+  ChunkIndex index{chunk_start_ns_, chunk_end_ns_, offset_, 0, index_offsets_.size(), 0, 0,
+                   records.size(),  chunk_.size()};
   scratch_.clear();
   Out out(scratch_);
   const char* compression = mcapCompressionName(options_.compression);
@@ -322,7 +326,8 @@ rt::Status McapWriter::flushChunk() {
   const std::size_t indexes_at = scratch_.size();
   for (ChannelInfo& channel : channels_) {
     if (channel.index.empty()) continue;
-    index.index_offsets.emplace_back(channel.id, offset_ + scratch_.size());
+    index_offsets_.emplace_back(channel.id, offset_ + scratch_.size());
+    ++index.offset_count;
     const std::size_t at = out.begin(kMessageIndex);
     out.put(channel.id);
     out.put(static_cast<std::uint32_t>(channel.index.size() * 16));
@@ -335,6 +340,7 @@ rt::Status McapWriter::flushChunk() {
   index.index_length = scratch_.size() - indexes_at;
   if (rt::Status s = writeFile(scratch_); !s) {
     // The chunk's messages are lost with it.
+    index_offsets_.resize(index.first_offset);
     for (ChannelInfo& channel : channels_) {
       stats_.dropped += channel.index.size();
       stats_.messages -= channel.index.size();
@@ -413,7 +419,8 @@ rt::Status McapWriter::close() {
     out.put(c.offset);
     out.put(c.length);
     map_at = out.beginLength();
-    for (const auto& [id, offset] : c.index_offsets) {
+    for (std::size_t k = c.first_offset; k < c.first_offset + c.offset_count; ++k) {
+      const auto& [id, offset] = index_offsets_[k];
       out.put(id);
       out.put(offset);
     }

@@ -12,8 +12,9 @@
 //
 // Cost: a message is copied into the open chunk's buffer and its (time, offset) appended to its
 // channel's index; both keep their capacity from chunk to chunk, so once the buffers have grown to a
-// chunk's size, writing allocates nothing (the chunk index list grows by one entry per chunk). A full
-// chunk is compressed with a reused context and handed to the file with write(2).
+// chunk's size, writing allocates nothing. What the summary needs of each chunk is appended to two flat
+// lists reserved for a thousand chunks (a GB at the default size), which grow by doubling beyond.
+// A full chunk is compressed with a reused context and handed to the file with write(2).
 //
 // Failures are values: a failed write (a full disk, EIO) or a file grown past max_file_bytes ends
 // the log. write() then returns the first error, every later message is counted as dropped, and the
@@ -115,6 +116,8 @@ class McapWriter {
   std::vector<std::pair<std::uint16_t, std::vector<std::uint8_t>>> schemas_;  ///< id, whole record
   std::vector<ChannelInfo> channels_;
   std::vector<ChunkIndex> chunk_indexes_;
+  std::vector<std::pair<std::uint16_t, std::uint64_t>>
+      index_offsets_;  ///< Every chunk's (channel, Message Index offset)
   std::unique_ptr<Codec> codec_;
   McapWriterStats stats_;
   rt::Status failure_;
