@@ -56,6 +56,8 @@ struct AppConfig {
   std::string mcap_path;
   /// `--mcap-compression zstd|lz4|none`.
   std::string mcap_compression = "zstd";
+  /// `--live PORT|HOST:PORT` (run, sim --realtime): the live view (live_view.hpp). Empty: no socket.
+  std::string live_address;
   VehicleConfig vehicle;
   hal::HalConfig hal;
   hal::SimConfig sim;  ///< Used when a backend is "sim"; `aerotrack sim` overrides scenario and seed.

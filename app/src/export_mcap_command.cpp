@@ -169,11 +169,12 @@ int exportMcapCommand(const ParsedArgs& args) {
   std::stable_sort(events.begin(), events.end(),
                    [](const Event& a, const Event& b) { return a.stamp_ns < b.stamp_ns; });
 
-  hal::replay::McapWriterOptions writer;
+  FlightLogTargets targets;
+  targets.mcap_path = out;
   auto compression = hal::replay::parseMcapCompression(args.valueOr("mcap-compression", "zstd"));
   if (!compression) return failCommand("export-mcap", "--mcap-compression: " + compression.error().message);
-  writer.compression = *compression;
-  auto log = FlightLogWriter::open(out, writer, /*simulation=*/false);
+  targets.mcap.compression = *compression;
+  auto log = FlightLogWriter::open(targets, /*simulation=*/false);
   if (!log) return failCommand("export-mcap", log.error().message);
   FlightLogWriter& w = **log;
 
@@ -195,7 +196,7 @@ int exportMcapCommand(const ParsedArgs& args) {
   const auto* setpoints = d.setpoints();
   const auto* gimbal_commands = d.gimbalCommands();
   for (const Event& e : events) {
-    if (!w.healthy()) break;
+    if (!w.active()) break;
     switch (e.source) {
       case Source::kOdometry: {
         if (odometry == nullptr) break;

@@ -29,13 +29,13 @@ FlightLogTask::~FlightLogTask() = default;
 
 rt::Expected<std::unique_ptr<FlightLogTask>> FlightLogTask::create(const FlightLogOptions& options,
                                                                    const FlightLogSources& sources) {
-  auto log = FlightLogWriter::open(options.path, options.writer, sources.simulation != nullptr);
+  auto log = FlightLogWriter::open(options.targets, sources.simulation != nullptr);
   if (!log) return log.error();
   return std::unique_ptr<FlightLogTask>(new FlightLogTask(options, sources, std::move(log.value())));
 }
 
 void FlightLogTask::step(rt::TimeNs now_ns) {
-  if (!log_->healthy()) return;  // the log has ended; the flight goes on
+  if (!log_->active()) return;  // the log has ended; the flight goes on
   logOdometry(now_ns);
   logSetpoint();
   logCamera();
@@ -161,8 +161,11 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
       log_->write(Topic::kMap, now_ns, scene_);
     }
   }
-  if (const auto state = sources_.channels.supervisor.read(); state && state->transitions != last_transitions_) {
+  // On every transition, and once a second (a plot, or a viewer joining late, sees the mode all along).
+  if (const auto state = sources_.channels.supervisor.read();
+      state && (state->transitions != last_transitions_ || now_ns >= next_supervisor_ns_)) {
     last_transitions_ = state->transitions;
+    next_supervisor_ns_ = now_ns + rt::secondsToNs(1.0);
     const nlohmann::json values = {{"mode", std::string(supervisor::toString(state->mode))},
                                    {"reason", std::string(supervisor::toString(state->reason))},
                                    {"since_s", seconds(state->since_ns)},
@@ -228,7 +231,7 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
 }
 
 rt::Status FlightLogTask::finish() {
-  if (!path_W_m_.empty() && path_W_m_.size() > 1 && log_->healthy()) {
+  if (!path_W_m_.empty() && path_W_m_.size() > 1 && log_->active()) {
     foxglove_log::fillPathSegment(scene_, last_odometry_ns_, path_segments_++, path_W_m_);
     log_->write(Topic::kPath, last_odometry_ns_, scene_);
   }

@@ -40,8 +40,7 @@ namespace aerotrack::app {
 struct Channels;
 
 struct FlightLogOptions {
-  std::string path;
-  hal::replay::McapWriterOptions writer;
+  FlightLogTargets targets;         ///< The file (--mcap), the live view (--live), or both.
   double map_rate_hz = 1.0;         ///< The occupied cells (a whole window each time).
   double truth_rate_hz = 20.0;      ///< The simulator's truth.
   double depth_rate_hz = 5.0;       ///< Depth images as point clouds.
@@ -72,7 +71,8 @@ class FlightLogTask final : public rt::Task {
   rt::Status finish();
   /// One line: the file, its messages, size, chunks, and any error.
   std::string summary() const;
-  const hal::replay::McapWriterStats& stats() const { return log_->stats(); }
+  hal::replay::McapWriterStats stats() const { return log_->stats(); }
+  const FlightLogWriter& log() const { return *log_; }
 
  private:
   FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources, std::unique_ptr<FlightLogWriter> log);
@@ -116,6 +116,7 @@ class FlightLogTask final : public rt::Task {
   bool obstacles_written_ = false;
   std::vector<rt::TaskSet::NamedStats> timings_;
   rt::TimeNs next_status_ns_ = INT64_MIN;
+  rt::TimeNs next_supervisor_ns_ = INT64_MIN;
 };
 
 }  // namespace aerotrack::app

@@ -68,67 +68,97 @@ const char* topicName(Topic topic) {
   return kTopics[static_cast<std::size_t>(topic)].name;
 }
 
-rt::Expected<std::unique_ptr<FlightLogWriter>> FlightLogWriter::open(const std::string& path,
-                                                                     const hal::replay::McapWriterOptions& options,
-                                                                     bool simulation) {
-  auto mcap = hal::replay::McapWriter::open(path, options);
-  if (!mcap) return mcap.error();
-  std::unique_ptr<FlightLogWriter> log(new FlightLogWriter(std::move(mcap.value()), options.compression));
+FlightLogWriter::~FlightLogWriter() = default;
+
+rt::Expected<std::unique_ptr<FlightLogWriter>> FlightLogWriter::open(const FlightLogTargets& targets, bool simulation) {
+  std::unique_ptr<FlightLogWriter> log(new FlightLogWriter());
   log->buffer_.reserve(1U << 16);
-  hal::replay::McapWriter& w = *log->writer_;
-  std::map<std::string, std::uint16_t> schemas;  // one schema per type, shared by its topics
+  log->compression_ = targets.mcap.compression;
+  if (!targets.mcap_path.empty()) {
+    auto mcap = hal::replay::McapWriter::open(targets.mcap_path, targets.mcap);
+    if (!mcap) return mcap.error();
+    log->mcap_ = std::move(mcap.value());
+  }
+  std::map<std::string, std::uint16_t> schemas;  // one schema per type in the file, shared by its topics
+  std::vector<live::Channel> live_channels;
   for (const TopicSpec& spec : kTopics) {
     if (spec.simulation_only && !simulation) continue;
-    const std::string schema_name = spec.proto != nullptr ? spec.proto()->full_name() : spec.json_schema;
-    auto it = schemas.find(schema_name);
-    if (it == schemas.end()) {
-      const std::string data =
-          spec.proto != nullptr ? foxglove_log::fileDescriptorSet(*spec.proto()) : std::string(kAnyObject);
-      auto id = w.addSchema(schema_name, spec.proto != nullptr ? "protobuf" : "jsonschema", bytesOf(data));
-      if (!id) return id.error();
-      it = schemas.emplace(schema_name, *id).first;
+    const bool proto = spec.proto != nullptr;
+    const std::string schema_name = proto ? spec.proto()->full_name() : spec.json_schema;
+    const std::string data = proto ? foxglove_log::fileDescriptorSet(*spec.proto()) : std::string(kAnyObject);
+    const auto index = static_cast<std::size_t>(spec.topic);
+    if (log->mcap_) {
+      hal::replay::McapWriter& w = *log->mcap_;
+      auto it = schemas.find(schema_name);
+      if (it == schemas.end()) {
+        auto id = w.addSchema(schema_name, proto ? "protobuf" : "jsonschema", bytesOf(data));
+        if (!id) return id.error();
+        it = schemas.emplace(schema_name, *id).first;
+      }
+      auto channel = w.addChannel(it->second, spec.name, proto ? "protobuf" : "json");
+      if (!channel) return channel.error();
+      log->channels_[index] = *channel;
     }
-    auto channel = w.addChannel(it->second, spec.name, spec.proto != nullptr ? "protobuf" : "json");
-    if (!channel) return channel.error();
-    log->channels_[static_cast<std::size_t>(spec.topic)] = *channel;
+    // The live view's channel ids are the topics' indices.
+    live_channels.push_back({static_cast<std::uint32_t>(index), spec.name, proto ? "protobuf" : "json", schema_name,
+                             data, proto ? "protobuf" : "jsonschema"});
+  }
+  if (!targets.live.address.empty()) {
+    auto live = LiveView::start(targets.live, std::move(live_channels));
+    if (!live) return live.error();
+    log->live_ = std::move(live.value());
   }
   return log;
 }
 
-void FlightLogWriter::write(Topic topic, rt::TimeNs stamp_ns, const google::protobuf::Message& message) {
-  const std::uint16_t channel = channels_[static_cast<std::size_t>(topic)];
-  if (channel == 0) return;
-  if (!healthy()) {
-    (void)writer_->write(channel, 0, 0, {});  // counted as dropped
-    return;
+void FlightLogWriter::put(Topic topic, rt::TimeNs stamp_ns, std::span<const std::uint8_t> bytes) {
+  const auto index = static_cast<std::size_t>(topic);
+  if (mcap_ && channels_[index] != 0) {
+    const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
+    (void)mcap_->write(channels_[index], t, t, bytes);  // after a failure: counted as dropped
   }
+  if (live_) live_->offer(static_cast<std::uint32_t>(index), stamp_ns, bytes);
+}
+
+void FlightLogWriter::write(Topic topic, rt::TimeNs stamp_ns, const google::protobuf::Message& message) {
+  if (!active()) return;
   const std::size_t size = message.ByteSizeLong();
   if (buffer_.size() < size) buffer_.resize(size);
   if (!message.SerializeToArray(buffer_.data(), static_cast<int>(size))) return;
-  const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
-  (void)writer_->write(channel, t, t, std::span<const std::uint8_t>(buffer_.data(), size));
+  put(topic, stamp_ns, std::span<const std::uint8_t>(buffer_.data(), size));
 }
 
 void FlightLogWriter::writeJson(Topic topic, rt::TimeNs stamp_ns, std::string_view json) {
-  const std::uint16_t channel = channels_[static_cast<std::size_t>(topic)];
-  if (channel == 0) return;
-  const auto t = static_cast<std::uint64_t>(std::max<rt::TimeNs>(stamp_ns, 0));
-  (void)writer_->write(channel, t, t, bytesOf(json));
+  if (!active()) return;
+  put(topic, stamp_ns, bytesOf(json));
+}
+
+rt::Status FlightLogWriter::close() {
+  if (live_) live_->stop();
+  return mcap_ ? mcap_->close() : rt::ok();
+}
+
+hal::replay::McapWriterStats FlightLogWriter::stats() const {
+  return mcap_ ? mcap_->stats() : hal::replay::McapWriterStats{};
 }
 
 std::string FlightLogWriter::summary() const {
-  const hal::replay::McapWriterStats& s = writer_->stats();
-  const char* compression = hal::replay::mcapCompressionName(compression_);
-  char line[512];
-  std::snprintf(line, sizeof(line), "flight log %s: %llu messages, %.1f MB in %llu chunks (%s)",
-                writer_->path().c_str(), static_cast<unsigned long long>(s.messages),
-                static_cast<double>(s.bytes_written) / 1e6, static_cast<unsigned long long>(s.chunks),
-                compression[0] != '\0' ? compression : "uncompressed");
-  std::string out = line;
-  if (!writer_->failure()) {
-    out += "; stopped early, " + std::to_string(s.dropped) +
-           " messages not written: " + writer_->failure().error().message;
+  std::string out;
+  if (mcap_) {
+    const hal::replay::McapWriterStats& s = mcap_->stats();
+    const char* compression = hal::replay::mcapCompressionName(compression_);
+    char line[512];
+    std::snprintf(line, sizeof(line), "flight log %s: %llu messages, %.1f MB in %llu chunks (%s)",
+                  mcap_->path().c_str(), static_cast<unsigned long long>(s.messages),
+                  static_cast<double>(s.bytes_written) / 1e6, static_cast<unsigned long long>(s.chunks),
+                  compression[0] != '\0' ? compression : "uncompressed");
+    out = line;
+    if (!mcap_->failure()) {
+      out += "; stopped early, " + std::to_string(s.dropped) +
+             " messages not written: " + mcap_->failure().error().message;
+    }
   }
+  if (live_) out += (out.empty() ? "" : "\n") + live_->summary();
   return out;
 }
 

@@ -16,6 +16,7 @@
 
 #include "aerotrack/hal/replay/mcap_writer.hpp"
 #include "aerotrack/rt/time.hpp"
+#include "live_view.hpp"
 
 namespace aerotrack::app {
 
@@ -46,32 +47,44 @@ enum class Topic : std::uint8_t {
 /// The topic's name in the file ("/tf", ...).
 const char* topicName(Topic topic);
 
+/// Where a flight log goes: an MCAP file, a live view, or both.
+struct FlightLogTargets {
+  std::string mcap_path;  ///< "": no file.
+  hal::replay::McapWriterOptions mcap;
+  LiveViewOptions live;  ///< live.address "": no live view.
+};
+
 class FlightLogWriter {
  public:
-  /// Creates the file and registers every topic (the simulation's only with `simulation`). Error: one
-  /// line (the path cannot be created, is not a regular file, ...).
-  static rt::Expected<std::unique_ptr<FlightLogWriter>> open(const std::string& path,
-                                                             const hal::replay::McapWriterOptions& options,
-                                                             bool simulation);
+  /// Creates the file and starts the live view (each if asked) and registers every topic (the
+  /// simulation's only with `simulation`). Error: one line (the path cannot be created, is not a regular
+  /// file, the port is in use, ...).
+  static rt::Expected<std::unique_ptr<FlightLogWriter>> open(const FlightLogTargets& targets, bool simulation);
+  ~FlightLogWriter();
 
-  /// Serializes and appends a message, log time = stamp. Failures are counted, never thrown.
+  /// Serializes a message once and appends it to the file (log time = stamp) and offers it to the live
+  /// view. Failures are counted, never thrown.
   void write(Topic topic, rt::TimeNs stamp_ns, const google::protobuf::Message& message);
   void writeJson(Topic topic, rt::TimeNs stamp_ns, std::string_view json);
-  /// False once the log has failed (a full disk): writing is then pointless.
-  bool healthy() const { return static_cast<bool>(writer_->failure()); }
-  /// Writes the summary and closes the file; the log's first error, if any.
-  rt::Status close() { return writer_->close(); }
-  /// One line: the file, its messages, size, chunks, and any early stop with its cause.
+  /// False once nothing is left to write to: the file has failed (a full disk) and there is no live view.
+  bool active() const { return live_ != nullptr || (mcap_ != nullptr && static_cast<bool>(mcap_->failure())); }
+  /// Writes the file's summary and closes it, stops the live view; the file's first error, if any.
+  rt::Status close();
+  /// One line per target: the file (messages, size, chunks, any early stop and its cause), the live view.
   std::string summary() const;
-  const hal::replay::McapWriterStats& stats() const { return writer_->stats(); }
+  /// The file's statistics (all zero without a file).
+  hal::replay::McapWriterStats stats() const;
+  /// The live view, if any (for its port and counters).
+  const LiveView* live() const { return live_.get(); }
 
  private:
-  FlightLogWriter(std::unique_ptr<hal::replay::McapWriter> writer, hal::replay::McapCompression compression)
-      : writer_(std::move(writer)), compression_(compression) {}
+  FlightLogWriter() = default;
+  void put(Topic topic, rt::TimeNs stamp_ns, std::span<const std::uint8_t> bytes);
 
-  std::unique_ptr<hal::replay::McapWriter> writer_;
-  hal::replay::McapCompression compression_;
-  std::array<std::uint16_t, static_cast<std::size_t>(Topic::kCount)> channels_{};  ///< 0: not registered
+  std::unique_ptr<hal::replay::McapWriter> mcap_;
+  hal::replay::McapCompression compression_ = hal::replay::McapCompression::kZstd;
+  std::unique_ptr<LiveView> live_;
+  std::array<std::uint16_t, static_cast<std::size_t>(Topic::kCount)> channels_{};  ///< 0: not in the file
   std::vector<std::uint8_t> buffer_;  ///< One serialized message (keeps its capacity).
 };
 

@@ -26,6 +26,7 @@ int runCommand(const ParsedArgs& args) {
     config->record_dir = args.valueOr("record", "");
     config->mcap_path = args.valueOr("mcap", "");
     config->mcap_compression = args.valueOr("mcap-compression", "zstd");
+    config->live_address = args.valueOr("live", "");
     config->hal.replay.start_at_first_use = true;  // a replayed device starts with the tasks, not at build
   }
   if (!config) {

@@ -40,6 +40,7 @@ int simCommand(const ParsedArgs& args) {
   config->record_dir = args.valueOr("record", "");
   config->mcap_path = args.valueOr("mcap", "");
   config->mcap_compression = args.valueOr("mcap-compression", "zstd");
+  config->live_address = args.valueOr("live", "");
   const std::string scenario_name = args.values.at("scenario");
   auto trial = loadTrial(scenario_name, static_cast<std::uint64_t>(*seed), speed);
   if (!trial) return failCommand("sim", trial.error().message);
@@ -58,6 +59,9 @@ int simCommand(const ParsedArgs& args) {
   if (ec) return failCommand("sim", out_dir + ": cannot create directory: " + ec.message());
 
   const bool realtime = args.flags.count("realtime") != 0;
+  if (args.has("live") && !realtime)
+    return failCommand("sim",
+                       "--live: needs --realtime (a lockstep run goes faster than real time: nothing to watch live)");
   config->record_lossless = !realtime;
   rt::ManualClock sim_clock(0);
   const rt::MonotonicClock mono_clock;

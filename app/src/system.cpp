@@ -71,7 +71,7 @@ rt::Expected<std::unique_ptr<System>> System::build(const AppConfig& config, con
     spec.budget_ms = 2.0;
     system->bindings_.push_back({spec, system->tasks_.back().get(), nullptr});
   }
-  if (!config.mcap_path.empty()) {
+  if (!config.mcap_path.empty() || !config.live_address.empty()) {
     if (rt::Status s = system->addFlightLog(); !s) return s.error();
   }
   return system;
@@ -81,14 +81,15 @@ System::~System() = default;
 
 rt::Status System::addFlightLog() {
   FlightLogOptions options;
-  options.path = config_.mcap_path;
+  options.targets.mcap_path = config_.mcap_path;
   auto compression = hal::replay::parseMcapCompression(config_.mcap_compression);
   if (!compression) return rt::Error{"--mcap-compression: " + compression.error().message};
-  options.writer.compression = *compression;
+  options.targets.mcap.compression = *compression;
+  options.targets.live.address = config_.live_address;
   const estimation::GimbalCameraExtrinsics* extrinsics =
       config_.estimation ? &config_.estimation->task.extrinsics : nullptr;
   auto log = FlightLogTask::create(options, FlightLogSources{channels_, extrinsics, devices_.simulation, &devices_});
-  if (!log) return rt::Error{"--mcap: " + log.error().message};
+  if (!log) return rt::Error{(log.error().message.rfind("--live", 0) == 0 ? "" : "--mcap: ") + log.error().message};
   flight_log_ = log->get();
   tasks_.push_back(std::move(log.value()));
   rt::TaskSpec spec;
@@ -276,15 +277,16 @@ System::TaskResult System::makePlanningTask(System& s, const std::string& where)
   auto planner = planning::TrackingPlanner::create(*s.config_.planning);
   if (!planner) return rt::Error{s.config_.source + ": " + planner.error().message};
   Channels& c = s.channels_;
-  const planning::PlanningChannels channels{c.odometry,
-                                            c.target,
-                                            c.local_grid,
-                                            c.octree,
-                                            c.trajectories,
-                                            &c.supervisor,
-                                            &c.planner_failures_in_a_row,
-                                            &c.refused_trajectory_start_ns,
-                                            s.config_.mcap_path.empty() ? nullptr : &c.plan_snapshots};
+  const planning::PlanningChannels channels{
+      c.odometry,
+      c.target,
+      c.local_grid,
+      c.octree,
+      c.trajectories,
+      &c.supervisor,
+      &c.planner_failures_in_a_row,
+      &c.refused_trajectory_start_ns,
+      s.config_.mcap_path.empty() && s.config_.live_address.empty() ? nullptr : &c.plan_snapshots};
   if (s.config_.baseline_mode) planner->setOcclusionAware(false);
   auto task = std::make_unique<planning::PlanningTask>(std::move(planner.value()), channels, s.stats_clock_);
   s.planning_task_ = task.get();

@@ -68,7 +68,9 @@ BENCHMARK(BM_McapWrite)
     ->Unit(benchmark::kMicrosecond);
 
 void BM_FlightLogMix(benchmark::State& state) {
-  auto log = app::FlightLogWriter::open(tempPath("bench_flight_log_mix.mcap"), {}, true);
+  app::FlightLogTargets targets;
+  targets.mcap_path = tempPath("bench_flight_log_mix.mcap");
+  auto log = app::FlightLogWriter::open(targets, true);
   if (!log) {
     state.SkipWithError(log.error().message.c_str());
     return;
