@@ -18,6 +18,7 @@
 #include <map>
 #include <thread>
 
+#include "bench_plot.hpp"
 #include "bench_stats.hpp"
 #include "commands.hpp"
 #include "signals.hpp"
@@ -241,6 +242,20 @@ int benchCommand(const ParsedArgs& args) {
   file << bench.dump(2) << "\n";
   file.close();
   if (!file) return failCommand("bench", out_dir + "/bench.json: write failed");
+  BenchPlotData plot;
+  plot.title = args.values.at("scenario") + ", " + std::to_string(per_trial.size()) + " trials" +
+               (args.has("speed") ? ", " + args.values.at("speed") + " m/s" : "") + " (" +
+               args.valueOr("mode", "proposed") + ")";
+  plot.verdict = "ours " + std::to_string(successes) + "/" + std::to_string(*trials) + " " +
+                 formatInterval(stats["success_ci95"]) + ", followed all the way " +
+                 std::to_string(stats["followed_all_the_way"].get<int>()) + " " +
+                 formatInterval(stats["followed_ci95"]);
+  for (const nlohmann::json& s : per_trial) {
+    plot.visible_ratio.push_back(s.value("visible_ratio", std::nan("")));
+    plot.distance_mean_m.push_back(s.value("distance_mean_m", std::nan("")));
+  }
+  if (const rt::Status drawn = writeBenchPlot(out_dir + "/bench.png", plot); !drawn)
+    return failCommand("bench", drawn.error().message);
   std::printf("%s: %d/%lld successful (%.0f%%), %d collisions, person visible %.0f%% on average; %s/bench.json\n",
               args.values.at("scenario").c_str(), successes, static_cast<long long>(*trials),
               100.0 * successes / static_cast<double>(*trials), collisions, 100.0 * visible_sum / n, out_dir.c_str());

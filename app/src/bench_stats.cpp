@@ -87,4 +87,13 @@ nlohmann::json aggregateSummaries(const std::vector<nlohmann::json>& summaries) 
   };
 }
 
+double quantileOf(std::vector<double> values, double q) {
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const double at = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const auto below = static_cast<std::size_t>(std::floor(at));
+  const std::size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (at - static_cast<double>(below)) * (values[above] - values[below]);
+}
+
 }  // namespace aerotrack::app

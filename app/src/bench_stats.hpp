@@ -31,4 +31,8 @@ ProportionInterval wilsonInterval(int successes, int n, double z = kZ95);
 /// person_top_speed_mps_max, person_mean_speed_mps_mean. Rates and intervals are over completed trials.
 nlohmann::json aggregateSummaries(const std::vector<nlohmann::json>& summaries);
 
+/// The q-quantile (0 <= q <= 1) of values, interpolated linearly between order statistics (R's type 7,
+/// numpy's default). NaN for no values.
+double quantileOf(std::vector<double> values, double q);
+
 }  // namespace aerotrack::app

@@ -29,8 +29,13 @@ CameraStripTask::CameraStripTask(std::shared_ptr<hal::sim::Simulation> sim, cons
   panels_.reserve(kMaxPanels);
 }
 
-cv::Mat CameraStripTask::cameraPanel(const hal::DetectionFrame* frame, double t_s) const {
+cv::Mat CameraStripTask::cameraPanel(const hal::DetectionFrame* frame, const hal::ImageFrame* image, double t_s) const {
   cv::Mat panel(kCameraH, kPanelW, CV_8UC3, cv::Scalar(215, 215, 215));
+  if (image != nullptr && !image->bgr.empty() && image->bgr.type() == CV_8UC3) {
+    cv::resize(image->bgr, panel, panel.size(), 0.0, 0.0, cv::INTER_AREA);
+    // The label on a light band, readable over any picture.
+    cv::rectangle(panel, cv::Rect(0, 0, kPanelW, 26), cv::Scalar(235, 235, 235), cv::FILLED);
+  }
   char text[96];
   if (frame == nullptr) {
     std::snprintf(text, sizeof(text), "t %.0f s: no detection yet", t_s);
@@ -41,7 +46,9 @@ cv::Mat CameraStripTask::cameraPanel(const hal::DetectionFrame* frame, double t_
   constexpr double kMinScore = 0.3;
   for (std::size_t i = 0; i < frame->person_count; ++i) {
     const bool followed = static_cast<int>(i) == frame->target_index;
-    const cv::Scalar colour = followed ? cv::Scalar(40, 170, 40) : cv::Scalar(90, 90, 90);
+    const cv::Scalar colour = followed           ? cv::Scalar(40, 200, 40)
+                              : image != nullptr ? cv::Scalar(0, 140, 255)
+                                                 : cv::Scalar(90, 90, 90);
     const auto& k = frame->persons[i].keypoints;
     const auto pt = [&](int j) {
       const hal::Keypoint2D& p = k[static_cast<std::size_t>(j)];
@@ -53,7 +60,8 @@ cv::Mat CameraStripTask::cameraPanel(const hal::DetectionFrame* frame, double t_
     }
   }
   cv::line(panel, {kPanelW / 2, 0}, {kPanelW / 2, kCameraH}, cv::Scalar(160, 160, 160), 1);  // image centre
-  std::snprintf(text, sizeof(text), "t %.0f s: camera, %zu person(s)%s", t_s, frame->person_count,
+  std::snprintf(text, sizeof(text), "t %.0f s: %s, %zu person(s)%s", t_s,
+                image != nullptr ? "the network's frame" : "camera", frame->person_count,
                 frame->target_index >= 0 ? "" : ", target not found");
   label(panel, text, {8, 18});
   return panel;
@@ -108,14 +116,30 @@ cv::Mat CameraStripTask::mapPanel(const hal::sim::TruthSnapshot& truth, rt::Time
 
 void CameraStripTask::step(rt::TimeNs now_ns) {
   if (next_ns_ < 0) next_ns_ = now_ns + every_ns_;
-  if (now_ns < next_ns_ || panels_.size() >= kMaxPanels) return;
-  next_ns_ += every_ns_;
+  if (panels_.size() >= kMaxPanels) return;
+  if (!waiting_) {
+    if (now_ns < next_ns_) return;
+    next_ns_ += every_ns_;
+    waiting_ = true;
+    give_up_ns_ = now_ns + rt::secondsToNs(1.0);
+    held_image_ = sources_.images != nullptr ? sources_.images->read() : nullptr;
+  }
+  const auto frame = sources_.detection.read();
+  // In image mode, the panel waits for the detection of the frame it holds (the detector's latency, a
+  // frame or two); a detector that skipped it moves the panel on to the newest frame.
+  const bool matched = held_image_ && frame && frame->stamp_ns == held_image_->stamp_ns;
+  if (held_image_ && !matched && now_ns < give_up_ns_) {
+    if (frame && frame->stamp_ns > held_image_->stamp_ns) held_image_ = sources_.images->read();
+    return;
+  }
+  waiting_ = false;
+  const hal::ImageFrameHandle image = matched ? std::move(held_image_) : nullptr;
+  held_image_.reset();
   const auto truth = sim_->truthOut().read();
   if (!truth) return;
-  const auto frame = sources_.detection.read();
   const double t_s = sim_->secondsSinceStart(now_ns);
   cv::Mat panel;
-  cv::vconcat(cameraPanel(frame ? &*frame : nullptr, t_s), mapPanel(*truth, now_ns), panel);
+  cv::vconcat(cameraPanel(frame ? &*frame : nullptr, image.get(), t_s), mapPanel(*truth, now_ns), panel);
   cv::rectangle(panel, cv::Rect(0, 0, panel.cols, panel.rows), cv::Scalar(120, 120, 120), 1);
   panels_.push_back(std::move(panel));
 }

@@ -245,16 +245,17 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
 }
 
 rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_path) {
+  constexpr int kHeaderPx = 50;  // two lines: the verdict, then the legend
   const hal::sim::ScenarioSpec& spec = sim.scenario().spec;
   const Eigen::Vector2d lo = spec.bounds_min_m.head<2>(), hi = spec.bounds_max_m.head<2>();
   const double scale = std::min(1400.0 / (hi.x() - lo.x()), 1000.0 / (hi.y() - lo.y()));  // px per metre
   const int margin = 40;
   const int width = static_cast<int>(std::ceil((hi.x() - lo.x()) * scale)) + 2 * margin;
-  const int height = static_cast<int>(std::ceil((hi.y() - lo.y()) * scale)) + 2 * margin + 30;
+  const int height = static_cast<int>(std::ceil((hi.y() - lo.y()) * scale)) + 2 * margin + kHeaderPx;
   cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
   const auto px = [&](const Eigen::Vector3d& p) {
     return cv::Point(static_cast<int>(std::lround(margin + (p.x() - lo.x()) * scale)),
-                     static_cast<int>(std::lround(margin + 30 + (hi.y() - p.y()) * scale)));
+                     static_cast<int>(std::lround(margin + kHeaderPx + (hi.y() - p.y()) * scale)));
   };
   cv::rectangle(image, px({lo.x(), hi.y(), 0}), px({hi.x(), lo.y(), 0}), cv::Scalar(200, 200, 200), 1);
   for (const auto& b : sim.obstacles().boxes())
@@ -281,6 +282,14 @@ rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_p
     const cv::Scalar colour = track[i].visible ? cv::Scalar(60, 170, 40) : cv::Scalar(40, 40, 220);
     cv::line(image, px(track[i - 1].drone_m), px(track[i].drone_m), colour, 2, cv::LINE_AA);
   }
+  // The odometry's drift (issue 20's drifting VIO): where the odometry put the drone, in purple, when it
+  // strays from the truth by more than 5 cm anywhere (the world's map and the plans are in that frame).
+  double max_drift_m = 0.0;
+  for (const auto& s : track) max_drift_m = std::max(max_drift_m, (s.odometry_m - s.drone_m).head<2>().norm());
+  if (max_drift_m > 0.05) {
+    for (std::size_t i = 1; i < track.size(); ++i)
+      cv::line(image, px(track[i - 1].odometry_m), px(track[i].odometry_m), cv::Scalar(200, 60, 170), 1, cv::LINE_AA);
+  }
   for (const auto& loss : sim.metrics().losses()) cv::circle(image, px(loss.drone_m), 7, cv::Scalar(0, 140, 255), 2);
   if (!track.empty()) {
     cv::drawMarker(image, px(track.front().drone_m), cv::Scalar(0, 0, 0), cv::MARKER_TRIANGLE_UP, 14, 2);
@@ -289,12 +298,16 @@ rt::Status drawTopdown(const hal::sim::Simulation& sim, const std::string& png_p
   }
   const std::string reason = sim.metrics().failureReason();
   char title[256];
-  std::snprintf(title, sizeof(title),
-                "%s seed %llu: %s   visible %.0f%%  blue: person  green/red: drone (person visible / not)  orange: loss"
-                "  grey: bystanders",
-                spec.name.c_str(), static_cast<unsigned long long>(sim.scenario().seed),
-                reason.empty() ? "success" : reason.c_str(), 100.0 * sim.metrics().visibleRatio());
-  cv::putText(image, title, cv::Point(10, 24), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  std::snprintf(title, sizeof(title), "%s seed %llu: %s   visible %.0f%%", spec.name.c_str(),
+                static_cast<unsigned long long>(sim.scenario().seed), reason.empty() ? "success" : reason.c_str(),
+                100.0 * sim.metrics().visibleRatio());
+  char legend[256];
+  char drift[64] = "";
+  if (max_drift_m > 0.05) std::snprintf(drift, sizeof(drift), "  purple: odometry (drift up to %.2f m)", max_drift_m);
+  std::snprintf(legend, sizeof(legend),
+                "blue: person  green/red: drone (person visible / not)  orange: loss  grey: bystanders%s", drift);
+  cv::putText(image, title, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(image, legend, cv::Point(10, 42), cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
   try {
     if (!cv::imwrite(png_path, image)) return rt::Error{png_path + ": cannot write image"};
   } catch (const cv::Exception& e) {

@@ -394,11 +394,18 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
       const std::string name = suiteSeriesName(r.cell);
       success[name].push_back({*x, stats["followed_rate"].get<double>(), stats["followed_ci95"][0].get<double>(),
                                stats["followed_ci95"][1].get<double>(), stats["success_rate"].get<double>()});
-      double v = 0.0, d = 0.0;
-      if (suiteNumber(stats, "visible_ratio_mean", v)) visible[name].push_back({*x, v, v, v});
-      if (suiteNumber(stats, "distance_mean_m", d)) {
-        distance[name].push_back({*x, d, d, d});
-        d_hi = std::max(d_hi, d);
+      // Visibility and distance as distributions over the cell's trials: the median, and the band from the
+      // 10th to the 90th percentile (issue 24 item 4).
+      std::vector<double> v, d;
+      for (const nlohmann::json& trial : r.summaries) {
+        double value = 0.0;
+        if (suiteNumber(trial, "visible_ratio", value)) v.push_back(value);
+        if (suiteNumber(trial, "distance_mean_m", value)) d.push_back(value);
+      }
+      if (!v.empty()) visible[name].push_back({*x, quantileOf(v, 0.5), quantileOf(v, 0.1), quantileOf(v, 0.9)});
+      if (!d.empty()) {
+        distance[name].push_back({*x, quantileOf(d, 0.5), quantileOf(d, 0.1), quantileOf(d, 0.9)});
+        d_hi = std::max(d_hi, quantileOf(d, 0.9));
       }
     }
     if (success.empty()) continue;
@@ -415,9 +422,11 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     drawSuitePanel(image, cv::Rect(0, 30, w, h),
                    {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0}, x_lo, x_hi, success, true);
-    drawSuitePanel(image, cv::Rect(w, 30, w, h), {"visible ratio", 0.0, 1.0}, x_lo, x_hi, visible, false);
-    drawSuitePanel(image, cv::Rect(2 * w, 30, w, h), {"mean distance, m", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo,
-                   x_hi, distance, false);
+    drawSuitePanel(image, cv::Rect(w, 30, w, h), {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0}, x_lo,
+                   x_hi, visible, true);
+    drawSuitePanel(image, cv::Rect(2 * w, 30, w, h),
+                   {"mean distance per trial, m: median, 10-90 %", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo, x_hi,
+                   distance, true);
     const std::string file = "plot-" + suiteScenarioTag(scenario) + ".png";
     std::string path = out_dir;
     path += '/';

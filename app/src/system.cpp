@@ -192,7 +192,7 @@ System::TaskResult System::makeCameraStripTask(System& s, const std::string& /*w
   const double hfov_rad = 2.0 * std::atan2(k.cx_px, k.fx_px);
   const Channels& c = s.channels_;
   auto strip = std::make_unique<CameraStripTask>(
-      s.devices_.simulation, CameraStripSources{c.newest_detection, c.target, c.local_grid, c.trajectories},
+      s.devices_.simulation, CameraStripSources{c.newest_detection, c.target, c.local_grid, c.trajectories, &c.images},
       /*every_s=*/4.0, hfov_rad);
   s.camera_strip_task_ = strip.get();
   return made(std::move(strip));

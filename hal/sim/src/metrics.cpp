@@ -26,7 +26,7 @@ void SimMetrics::record(const MetricsSample& sample) {
   const bool colliding = surface_clearance_m < 0.0;
   if (colliding && !in_collision_) ++collisions_;
   in_collision_ = colliding;
-  track_.push_back({t_s, sample.drone_m, sample.person_m, visible});
+  track_.push_back({t_s, sample.drone_m, sample.person_m, visible, sample.odometry_m});
   last_t_s_ = t_s;
   person_top_speed_mps_ = std::max(person_top_speed_mps_, sample.person_speed_mps);
   if (sample.person_walking) {  // a rectangle rule, like every other time integral here

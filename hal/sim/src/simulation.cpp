@@ -252,6 +252,7 @@ void Simulation::sampleDueSensors() {
     sample.t_s = t_s;
     sample.dt_s = rt::nsToSeconds(metrics_period_ns_);
     sample.drone_m = truth_.drone.p_W_m;
+    sample.odometry_m = drift_ ? inOdometryFrame(drift_->error(), truth_.drone).p_W_m : truth_.drone.p_W_m;
     sample.person_m = truth_.person.p_W_m;
     sample.person_speed_mps = truth_.person.speed_mps;
     sample.tracking = t_s >= personStartS();

@@ -3,6 +3,8 @@
 
 #include "bench_stats.hpp"
 
+#include <cmath>
+
 namespace aerotrack::app {
 namespace {
 
@@ -95,6 +97,19 @@ TEST(AggregateSummaries, GivenNoTrialsThenNullMeansAndFullInterval) {
   EXPECT_TRUE(a["visible_ratio_mean"].is_null());
   EXPECT_TRUE(a["identity"]["time_on_wrong_person_s_mean"].is_null());
   EXPECT_EQ(a["success_ci95"], nlohmann::json::array({0.0, 1.0}));
+}
+
+TEST(QuantileOf, GivenValuesThenLinearInterpolationAsNumpysDefault) {
+  // numpy.quantile([3, 1, 4, 1, 5], q): 0.1 -> 1.0, 0.5 -> 3.0, 0.9 -> 4.6, 0.75 -> 4.0
+  const std::vector<double> v = {3.0, 1.0, 4.0, 1.0, 5.0};
+  EXPECT_DOUBLE_EQ(quantileOf(v, 0.1), 1.0);
+  EXPECT_DOUBLE_EQ(quantileOf(v, 0.5), 3.0);
+  EXPECT_DOUBLE_EQ(quantileOf(v, 0.9), 4.6);
+  EXPECT_DOUBLE_EQ(quantileOf(v, 0.75), 4.0);
+  EXPECT_DOUBLE_EQ(quantileOf(v, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(quantileOf(v, 1.0), 5.0);
+  EXPECT_DOUBLE_EQ(quantileOf({2.5}, 0.3), 2.5);
+  EXPECT_TRUE(std::isnan(quantileOf({}, 0.5)));
 }
 
 }  // namespace

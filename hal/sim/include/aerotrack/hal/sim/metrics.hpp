@@ -35,6 +35,8 @@ struct TrackSample {
   Eigen::Vector3d drone_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d person_m = Eigen::Vector3d::Zero();
   bool visible = false;
+  /// Where the odometry put the drone (its frame O read as W): drone_m without drift.
+  Eigen::Vector3d odometry_m = Eigen::Vector3d::Zero();
 };
 
 struct LossEvent {
@@ -51,7 +53,8 @@ struct MetricsSample {
   double dt_s = 0.0;  ///< The metrics period: the time this sample stands for.
   Eigen::Vector3d drone_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d person_m = Eigen::Vector3d::Zero();
-  double person_speed_mps = 0.0;  ///< PersonState::speed_mps.
+  Eigen::Vector3d odometry_m = Eigen::Vector3d::Zero();  ///< The drone as the odometry reports it (drift).
+  double person_speed_mps = 0.0;                         ///< PersonState::speed_mps.
   /// The person is on the path: from the start delay until they stop at its end (pauses on the way
   /// included); the person's mean speed is taken over these samples.
   bool person_walking = false;
