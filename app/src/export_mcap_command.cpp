@@ -197,6 +197,7 @@ int exportMcapCommand(const ParsedArgs& args) {
   const auto* gimbal_commands = d.gimbalCommands();
   for (const Event& e : events) {
     if (!w.active()) break;
+    JsonLine json;
     switch (e.source) {
       case Source::kOdometry: {
         if (odometry == nullptr) break;
@@ -267,26 +268,26 @@ int exportMcapCommand(const ParsedArgs& args) {
         const estimation::TargetEstimate& estimate = (*estimates)[e.index];
         foxglove_log::fillEstimate(scene, estimate);
         w.write(Topic::kEstimate, estimate.stamp_ns, scene);
-        w.writeJson(Topic::kEstimateValues, estimate.stamp_ns, foxglove_log::estimateJson(estimate));
+        w.writeJson(Topic::kEstimateValues, estimate.stamp_ns, foxglove_log::estimateJson(estimate, json));
         break;
       }
       case Source::kTrajectory: {
         const RecordedTrajectory& t = (*trajectories)[e.index];
         foxglove_log::fillPathSegment(scene, t.stamp_ns, 0, t.points_W_m);
-        scene.mutable_entities(0)->set_id("planning/trajectory");  // the newest replaces the last
+        scene.mutable_entities(0)->set_id("plan/trajectory");  // the newest replaces the last
         w.write(Topic::kTrajectory, t.stamp_ns, scene);
         break;
       }
       case Source::kSetpoint: {
         if (setpoints == nullptr) break;
         const hal::Setpoint& s = setpoints->samples[e.index];
-        w.writeJson(Topic::kSetpoint, s.stamp_ns, foxglove_log::setpointJson(s));
+        w.writeJson(Topic::kSetpoint, s.stamp_ns, foxglove_log::setpointJson(s, json));
         break;
       }
       case Source::kGimbalCommand: {
         if (gimbal_commands == nullptr) break;
         const hal::GimbalCommand& c = gimbal_commands->samples[e.index];
-        w.writeJson(Topic::kGimbalCommand, c.stamp_ns, foxglove_log::gimbalCommandJson(c));
+        w.writeJson(Topic::kGimbalCommand, c.stamp_ns, foxglove_log::gimbalCommandJson(c, json));
         break;
       }
     }

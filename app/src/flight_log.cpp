@@ -1,6 +1,7 @@
 // The flight log: see flight_log.hpp.
 #include "flight_log.hpp"
 
+#include <google/protobuf/arena.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -19,9 +20,24 @@ double seconds(rt::TimeNs ns) {
 
 }  // namespace
 
+namespace {
+
+google::protobuf::ArenaOptions arenaOn(std::vector<char>& block) {
+  google::protobuf::ArenaOptions options;
+  options.initial_block = block.data();
+  options.initial_block_size = block.size();
+  return options;
+}
+
+}  // namespace
+
 FlightLogTask::FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources,
                              std::unique_ptr<FlightLogWriter> log)
-    : options_(options), sources_(sources), log_(std::move(log)) {
+    : options_(options),
+      sources_(sources),
+      log_(std::move(log)),
+      arena_block_(kArenaBytes),
+      arena_(arenaOn(arena_block_)) {
   path_W_m_.reserve(256);
 }
 
@@ -44,6 +60,7 @@ void FlightLogTask::step(rt::TimeNs now_ns) {
   logPlanning(now_ns);
   logSim(now_ns);
   logStatus(now_ns);
+  arena_.Reset();  // every message of this step is written: their storage goes back to the initial block
 }
 
 void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
@@ -52,15 +69,17 @@ void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
   last_odometry_ns_ = odometry->stamp_ns;
   const auto gimbal = sources_.channels.gimbal_state.read();
   const auto depth = sources_.channels.depth.read();
-  foxglove_log::fillTransforms(transforms_, *odometry, gimbal ? gimbal->angle_rad : 0.0, sources_.extrinsics,
+  auto& transforms = fresh<foxglove::FrameTransforms>();
+  foxglove_log::fillTransforms(transforms, *odometry, gimbal ? gimbal->angle_rad : 0.0, sources_.extrinsics,
                                depth ? &depth->T_BC : nullptr);
-  log_->write(Topic::kTf, odometry->stamp_ns, transforms_);
+  log_->write(Topic::kTf, odometry->stamp_ns, transforms);
   // The flown path, a stretch at a time (each stretch starts where the last ended).
   if (path_segment_start_ns_ < 0) path_segment_start_ns_ = odometry->stamp_ns;
   path_W_m_.push_back(odometry->p_WB_m);
   if (seconds(odometry->stamp_ns - path_segment_start_ns_) >= options_.path_segment_s && path_W_m_.size() > 1) {
-    foxglove_log::fillPathSegment(scene_, now_ns, path_segments_++, path_W_m_);
-    log_->write(Topic::kPath, odometry->stamp_ns, scene_);
+    auto& scene = fresh<foxglove::SceneUpdate>();
+    foxglove_log::fillPathSegment(scene, now_ns, path_segments_++, path_W_m_);
+    log_->write(Topic::kPath, odometry->stamp_ns, scene);
     path_W_m_.erase(path_W_m_.begin(), path_W_m_.end() - 1);
     path_segment_start_ns_ = odometry->stamp_ns;
   }
@@ -70,7 +89,8 @@ void FlightLogTask::logSetpoint() {
   const auto setpoint = sources_.channels.setpoints.read();
   if (!setpoint || setpoint->stamp_ns <= last_setpoint_ns_) return;
   last_setpoint_ns_ = setpoint->stamp_ns;
-  log_->writeJson(Topic::kSetpoint, setpoint->stamp_ns, foxglove_log::setpointJson(*setpoint));
+  JsonLine json;
+  log_->writeJson(Topic::kSetpoint, setpoint->stamp_ns, foxglove_log::setpointJson(*setpoint, json));
 }
 
 void FlightLogTask::logCamera() {
@@ -82,10 +102,10 @@ void FlightLogTask::logCamera() {
     last_image_ns_ = image->stamp_ns;
     if (!image->bgr.empty() &&
         cv::imencode(".jpg", image->bgr, jpeg_, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality})) {
-      image_.Clear();
+      // Kept from frame to frame and overwritten, not cleared: its data keeps its capacity.
       foxglove_log::setTime(*image_.mutable_timestamp(), image->stamp_ns);
       image_.set_frame_id("camera_optical");
-      image_.set_data(jpeg_.data(), jpeg_.size());
+      image_.mutable_data()->assign(reinterpret_cast<const char*>(jpeg_.data()), jpeg_.size());
       image_.set_format("jpeg");
       log_->write(Topic::kImage, image->stamp_ns, image_);
     }
@@ -103,10 +123,12 @@ void FlightLogTask::logCamera() {
       followed && followed->stamp_ns == frame.stamp_ns && followed->sequence == frame.sequence) {
     frame.target_index = followed->target_index;
   }
-  foxglove_log::fillAnnotations(annotations_, frame, options_.keypoint_min_score);
-  log_->write(Topic::kDetections, frame.stamp_ns, annotations_);
-  foxglove_log::fillCalibration(calibration_, frame.stamp_ns, frame.intrinsics);
-  log_->write(Topic::kCalibration, frame.stamp_ns, calibration_);
+  auto& annotations = fresh<foxglove::ImageAnnotations>();
+  foxglove_log::fillAnnotations(annotations, frame, options_.keypoint_min_score);
+  log_->write(Topic::kDetections, frame.stamp_ns, annotations);
+  auto& calibration = fresh<foxglove::CameraCalibration>();
+  foxglove_log::fillCalibration(calibration, frame.stamp_ns, frame.intrinsics);
+  log_->write(Topic::kCalibration, frame.stamp_ns, calibration);
 }
 
 void FlightLogTask::logDepth(rt::TimeNs now_ns) {
@@ -123,10 +145,12 @@ void FlightLogTask::logEstimate() {
   const auto estimate = sources_.channels.target.read();
   if (!estimate || estimate->stamp_ns <= last_estimate_ns_) return;
   last_estimate_ns_ = estimate->stamp_ns;
-  foxglove_log::fillEstimate(scene_, *estimate);
-  log_->write(Topic::kEstimate, estimate->stamp_ns, scene_);
+  auto& scene = fresh<foxglove::SceneUpdate>();
+  foxglove_log::fillEstimate(scene, *estimate);
+  log_->write(Topic::kEstimate, estimate->stamp_ns, scene);
   if (!estimate->initialised) return;
-  log_->writeJson(Topic::kEstimateValues, estimate->stamp_ns, foxglove_log::estimateJson(*estimate));
+  JsonLine json;
+  log_->writeJson(Topic::kEstimateValues, estimate->stamp_ns, foxglove_log::estimateJson(*estimate, json));
 }
 
 void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
@@ -135,30 +159,24 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
       (trajectory->trajectory.get() != last_trajectory_ || trajectory->start_ns != last_trajectory_ns_)) {
     last_trajectory_ = trajectory->trajectory.get();
     last_trajectory_ns_ = trajectory->start_ns;
-    foxglove_log::fillTrajectory(scene_, now_ns, *trajectory, 40);
-    log_->write(Topic::kTrajectory, now_ns, scene_);
+    auto& scene = fresh<foxglove::SceneUpdate>();
+    foxglove_log::fillTrajectory(scene, now_ns, *trajectory, 40);
+    log_->write(Topic::kTrajectory, now_ns, scene);
   }
   if (const auto plan = sources_.channels.plan_snapshots.read(); plan && plan->stamp_ns > last_plan_ns_) {
     last_plan_ns_ = plan->stamp_ns;
-    foxglove_log::fillPlan(scene_, *plan);
-    log_->write(Topic::kPlan, plan->stamp_ns, scene_);
-    const planning::PlanReport& r = plan->report;
-    const nlohmann::json values = {{"status", std::string(planning::toString(r.status))},
-                                   {"search", std::string(planning::toString(r.search_status))},
-                                   {"search_expansions", r.search_expansions},
-                                   {"corridor_boxes", r.corridor_boxes},
-                                   {"optimizer_iterations", r.optimizer_iterations},
-                                   {"check", std::string(planning::toString(r.check))},
-                                   {"repair_stretch", r.repair_stretch},
-                                   {"predicted", r.predicted},
-                                   {"cycle_ms", plan->cycle_ms}};
-    log_->writeJson(Topic::kPlanValues, plan->stamp_ns, values.dump());
+    auto& scene = fresh<foxglove::SceneUpdate>();
+    foxglove_log::fillPlan(scene, *plan);
+    log_->write(Topic::kPlan, plan->stamp_ns, scene);
+    JsonLine json;
+    log_->writeJson(Topic::kPlanValues, plan->stamp_ns, foxglove_log::planCycleJson(*plan, json));
   }
   if (now_ns >= next_map_ns_) {
     if (const auto grid = sources_.channels.local_grid.read(); grid) {
       next_map_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.map_rate_hz);
-      foxglove_log::fillOccupied(scene_, now_ns, *grid);
-      log_->write(Topic::kMap, now_ns, scene_);
+      auto& scene = fresh<foxglove::SceneUpdate>();
+      foxglove_log::fillOccupied(scene, now_ns, *grid);
+      log_->write(Topic::kMap, now_ns, scene);
     }
   }
   // On every transition, and once a second (a plot, or a viewer joining late, sees the mode all along).
@@ -166,11 +184,8 @@ void FlightLogTask::logPlanning(rt::TimeNs now_ns) {
       state && (state->transitions != last_transitions_ || now_ns >= next_supervisor_ns_)) {
     last_transitions_ = state->transitions;
     next_supervisor_ns_ = now_ns + rt::secondsToNs(1.0);
-    const nlohmann::json values = {{"mode", std::string(supervisor::toString(state->mode))},
-                                   {"reason", std::string(supervisor::toString(state->reason))},
-                                   {"since_s", seconds(state->since_ns)},
-                                   {"transitions", state->transitions}};
-    log_->writeJson(Topic::kSupervisor, now_ns, values.dump());
+    JsonLine json;
+    log_->writeJson(Topic::kSupervisor, now_ns, foxglove_log::supervisorJson(*state, json));
   }
 }
 
@@ -178,24 +193,22 @@ void FlightLogTask::logSim(rt::TimeNs now_ns) {
   if (!sources_.simulation) return;
   if (!obstacles_written_) {
     obstacles_written_ = true;
-    foxglove_log::fillObstacles(scene_, now_ns, sources_.simulation->obstacles());
-    log_->write(Topic::kObstacles, now_ns, scene_);
+    auto& scene = fresh<foxglove::SceneUpdate>();
+    foxglove_log::fillObstacles(scene, now_ns, sources_.simulation->obstacles());
+    log_->write(Topic::kObstacles, now_ns, scene);
   }
   if (now_ns < next_truth_ns_) return;
   const auto truth = sources_.simulation->truthOut().read();
   if (!truth) return;
   next_truth_ns_ = now_ns + static_cast<rt::TimeNs>(1e9 / options_.truth_rate_hz);
-  foxglove_log::fillTruth(scene_, *truth);
-  log_->write(Topic::kTruth, truth->stamp_ns, scene_);
-  nlohmann::json values = {
-      {"person_p_W_m", {truth->person_p_W_m.x(), truth->person_p_W_m.y(), truth->person_p_W_m.z()}},
-      {"drone_p_W_m", {truth->drone_p_W_m.x(), truth->drone_p_W_m.y(), truth->drone_p_W_m.z()}},
-      {"distance_m", (truth->drone_p_W_m - truth->person_p_W_m).head<2>().norm()}};
-  // The estimate's error against the truth, when there is a live estimate: what a plot wants most.
-  if (const auto estimate = sources_.channels.target.read(); estimate && estimate->initialised && !estimate->lost) {
-    values["estimate_error_m"] = (estimate->p_WT_m - truth->person_p_W_m).head<2>().norm();
-  }
-  log_->writeJson(Topic::kTruthValues, truth->stamp_ns, values.dump());
+  auto& scene = fresh<foxglove::SceneUpdate>();
+  foxglove_log::fillTruth(scene, *truth);
+  log_->write(Topic::kTruth, truth->stamp_ns, scene);
+  const auto estimate = sources_.channels.target.read();
+  const bool live = estimate && estimate->initialised && !estimate->lost;
+  JsonLine json;
+  log_->writeJson(Topic::kTruthValues, truth->stamp_ns,
+                  foxglove_log::truthJson(*truth, live ? &*estimate : nullptr, json));
 }
 
 void FlightLogTask::logStatus(rt::TimeNs now_ns) {
@@ -232,8 +245,9 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
 
 rt::Status FlightLogTask::finish() {
   if (!path_W_m_.empty() && path_W_m_.size() > 1 && log_->active()) {
-    foxglove_log::fillPathSegment(scene_, last_odometry_ns_, path_segments_++, path_W_m_);
-    log_->write(Topic::kPath, last_odometry_ns_, scene_);
+    auto& scene = fresh<foxglove::SceneUpdate>();
+    foxglove_log::fillPathSegment(scene, last_odometry_ns_, path_segments_++, path_W_m_);
+    log_->write(Topic::kPath, last_odometry_ns_, scene);
   }
   return log_->close();
 }

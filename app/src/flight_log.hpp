@@ -21,6 +21,7 @@
 #include <foxglove/ImageAnnotations.pb.h>
 #include <foxglove/PointCloud.pb.h>
 #include <foxglove/SceneUpdate.pb.h>
+#include <google/protobuf/arena.h>
 
 #include <memory>
 #include <optional>
@@ -89,11 +90,17 @@ class FlightLogTask final : public rt::Task {
   FlightLogSources sources_;
   std::unique_ptr<FlightLogWriter> log_;
   std::vector<std::uint8_t> jpeg_;
-  foxglove::FrameTransforms transforms_;
+  /// The messages of one step are made in an arena over a block reserved once, reset after the step: no
+  /// allocation per message (protobuf's Clear() would free a reused message's sub-messages). The frames'
+  /// messages are kept instead, so that their data keeps its capacity.
+  static constexpr std::size_t kArenaBytes = 8U << 20;
+  std::vector<char> arena_block_;
+  google::protobuf::Arena arena_;
+  template <class T>
+  T& fresh() {
+    return *google::protobuf::Arena::CreateMessage<T>(&arena_);
+  }
   foxglove::CompressedImage image_;
-  foxglove::CameraCalibration calibration_;
-  foxglove::ImageAnnotations annotations_;
-  foxglove::SceneUpdate scene_;
   foxglove::PointCloud points_;
   std::vector<Eigen::Vector3d> path_W_m_;
   int path_segments_ = 0;

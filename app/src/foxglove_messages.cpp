@@ -3,8 +3,6 @@
 
 #include <google/protobuf/descriptor.pb.h>
 
-#include <nlohmann/json.hpp>
-
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <set>
@@ -210,7 +208,7 @@ void fillEstimate(foxglove::SceneUpdate& m, const estimation::TargetEstimate& e)
 void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const trajectory_server::TimedTrajectory& t,
                     int samples) {
   m.Clear();
-  foxglove::SceneEntity& entity = addEntity(m, stamp_ns, "planning/trajectory");
+  foxglove::SceneEntity& entity = addEntity(m, stamp_ns, "plan/trajectory");
   if (!t.trajectory) return;
   foxglove::LinePrimitive& line = *entity.add_lines();
   line.set_type(foxglove::LinePrimitive::LINE_STRIP);
@@ -225,7 +223,7 @@ void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const traject
 
 void fillPlan(foxglove::SceneUpdate& m, const planning::PlanSnapshot& plan) {
   m.Clear();
-  foxglove::SceneEntity& corridor = addEntity(m, plan.stamp_ns, "planning/corridor");
+  foxglove::SceneEntity& corridor = addEntity(m, plan.stamp_ns, "plan/corridor");
   for (std::size_t i = 0; i < plan.box_count; ++i) {
     foxglove::CubePrimitive& cube = *corridor.add_cubes();
     setPose(*cube.mutable_pose(), 0.5 * (plan.box_lo_W_m[i] + plan.box_hi_W_m[i]));
@@ -242,8 +240,8 @@ void fillPlan(foxglove::SceneUpdate& m, const planning::PlanSnapshot& plan) {
     setColor(*line.mutable_color(), colour);
     for (const Eigen::Vector3d& p : points) setPoint(*line.add_points(), p);
   };
-  polyline("planning/search", std::span(plan.search_W_m.data(), plan.search_count), Rgba{1.0, 0.3, 0.9, 1.0});
-  polyline("person/prediction", std::span(plan.prediction_W_m.data(), plan.prediction_count), kYellow);
+  polyline("plan/search", std::span(plan.search_W_m.data(), plan.search_count), Rgba{1.0, 0.3, 0.9, 1.0});
+  polyline("person/predict", std::span(plan.prediction_W_m.data(), plan.prediction_count), kYellow);
 }
 
 void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
@@ -259,21 +257,24 @@ void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
 }
 
 void fillDepthPoints(foxglove::PointCloud& m, const hal::DepthFrame& frame, int step) {
-  m.Clear();
   setTime(*m.mutable_timestamp(), frame.stamp_ns);
   m.set_frame_id("depth_optical");
   setPose(*m.mutable_pose(), Eigen::Vector3d::Zero());
   m.set_point_stride(12);
-  const char* names[] = {"x", "y", "z"};
-  for (std::uint32_t i = 0; i < 3; ++i) {
-    foxglove::PackedElementField& field = *m.add_fields();
-    field.set_name(names[i]);
-    field.set_offset(4 * i);
-    field.set_type(foxglove::PackedElementField::FLOAT32);
+  if (m.fields_size() != 3) {
+    m.clear_fields();
+    const char* names[] = {"x", "y", "z"};
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      foxglove::PackedElementField& field = *m.add_fields();
+      field.set_name(names[i]);
+      field.set_offset(4 * i);
+      field.set_type(foxglove::PackedElementField::FLOAT32);
+    }
   }
+  std::string& data = *m.mutable_data();
+  data.clear();  // keeps its capacity
   const hal::CameraIntrinsics& k = frame.intrinsics;
   if (frame.depth_m.type() != CV_32FC1 || k.fx_px <= 0.0 || k.fy_px <= 0.0) return;
-  std::string& data = *m.mutable_data();
   for (int v = 0; v < frame.depth_m.rows; v += step) {
     const float* row = frame.depth_m.ptr<float>(v);
     for (int u = 0; u < frame.depth_m.cols; u += step) {
@@ -346,33 +347,67 @@ void fillTruth(foxglove::SceneUpdate& m, const hal::sim::TruthSnapshot& truth) {
   setColor(*drone.mutable_color(), Rgba{1.0, 1.0, 1.0, 0.5});
 }
 
-std::string estimateJson(const estimation::TargetEstimate& e) {
-  const auto v3 = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
-  return nlohmann::json{{"initialised", e.initialised},
-                        {"lost", e.lost},
-                        {"p_WT_m", v3(e.p_WT_m)},
-                        {"v_WT_mps", v3(e.v_WT_mps)},
-                        {"sigma_p_m", std::sqrt(std::max(0.0, e.covariance.topLeftCorner<3, 3>().trace()))},
-                        {"manoeuvre_probability", e.manoeuvre_probability},
-                        {"measurement_age_s", rt::nsToSeconds(e.stamp_ns - e.last_accepted_ns)},
-                        {"other_people", e.other_count}}
-      .dump();
+std::string_view estimateJson(const estimation::TargetEstimate& e, JsonLine& out) {
+  return out.boolean("initialised", e.initialised)
+      .boolean("lost", e.lost)
+      .vector3("p_WT_m", e.p_WT_m)
+      .vector3("v_WT_mps", e.v_WT_mps)
+      .number("sigma_p_m", std::sqrt(std::max(0.0, e.covariance.topLeftCorner<3, 3>().trace())))
+      .number("manoeuvre_probability", e.manoeuvre_probability)
+      .number("measurement_age_s", rt::nsToSeconds(e.stamp_ns - e.last_accepted_ns))
+      .integer("other_people", static_cast<std::int64_t>(e.other_count))
+      .view();
 }
 
-std::string setpointJson(const hal::Setpoint& s) {
-  const auto v3 = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
-  return nlohmann::json{{"p_W_m", v3(s.p_W_m)},       {"v_W_mps", v3(s.v_W_mps)},
-                        {"a_W_mps2", v3(s.a_W_mps2)}, {"speed_mps", s.v_W_mps.norm()},
-                        {"yaw_rad", s.yaw_rad},       {"yaw_rate_radps", s.yaw_rate_radps}}
-      .dump();
+std::string_view setpointJson(const hal::Setpoint& s, JsonLine& out) {
+  return out.vector3("p_W_m", s.p_W_m)
+      .vector3("v_W_mps", s.v_W_mps)
+      .vector3("a_W_mps2", s.a_W_mps2)
+      .number("speed_mps", s.v_W_mps.norm())
+      .number("yaw_rad", s.yaw_rad)
+      .number("yaw_rate_radps", s.yaw_rate_radps)
+      .view();
 }
 
-std::string gimbalCommandJson(const hal::GimbalCommand& c) {
-  return nlohmann::json{{"mode", c.mode == hal::GimbalCommand::Mode::kRate ? "rate" : "angle"},
-                        {"rate_radps", c.rate_radps},
-                        {"angle_rad", c.angle_rad},
-                        {"max_rate_radps", c.max_rate_radps}}
-      .dump();
+std::string_view gimbalCommandJson(const hal::GimbalCommand& c, JsonLine& out) {
+  return out.text("mode", c.mode == hal::GimbalCommand::Mode::kRate ? "rate" : "angle")
+      .number("rate_radps", c.rate_radps)
+      .number("angle_rad", c.angle_rad)
+      .number("max_rate_radps", c.max_rate_radps)
+      .view();
+}
+
+std::string_view planCycleJson(const planning::PlanSnapshot& plan, JsonLine& out) {
+  const planning::PlanReport& r = plan.report;
+  return out.text("status", planning::toString(r.status))
+      .text("search", planning::toString(r.search_status))
+      .integer("search_expansions", r.search_expansions)
+      .integer("corridor_boxes", r.corridor_boxes)
+      .integer("optimizer_iterations", r.optimizer_iterations)
+      .text("check", planning::toString(r.check))
+      .number("repair_stretch", r.repair_stretch)
+      .boolean("predicted", r.predicted)
+      .number("cycle_ms", plan.cycle_ms)
+      .view();
+}
+
+std::string_view supervisorJson(const supervisor::SupervisorState& state, JsonLine& out) {
+  return out.text("mode", supervisor::toString(state.mode))
+      .text("reason", supervisor::toString(state.reason))
+      .number("since_s", rt::nsToSeconds(state.since_ns))
+      .integer("transitions", static_cast<std::int64_t>(state.transitions))
+      .view();
+}
+
+std::string_view truthJson(const hal::sim::TruthSnapshot& truth, const estimation::TargetEstimate* live_estimate,
+                           JsonLine& out) {
+  out.vector3("person_p_W_m", truth.person_p_W_m)
+      .vector3("drone_p_W_m", truth.drone_p_W_m)
+      .number("distance_m", (truth.drone_p_W_m - truth.person_p_W_m).head<2>().norm());
+  // The estimate's error against the truth while it is live: what a plot wants most.
+  if (live_estimate != nullptr)
+    out.number("estimate_error_m", (live_estimate->p_WT_m - truth.person_p_W_m).head<2>().norm());
+  return out.view();
 }
 
 }  // namespace aerotrack::app::foxglove_log

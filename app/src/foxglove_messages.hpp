@@ -27,7 +27,9 @@
 #include "aerotrack/mapping/local_grid.hpp"
 #include "aerotrack/planning/plan_snapshot.hpp"
 #include "aerotrack/rt/time.hpp"
+#include "aerotrack/supervisor/supervisor.hpp"
 #include "aerotrack/trajectory_server/trajectory.hpp"
+#include "json_line.hpp"
 
 namespace aerotrack::app::foxglove_log {
 
@@ -67,7 +69,8 @@ void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
                      std::span<const Eigen::Vector3d> points_W_m);
 
 /// A depth image as points in depth_optical (x, y, z float32), one pixel in `step` along each axis;
-/// pixels without a return are left out.
+/// pixels without a return are left out. Reuses m's storage (no Clear(): its data keeps its capacity, so a
+/// message kept from frame to frame allocates nothing once it has held the largest cloud).
 void fillDepthPoints(foxglove::PointCloud& m, const hal::DepthFrame& frame, int step);
 
 /// The occupied cells of the local grid's window, as cubes.
@@ -79,10 +82,15 @@ void fillObstacles(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const hal::sim
 /// The simulator's truth: the person (a yellow cylinder of a person's size) and the drone's true position.
 void fillTruth(foxglove::SceneUpdate& m, const hal::sim::TruthSnapshot& truth);
 
-/// JSON values for plots: an estimate (p, v, sigma, lost, age of its newest measurement, people tracked),
-/// a setpoint (p, v, a, yaw) and a gimbal command.
-std::string estimateJson(const estimation::TargetEstimate& estimate);
-std::string setpointJson(const hal::Setpoint& setpoint);
-std::string gimbalCommandJson(const hal::GimbalCommand& command);
+/// JSON values for plots, written into `out` without allocating: an estimate (p, v, sigma, lost, age of its
+/// newest measurement, people tracked), a setpoint (p, v, a, yaw), a gimbal command, a planning cycle, the
+/// supervisor's state, the simulator's truth (with the estimate's error when one is live).
+std::string_view estimateJson(const estimation::TargetEstimate& estimate, JsonLine& out);
+std::string_view setpointJson(const hal::Setpoint& setpoint, JsonLine& out);
+std::string_view gimbalCommandJson(const hal::GimbalCommand& command, JsonLine& out);
+std::string_view planCycleJson(const planning::PlanSnapshot& plan, JsonLine& out);
+std::string_view supervisorJson(const supervisor::SupervisorState& state, JsonLine& out);
+std::string_view truthJson(const hal::sim::TruthSnapshot& truth, const estimation::TargetEstimate* live_estimate,
+                           JsonLine& out);
 
 }  // namespace aerotrack::app::foxglove_log

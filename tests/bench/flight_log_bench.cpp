@@ -4,10 +4,11 @@
 //                     2: lz4) -- messages/s and MB/s.
 //   BM_FlightLogMix   what one second of a flight costs the log task: the message mix of `sim --mcap`
 //                     (100 transforms, 30 detections and calibrations, 30 estimates, 30 plans, 100
-//                     setpoints, ...) filled from our types, serialized and written; with the mallocs each
-//                     message makes (the writer itself makes none once warm: hal_mcap_alloc_tests).
+//                     setpoints, ...) filled from our types in an arena, serialized and written, as the
+//                     flight log task does it; with the mallocs each message makes.
 // Files go to $TMPDIR (default /tmp): the disk is part of what is measured.
 #include <benchmark/benchmark.h>
+#include <google/protobuf/arena.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -96,10 +97,13 @@ void BM_FlightLogMix(benchmark::State& state) {
   plan.search_count = planning::kSnapshotPathSamples;
   plan.prediction_count = planning::kSnapshotPredictionSamples;
   hal::Setpoint setpoint;
-  foxglove::FrameTransforms transforms;
-  foxglove::ImageAnnotations annotations;
-  foxglove::CameraCalibration calibration;
-  foxglove::SceneUpdate scene;
+  // As the flight log task does it (flight_log.hpp): each 10 ms step's messages made in an arena over a
+  // block reserved once, reset after the step; JSON values written into a fixed buffer.
+  std::vector<char> block(8U << 20);
+  google::protobuf::ArenaOptions arena_options;
+  arena_options.initial_block = block.data();
+  arena_options.initial_block_size = block.size();
+  google::protobuf::Arena arena(arena_options);
   rt::TimeNs t = 0;
   std::int64_t messages = 0;
   long mallocs = 0;
@@ -107,25 +111,34 @@ void BM_FlightLogMix(benchmark::State& state) {
     const aerotrack::test::MallocCount count;
     for (int k = 0; k < 100; ++k, t += 10'000'000) {
       odometry.stamp_ns = t;
+      auto& transforms = *google::protobuf::Arena::CreateMessage<foxglove::FrameTransforms>(&arena);
       app::foxglove_log::fillTransforms(transforms, odometry, 0.1 * k, &extrinsics, nullptr);
       w.write(app::Topic::kTf, t, transforms);
       setpoint.stamp_ns = t;
-      w.writeJson(app::Topic::kSetpoint, t, app::foxglove_log::setpointJson(setpoint));
+      app::JsonLine json;
+      w.writeJson(app::Topic::kSetpoint, t, app::foxglove_log::setpointJson(setpoint, json));
       messages += 2;
-      if (k % 3 != 0) continue;
-      detections.stamp_ns = t;
-      app::foxglove_log::fillAnnotations(annotations, detections, 0.2);
-      w.write(app::Topic::kDetections, t, annotations);
-      app::foxglove_log::fillCalibration(calibration, t, detections.intrinsics);
-      w.write(app::Topic::kCalibration, t, calibration);
-      estimate.stamp_ns = t;
-      app::foxglove_log::fillEstimate(scene, estimate);
-      w.write(app::Topic::kEstimate, t, scene);
-      w.writeJson(app::Topic::kEstimateValues, t, app::foxglove_log::estimateJson(estimate));
-      plan.stamp_ns = t;
-      app::foxglove_log::fillPlan(scene, plan);
-      w.write(app::Topic::kPlan, t, scene);
-      messages += 5;
+      if (k % 3 == 0) {
+        detections.stamp_ns = t;
+        auto& annotations = *google::protobuf::Arena::CreateMessage<foxglove::ImageAnnotations>(&arena);
+        app::foxglove_log::fillAnnotations(annotations, detections, 0.2);
+        w.write(app::Topic::kDetections, t, annotations);
+        auto& calibration = *google::protobuf::Arena::CreateMessage<foxglove::CameraCalibration>(&arena);
+        app::foxglove_log::fillCalibration(calibration, t, detections.intrinsics);
+        w.write(app::Topic::kCalibration, t, calibration);
+        estimate.stamp_ns = t;
+        auto& scene = *google::protobuf::Arena::CreateMessage<foxglove::SceneUpdate>(&arena);
+        app::foxglove_log::fillEstimate(scene, estimate);
+        w.write(app::Topic::kEstimate, t, scene);
+        app::JsonLine json2;
+        w.writeJson(app::Topic::kEstimateValues, t, app::foxglove_log::estimateJson(estimate, json2));
+        plan.stamp_ns = t;
+        auto& plan_scene = *google::protobuf::Arena::CreateMessage<foxglove::SceneUpdate>(&arena);
+        app::foxglove_log::fillPlan(plan_scene, plan);
+        w.write(app::Topic::kPlan, t, plan_scene);
+        messages += 5;
+      }
+      arena.Reset();
     }
     mallocs += count.count();
   }

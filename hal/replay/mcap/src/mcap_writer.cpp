@@ -7,6 +7,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
+// The static-context API (exported by Debian's libzstd): a compressor over memory reserved once.
+#define ZSTD_STATIC_LINKING_ONLY
 #include <zstd.h>
 
 #include <algorithm>
@@ -125,18 +127,46 @@ struct McapWriter::ChannelInfo {
 };
 
 /// The compressor, with its context kept from chunk to chunk.
+/// zstd's context is a static one over a workspace reserved at open, with its parameters fixed for a whole
+/// chunk: a dynamic context re-sizes its workspace as chunk sizes wander, an allocation now and then.
 struct McapWriter::Codec {
-  ZSTD_CCtx* zstd = nullptr;
+  std::vector<std::uint64_t> zstd_workspace;  ///< 8-byte aligned, as zstd asks
+  ZSTD_CCtx* zstd = nullptr;                  ///< lives in the workspace: nothing to free
   LZ4F_preferences_t lz4{};
-  ~Codec() { ZSTD_freeCCtx(zstd); }
+
+  bool initZstd(int level, std::size_t max_source_bytes) {
+    const ZSTD_compressionParameters p = ZSTD_getCParams(level, max_source_bytes, 0);
+    const std::size_t bytes = ZSTD_estimateCCtxSize_usingCParams(p);
+    zstd_workspace.assign((bytes + 7) / 8, 0);
+    zstd = ZSTD_initStaticCCtx(zstd_workspace.data(), zstd_workspace.size() * 8);
+    if (zstd == nullptr) return false;
+    const std::pair<ZSTD_cParameter, int> fixed[] = {
+        {ZSTD_c_windowLog, static_cast<int>(p.windowLog)}, {ZSTD_c_chainLog, static_cast<int>(p.chainLog)},
+        {ZSTD_c_hashLog, static_cast<int>(p.hashLog)},     {ZSTD_c_searchLog, static_cast<int>(p.searchLog)},
+        {ZSTD_c_minMatch, static_cast<int>(p.minMatch)},   {ZSTD_c_targetLength, static_cast<int>(p.targetLength)},
+        {ZSTD_c_strategy, static_cast<int>(p.strategy)}};
+    for (const auto& [parameter, value] : fixed) {
+      if (ZSTD_isError(ZSTD_CCtx_setParameter(zstd, parameter, value)) != 0U) return false;
+    }
+    return true;
+  }
 };
 
 McapWriter::McapWriter(std::string path, int fd, const McapWriterOptions& options)
     : path_(std::move(path)), fd_(fd), options_(options), codec_(std::make_unique<Codec>()) {
-  if (options_.compression == McapCompression::kZstd) codec_->zstd = ZSTD_createCCtx();
+  // Room for a chunk and for what it becomes (compressed, with its header and message indexes), so that the
+  // buffers do not grow chunk after chunk as their sizes wander (a message larger than a quarter chunk
+  // still grows them, once).
   chunk_.reserve(options_.chunk_bytes + (options_.chunk_bytes >> 2));
+  const std::size_t packed =
+      std::max(ZSTD_compressBound(chunk_.capacity()), LZ4F_compressFrameBound(chunk_.capacity(), nullptr));
+  packed_.reserve(packed);
+  scratch_.reserve(packed + (options_.chunk_bytes >> 1));
   chunk_indexes_.reserve(1024);  // a GB of log at the default chunk size before the first growth
   index_offsets_.reserve(8192);
+  if (options_.compression == McapCompression::kZstd && !codec_->initZstd(options_.zstd_level, chunk_.capacity())) {
+    fail(rt::Error{"mcap: " + path_ + ": cannot set up the zstd compressor"});
+  }
 }
 
 McapWriter::~McapWriter() {
@@ -289,8 +319,7 @@ rt::Status McapWriter::flushChunk() {
   std::span<const std::uint8_t> records = chunk_;
   if (options_.compression == McapCompression::kZstd) {
     packed_.resize(ZSTD_compressBound(chunk_.size()));
-    const std::size_t n = ZSTD_compressCCtx(codec_->zstd, packed_.data(), packed_.size(), chunk_.data(), chunk_.size(),
-                                            options_.zstd_level);
+    const std::size_t n = ZSTD_compress2(codec_->zstd, packed_.data(), packed_.size(), chunk_.data(), chunk_.size());
     if (ZSTD_isError(n) != 0U) {
       fail(rt::Error{"mcap: " + path_ + ": zstd: " + ZSTD_getErrorName(n)});
       return failure_;
