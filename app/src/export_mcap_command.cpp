@@ -42,7 +42,7 @@ enum class Source : std::uint8_t {
   kSetpoint,
   kGimbalCommand
 };
-struct Event {
+struct ExportEvent {
   rt::TimeNs stamp_ns;
   Source source;
   std::size_t index;
@@ -135,7 +135,7 @@ int exportMcapCommand(const ParsedArgs& args) {
   }
   const std::vector<hal::DetectionFrame>& frames = detections->empty() ? camera_detections : *detections;
 
-  std::vector<Event> events;
+  std::vector<ExportEvent> events;
   auto add = [&](Source source, std::size_t n, auto stamp_of) {
     for (std::size_t i = 0; i < n; ++i) events.push_back({stamp_of(i), source, i});
   };
@@ -167,7 +167,7 @@ int exportMcapCommand(const ParsedArgs& args) {
         [&](std::size_t i) { return d.gimbalCommands()->samples[i].stamp_ns; });
   }
   std::stable_sort(events.begin(), events.end(),
-                   [](const Event& a, const Event& b) { return a.stamp_ns < b.stamp_ns; });
+                   [](const ExportEvent& a, const ExportEvent& b) { return a.stamp_ns < b.stamp_ns; });
 
   FlightLogTargets targets;
   targets.mcap_path = out;
@@ -195,7 +195,7 @@ int exportMcapCommand(const ParsedArgs& args) {
   const auto* depth_frames = d.depthFrames();
   const auto* setpoints = d.setpoints();
   const auto* gimbal_commands = d.gimbalCommands();
-  for (const Event& e : events) {
+  for (const ExportEvent& e : events) {
     if (!w.active()) break;
     JsonLine json;
     switch (e.source) {

@@ -187,16 +187,17 @@ std::unique_ptr<Transport> Transport::start(const std::string& host, std::uint16
     }
     return false;  // not a Foxglove client
   });
-  s.server.set_open_handler([self](Handle hdl) {
+  s.server.set_open_handler([self](const Handle& hdl) {
     self->clients.fetch_add(1, std::memory_order_relaxed);
     self->subscriptions[hdl];
     websocketpp::lib::error_code e;
     self->server.send(hdl, self->hello, websocketpp::frame::opcode::text, e);
     if (!e) self->server.send(hdl, self->advertise, websocketpp::frame::opcode::text, e);
   });
-  s.server.set_message_handler([self](Handle hdl, const Server::message_ptr& msg) { self->onMessage(hdl, msg); });
-  s.server.set_close_handler([self](Handle hdl) { self->onClose(hdl); });
-  s.server.set_fail_handler([self](Handle hdl) { self->onClose(hdl); });
+  s.server.set_message_handler(
+      [self](const Handle& hdl, const Server::message_ptr& msg) { self->onMessage(hdl, msg); });
+  s.server.set_close_handler([self](const Handle& hdl) { self->onClose(hdl); });
+  s.server.set_fail_handler([self](const Handle& hdl) { self->onClose(hdl); });
   s.server.listen(host, std::to_string(port), ec);
   if (ec) {
     error = host + ":" + std::to_string(port) + ": cannot listen: " + ec.message();

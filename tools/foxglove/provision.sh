@@ -15,13 +15,7 @@ fail() { echo "provision: foxglove: $*" >&2; exit 1; }
 stamp() { sha256sum "$HERE/package-lock.json" "$HERE/generate_protos.js"; }
 [[ -f $OUT/.stamp && -f $HERE/node_modules/.aerotrack-lock ]] && [[ $(stamp) == "$(<"$OUT/.stamp")" ]] && exit 0
 
-if ! command -v npm >/dev/null; then
-  sudo=()
-  [[ $(id -u) -ne 0 ]] && sudo=(sudo)
-  echo "provision: installing npm (Debian package)"
-  "${sudo[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends npm >/dev/null
-fi
+scripts/ensure_npm.sh
 if ! cmp -s "$HERE/package-lock.json" "$HERE/node_modules/.aerotrack-lock"; then
   echo "provision: installing @foxglove/schemas, @mcap/core, @mcap/support (npm ci)"
   if ! npm ci --prefix "$HERE" --loglevel error --no-audit --no-fund >"$HERE/npm.log" 2>&1; then

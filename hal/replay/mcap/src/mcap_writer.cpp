@@ -387,7 +387,7 @@ rt::Status McapWriter::flushChunk() {
   }
   stats_.uncompressed_bytes += chunk_.size();
   ++stats_.chunks;
-  chunk_indexes_.push_back(std::move(index));
+  chunk_indexes_.push_back(index);
   chunk_.clear();
   return rt::ok();
 }
