@@ -84,7 +84,8 @@ std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& r
                         const std::vector<std::string>& plot_files);
 
 /// One PNG per scenario, DIR/plot-<scenario>.png: success rate (the paper's verdict, with its 95 %
-/// Wilson band, and ours) against person speed per mode, visible ratio and mean distance against speed.
+/// Wilson band, and ours) against person speed per mode; the visible ratio and the mean distance per trial
+/// against speed as distributions (median, 10th-90th percentile band over the cell's trials).
 /// Returns the file names written (relative to out_dir).
 rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_dir, const SuiteSpec& suite,
                                                        const std::vector<CellResult>& results);
