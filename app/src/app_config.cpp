@@ -150,8 +150,8 @@ rt::Expected<AppConfig> parseFrom(rt::Expected<rt::ConfigNode> root) {
 
 }  // namespace
 
-rt::Expected<AppConfig> loadAppConfig(const std::string& path) {
-  return parseFrom(rt::ConfigNode::loadFile(path));
+rt::Expected<AppConfig> loadAppConfig(const std::string& path, const std::vector<rt::ConfigOverride>& overrides) {
+  return parseFrom(rt::ConfigNode::loadFile(path, overrides));
 }
 
 rt::Expected<AppConfig> parseAppConfig(const std::string& yaml_text, const std::string& source_name) {

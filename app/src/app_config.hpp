@@ -84,7 +84,8 @@ void selectLocalization(AppConfig& config, bool image_camera);
 EstimationConfig parseEstimation(const rt::ConfigNode& node, const std::string& config_path);
 
 /// Loads and checks a config file. The error names the file, line and key.
-rt::Expected<AppConfig> loadAppConfig(const std::string& path);
+/// `overrides` (--set KEY=VALUE) replace the file's values before it is checked.
+rt::Expected<AppConfig> loadAppConfig(const std::string& path, const std::vector<rt::ConfigOverride>& overrides = {});
 /// Same, from YAML text (tests); source_name stands for the file name in messages.
 rt::Expected<AppConfig> parseAppConfig(const std::string& yaml_text, const std::string& source_name);
 

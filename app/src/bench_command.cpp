@@ -1,11 +1,11 @@
-// `aerotrack bench --scenario NAME|FILE --trials N [--speed MPS] [--out DIR] [--jobs J] [--config FILE]`:
-// runs seeds 1..N of a scenario as separate `aerotrack sim` processes, J at a time, then merges
-// their summary.json files into DIR/bench.json and prints a table. Each trial is a pure function
-// of (scenario, seed, config) writing one result folder (DIR/trial-SEED), so any batch system can
-// run the same trials unchanged and this merge step reads them (DESIGN.md, "Scale beyond one
-// machine").
-// `aerotrack bench --suite FILE [--out DIR] [--jobs J]` runs a suite's matrix the same way (suite.hpp),
-// skipping trials whose summary.json is complete, so an interrupted suite resumes where it stopped.
+// `aerotrack bench`: seeds of a scenario (--scenario NAME|FILE --trials N), or a suite's matrix
+// (--suite FILE, resumable: trials with a complete summary.json are kept), optionally swept over config
+// keys (--set KEY=V1,V2,...), as separate `aerotrack sim` processes. The trials are written down first
+// (trial_plan.hpp: DIR/plan.json, trials.txt, run_trial.sh); then an executor runs them -- local
+// processes, J at a time (--executor local, the default), or Slurm job arrays (--executor slurm,
+// slurm_executor.hpp) -- and the merge step (bench_merge.hpp) reads their folders and writes the
+// reports. `aerotrack bench merge DIR [--resubmit-missing] [--no-wait]` runs the merge alone, after a
+// `--no-wait` submission or an engine of one's own (DESIGN.md, "Scale beyond one machine").
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,13 +18,14 @@
 #include <map>
 #include <thread>
 
-#include "bench_plot.hpp"
-#include "bench_stats.hpp"
+#include "app_config.hpp"
+#include "bench_merge.hpp"
 #include "commands.hpp"
+#include "paths.hpp"
 #include "signals.hpp"
+#include "slurm_executor.hpp"
 #include "suite.hpp"
-
-#include <nlohmann/json.hpp>
+#include "trial_plan.hpp"
 
 namespace aerotrack::app {
 namespace {
@@ -71,6 +72,8 @@ bool runTrials(const std::string& self, const std::vector<TrialJob>& trials, std
         error = trials[next].dir + ": cannot create directory: " + ec.message();
         return false;
       }
+      // The last run's result must not stand for this one if this one fails.
+      std::filesystem::remove(trials[next].dir + "/summary.json", ec);
       const pid_t pid = launchTrial(self, trials[next].args, trials[next].dir);
       if (pid < 0) {
         error = "cannot start a trial process";
@@ -97,13 +100,123 @@ bool runTrials(const std::string& self, const std::vector<TrialJob>& trials, std
   return true;
 }
 
-std::string formatInterval(const nlohmann::json& ci) {
-  char text[48];
-  std::snprintf(text, sizeof(text), "[%.2f, %.2f]", ci[0].get<double>(), ci[1].get<double>());
-  return text;
+/// A path as every node sees it: absolute. A scenario name (no '/', no .yaml) stays a name.
+std::string absolutePath(const std::string& path) {
+  return std::filesystem::absolute(path).lexically_normal().string();
 }
 
-int suiteCommand(const ParsedArgs& args, const std::string& self, std::int64_t jobs);
+std::string absoluteScenario(const std::string& scenario) {
+  return resolveScenario(scenario) == scenario ? absolutePath(scenario) : scenario;
+}
+
+/// The cells of `bench --scenario`: one, or one per sweep point.
+rt::Expected<SuiteSpec> benchCells(const ParsedArgs& args) {
+  if (!args.has("scenario") || !args.has("trials"))
+    return rt::Error{"needs --scenario NAME|FILE and --trials N, or --suite FILE"};
+  SuiteCell cell;
+  cell.scenario = absoluteScenario(args.values.at("scenario"));
+  cell.mode = args.valueOr("mode", "proposed");
+  if (cell.mode != "proposed" && cell.mode != "baseline")
+    return rt::Error{"--mode: expected proposed or baseline, got '" + cell.mode + "'"};
+  cell.camera = args.valueOr("camera", "");
+  if (!cell.camera.empty() && cell.camera != "keypoints" && cell.camera != "image")
+    return rt::Error{"--camera: expected keypoints or image, got '" + cell.camera + "'"};
+  const auto trials = parseInt("trials", args.values.at("trials"), 1, 100000);
+  if (!trials) return trials.error();
+  if (args.has("speed")) {
+    const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0);
+    if (!s) return s.error();
+    cell.speed_mps = *s;
+  }
+  if (args.has("config")) cell.config = absolutePath(args.values.at("config"));
+  SuiteSpec suite;
+  suite.name = std::filesystem::path(args.values.at("scenario")).stem().string();
+  suite.source = "aerotrack bench --scenario " + args.values.at("scenario");
+  suite.first_seed = 1;
+  suite.last_seed = *trials;
+  suite.cells.push_back(cell);
+  return suite;
+}
+
+/// Checks every sweep point of every config the plan uses with the config's own parser, before a
+/// trial starts: a misspelt key or a value out of range is one line here, not N failed trials.
+rt::Status checkSweep(const SuiteSpec& suite, const std::vector<SweepPoint>& points) {
+  std::vector<std::string> configs;
+  for (const SuiteCell& c : suite.cells) {
+    const std::string config = c.config.empty() ? configDir() + "/sim.yaml" : c.config;
+    if (std::find(configs.begin(), configs.end(), config) == configs.end()) configs.push_back(config);
+  }
+  for (const std::string& config : configs)
+    for (const SweepPoint& point : points) {
+      if (point.empty()) continue;
+      if (auto loaded = loadAppConfig(config, point); !loaded) return loaded.error();
+    }
+  return rt::ok();
+}
+
+rt::Expected<SlurmSettings> slurmSettings(const ParsedArgs& args, std::int64_t jobs) {
+  SlurmSettings s;
+  s.partition = args.valueOr("slurm-partition", "");
+  const auto time = parseInt("slurm-time", args.valueOr("slurm-time", "30"), 1, 525600);
+  if (!time) return time.error();
+  const auto mem = parseInt("slurm-mem", args.valueOr("slurm-mem", "2048"), 16, 16777216);
+  if (!mem) return mem.error();
+  s.time_limit_min = static_cast<int>(*time);
+  s.memory_mb = static_cast<int>(*mem);
+  s.max_running = static_cast<int>(args.has("jobs") ? jobs : 16);
+  s.options = args.listOf("slurm-option");
+  for (const std::string& o : s.options)
+    if (o.rfind("--", 0) != 0)
+      return rt::Error{"--slurm-option: expected an sbatch option (--name=value), got '" + o + "'"};
+  return s;
+}
+
+/// Submits `indices` to Slurm, then waits and merges, or returns (--no-wait).
+int runOnSlurm(const TrialPlan& plan, const std::vector<std::size_t>& indices, bool wait, const char* command);
+
+/// Prints the merge's outcome and turns it into the exit status.
+int mergeAndReport(const TrialPlan& plan, const char* command) {
+  const auto merged = mergeTrials(plan);
+  if (!merged) return failCommand(command, merged.error().message);
+  return merged->missing.empty() && merged->error_cells == 0 ? 0 : 1;
+}
+
+std::vector<std::size_t> incompleteTrials(const TrialPlan& plan) {
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < plan.trials.size(); ++i)
+    if (!trialComplete(plan.trials[i].dir)) out.push_back(i);
+  return out;
+}
+
+int runOnSlurm(const TrialPlan& plan, const std::vector<std::size_t>& indices, bool wait, const char* command) {
+  if (indices.empty()) {
+    std::printf("slurm: nothing to submit: every trial has a result\n");
+    return mergeAndReport(plan, command);
+  }
+  const auto jobs = submitToSlurm(plan, indices);
+  if (!jobs) return failCommand(command, jobs.error().message);
+  std::string ids;
+  for (const std::string& id : *jobs) ids += (ids.empty() ? "" : ",") + id;
+  std::printf("slurm: %zu trials submitted as job%s %s (logs in %s/slurm/logs)\n", indices.size(),
+              jobs->size() > 1 ? "s" : "", ids.c_str(), plan.out_dir.c_str());
+  if (!wait) {
+    std::printf("slurm: not waiting; `aerotrack bench merge %s` merges what has finished, `scancel %s` stops it\n",
+                plan.out_dir.c_str(), ids.c_str());
+    return 0;
+  }
+  std::fflush(stdout);
+  std::atomic<bool> stop{false};
+  SignalWatcher signals(stop);
+  if (auto waited = waitForSlurm(plan, *jobs, stop); !waited) return failCommand(command, waited.error().message);
+  if (stop.load()) {
+    std::printf(
+        "slurm: stopped waiting; job%s %s run%s on (`scancel %s` stops %s); `aerotrack bench merge %s` merges\n",
+        jobs->size() > 1 ? "s" : "", ids.c_str(), jobs->size() > 1 ? "" : "s", ids.c_str(),
+        jobs->size() > 1 ? "them" : "it", plan.out_dir.c_str());
+    return signals.stoppedStatus();
+  }
+  return mergeAndReport(plan, command);
+}
 
 }  // namespace
 
@@ -111,264 +224,110 @@ int benchCommand(const ParsedArgs& args) {
   const auto jobs = parseInt(
       "jobs", args.valueOr("jobs", std::to_string(std::max(1U, std::thread::hardware_concurrency()))), 1, 1024);
   if (!jobs) return failCommand("bench", jobs.error().message);
+  const std::string executor = args.valueOr("executor", "local");
+  if (executor != "local" && executor != "slurm")
+    return failCommand("bench", "--executor: expected local or slurm, got '" + executor + "'");
+  if (executor != "slurm")
+    for (const char* slurm_only : {"no-wait", "slurm-partition", "slurm-time", "slurm-mem", "slurm-option"})
+      if (args.has(slurm_only))
+        return failCommand("bench", std::string("--") + slurm_only + " goes with --executor slurm");
+  std::error_code ec;
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+  if (ec) return failCommand("bench", "cannot find the aerotrack binary: " + ec.message());
+
+  TrialPlan plan;
+  plan.binary = self;
   if (args.has("suite")) {
     for (const char* other : {"scenario", "trials", "speed", "camera", "mode", "config"})
       if (args.has(other))
         return failCommand("bench", std::string("--") + other + " does not go with --suite (the suite file sets it)");
-    std::error_code ec;
-    const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string();
-    if (ec) return failCommand("bench", "cannot find the aerotrack binary: " + ec.message());
-    return suiteCommand(args, self, *jobs);
-  }
-  if (!args.has("scenario") || !args.has("trials"))
-    return failCommand("bench", "needs --scenario NAME|FILE and --trials N, or --suite FILE");
-  const std::string mode = args.valueOr("mode", "proposed");
-  if (mode != "proposed" && mode != "baseline")
-    return failCommand("bench", "--mode: expected proposed or baseline, got '" + mode + "'");
-  const auto trials = parseInt("trials", args.values.at("trials"), 1, 100000);
-  if (!trials) return failCommand("bench", trials.error().message);
-  if (args.has("speed")) {
-    if (const auto s = parseDouble("speed", args.values.at("speed"), 0.05, 20.0); !s)
-      return failCommand("bench", s.error().message);
-  }
-  std::error_code ec;
-  const std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string();
-  if (ec) return failCommand("bench", "cannot find the aerotrack binary: " + ec.message());
-  std::string scenario_tag = std::filesystem::path(args.values.at("scenario")).stem().string();
-  const std::string out_dir = args.valueOr("out", "out/bench-" + scenario_tag);
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return failCommand("bench", out_dir + ": cannot create directory: " + ec.message());
-
-  std::atomic<bool> stop{false};
-  SignalWatcher signals(stop);
-  std::vector<TrialJob> trial_jobs;
-  for (std::int64_t seed = 1; seed <= *trials; ++seed) {
-    TrialJob job{{"--scenario", args.values.at("scenario"), "--seed", std::to_string(seed), "--out",
-                  out_dir + "/trial-" + std::to_string(seed)},
-                 out_dir + "/trial-" + std::to_string(seed)};
-    for (const char* passthrough : {"speed", "camera", "config", "mode"})
-      if (args.values.count(passthrough) != 0) {
-        job.args.push_back(std::string("--") + passthrough);
-        job.args.push_back(args.values.at(passthrough));
-      }
-    trial_jobs.push_back(std::move(job));
-  }
-  std::map<std::size_t, int> status_by_index;
-  std::string run_error;
-  if (!runTrials(self, trial_jobs, *jobs, stop, status_by_index, run_error)) return failCommand("bench", run_error);
-  std::map<std::int64_t, int> exit_status;
-  for (const auto& [index, code] : status_by_index) exit_status[static_cast<std::int64_t>(index) + 1] = code;
-
-  nlohmann::json per_trial = nlohmann::json::array();
-  int successes = 0, failed_runs = 0, collisions = 0;
-  double visible_sum = 0.0, distance_sum = 0.0, rtf_sum = 0.0, plan_p50_sum = 0.0, plan_p99_max = 0.0;
-  double occluded_sum_s = 0.0, out_of_image_sum_s = 0.0, longest_loss_max_s = 0.0;
-  long long losses = 0;
-  int planned_trials = 0;
-  std::printf("%6s %8s %8s %8s %10s %9s %9s %7s %7s %9s  %s\n", "seed", "success", "followed", "visible", "long_loss",
-              "dist_m", "clear_m", "id_sw", "top_mps", "rt_x", "failure (ours; the paper's)");
-  for (const auto& [seed, code] : exit_status) {
-    const std::string path = out_dir + "/trial-" + std::to_string(seed) + "/summary.json";
-    std::ifstream in(path);
-    nlohmann::json s;
-    try {
-      in >> s;
-    } catch (const nlohmann::json::exception&) {
-      std::printf("%6lld   (no result: exit status %d, see %s/trial-%lld/log.txt)\n", static_cast<long long>(seed),
-                  code, out_dir.c_str(), static_cast<long long>(seed));
-      ++failed_runs;
-      continue;
+    auto suite = loadSuite(args.values.at("suite"));
+    if (!suite) return failCommand("bench", suite.error().message);
+    for (SuiteCell& c : suite->cells) {
+      c.scenario = absoluteScenario(c.scenario);
+      if (!c.config.empty()) c.config = absolutePath(c.config);
     }
-    per_trial.push_back(s);
-    const bool ok = s.value("success", false);
-    successes += ok ? 1 : 0;
-    collisions += s.value("collisions", 0);
-    visible_sum += s.value("visible_ratio", 0.0);
-    distance_sum += s.value("distance_mean_m", 0.0);
-    rtf_sum += s.value("realtime_factor", 0.0);
-    losses += s.value("losses", 0LL);
-    longest_loss_max_s = std::max(longest_loss_max_s, s.value("longest_loss_s", 0.0));
-    if (s.contains("hidden_s") && s["hidden_s"].is_object()) {
-      occluded_sum_s += s["hidden_s"].value("occluded", 0.0);
-      out_of_image_sum_s += s["hidden_s"].value("out_of_image", 0.0);
-    }
-    if (s.contains("planning") && s["planning"].is_object()) {
-      ++planned_trials;
-      plan_p50_sum += s["planning"].value("cycle_ms_p50", 0.0);
-      plan_p99_max = std::max(plan_p99_max, s["planning"].value("cycle_ms_p99", 0.0));
-    }
-    const bool followed = s.value("followed_all_the_way", false);
-    std::string reasons = s["failure_reason"].is_string() ? s["failure_reason"].get<std::string>() : "";
-    if (s.contains("follow_failure_reason") && s["follow_failure_reason"].is_string())
-      reasons += "; " + s["follow_failure_reason"].get<std::string>();
-    std::printf("%6lld %8s %8s %7.0f%% %9.1fs %9.2f %9.2f %7s %7.2f %9.0f  %s\n", static_cast<long long>(seed),
-                ok ? "yes" : "NO", followed ? "yes" : "NO", 100.0 * s.value("visible_ratio", 0.0),
-                s.value("longest_loss_s", 0.0), s.value("distance_mean_m", 0.0),
-                s["min_clearance_m"].is_number() ? s["min_clearance_m"].get<double>() : std::nan(""),
-                s.contains("identity_switches") && s["identity_switches"].is_number()
-                    ? std::to_string(s["identity_switches"].get<int>()).c_str()
-                    : "-",
-                s.value("person_top_speed_mps", 0.0), s.value("realtime_factor", 0.0), reasons.c_str());
+    plan.kind = "suite";
+    plan.suite = *suite;
+    plan.out_dir = absolutePath(args.valueOr("out", "out/suite-" + suite->name));
+  } else {
+    auto suite = benchCells(args);
+    if (!suite) return failCommand("bench", suite.error().message);
+    plan.kind = "bench";
+    plan.suite = *suite;
+    plan.out_dir = absolutePath(args.valueOr("out", "out/bench-" + suite->name));
+    plan.bench = {{"scenario", args.values.at("scenario")}, {"speed", args.valueOr("speed", "")}};
   }
-  const double n = std::max<double>(1.0, static_cast<double>(per_trial.size()));
-  const nlohmann::json stats = aggregateSummaries(std::vector<nlohmann::json>(per_trial.begin(), per_trial.end()));
-  nlohmann::json bench = {
-      {"scenario", args.values.at("scenario")},
-      {"speed_mps", args.has("speed") ? nlohmann::json(std::stod(args.values.at("speed"))) : nlohmann::json(nullptr)},
-      {"trials", *trials},
-      {"completed", per_trial.size()},
-      {"runs_without_result", failed_runs},
-      {"successes", successes},
-      {"success_rate", successes / static_cast<double>(*trials)},
-      {"collisions", collisions},
-      {"visible_ratio_mean", visible_sum / n},
-      {"losses", losses},
-      {"longest_loss_s_max", longest_loss_max_s},
-      {"hidden_s_mean", {{"occluded", occluded_sum_s / n}, {"out_of_image", out_of_image_sum_s / n}}},
-      {"distance_mean_m", distance_sum / n},
-      {"realtime_factor_mean", rtf_sum / n},
-      {"mode", args.valueOr("mode", "proposed")},
-      {"planning_cycle_ms_p50_mean", planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0},
-      {"planning_cycle_ms_p99_max", plan_p99_max},
-      {"summaries", per_trial},
-  };
-  // Both verdicts with 95 % Wilson intervals, identity metrics and the person's measured speed (over
-  // the completed trials; bench_stats.hpp).
-  for (const char* key :
-       {"completed", "success_ci95", "followed_all_the_way", "followed_rate", "followed_ci95", "min_clearance_m",
-        "identity", "person_top_speed_mps_mean", "person_top_speed_mps_max", "person_mean_speed_mps_mean"})
-    bench[key] = stats[key];
-  std::ofstream file(out_dir + "/bench.json");
-  file << bench.dump(2) << "\n";
-  file.close();
-  if (!file) return failCommand("bench", out_dir + "/bench.json: write failed");
-  BenchPlotData plot;
-  plot.title = args.values.at("scenario") + ", " + std::to_string(per_trial.size()) + " trials" +
-               (args.has("speed") ? ", " + args.values.at("speed") + " m/s" : "") + " (" +
-               args.valueOr("mode", "proposed") + ")";
-  plot.verdict = "ours " + std::to_string(successes) + "/" + std::to_string(*trials) + " " +
-                 formatInterval(stats["success_ci95"]) + ", followed all the way " +
-                 std::to_string(stats["followed_all_the_way"].get<int>()) + " " +
-                 formatInterval(stats["followed_ci95"]);
-  for (const nlohmann::json& s : per_trial) {
-    plot.visible_ratio.push_back(s.value("visible_ratio", std::nan("")));
-    plot.distance_mean_m.push_back(s.value("distance_mean_m", std::nan("")));
+  for (const std::string& option : args.listOf("set")) {
+    auto key = parseSweepOption(option);
+    if (!key) return failCommand("bench", key.error().message);
+    plan.sweep.push_back(*key);
   }
-  if (const rt::Status drawn = writeBenchPlot(out_dir + "/bench.png", plot); !drawn)
-    return failCommand("bench", drawn.error().message);
-  std::printf("%s: %d/%lld successful (%.0f%%), %d collisions, person visible %.0f%% on average; %s/bench.json\n",
-              args.values.at("scenario").c_str(), successes, static_cast<long long>(*trials),
-              100.0 * successes / static_cast<double>(*trials), collisions, 100.0 * visible_sum / n, out_dir.c_str());
-  const nlohmann::json& identity = stats["identity"];
-  std::printf(
-      "verdicts over %d completed trials (95 %% Wilson): ours %d %s, followed all the way %d %s; identity: %s; "
-      "person top speed %.2f m/s (mean over trials), mean %.2f m/s\n",
-      stats["completed"].get<int>(), successes, formatInterval(stats["success_ci95"]).c_str(),
-      stats["followed_all_the_way"].get<int>(), formatInterval(stats["followed_ci95"]).c_str(),
-      identity["trials_reported"].get<int>() > 0
-          ? (std::to_string(identity["trials_without_switch"].get<int>()) + "/" +
-             std::to_string(identity["trials_reported"].get<int>()) + " trials without a switch, " +
-             std::to_string(identity["time_on_wrong_person_s_mean"].get<double>()) + " s on a wrong person on average")
-                .c_str()
-          : "not reported",
-      stats["person_top_speed_mps_mean"].is_number() ? stats["person_top_speed_mps_mean"].get<double>() : 0.0,
-      stats["person_mean_speed_mps_mean"].is_number() ? stats["person_mean_speed_mps_mean"].get<double>() : 0.0);
-  // One row of the paper's Table I, in markdown (scripts/table1.sh collects them).
-  std::printf(
-      "| %s | %s | %s | %d/%lld | %.1f %% | %lld, longest %.1f s | %.2f / %.2f s | %.2f m | %.2f / %.2f ms | %d |\n",
-      scenario_tag.c_str(), args.has("speed") ? (args.values.at("speed") + " m/s").c_str() : "scenario's",
-      args.valueOr("mode", "proposed").c_str(), successes, static_cast<long long>(*trials), 100.0 * visible_sum / n,
-      losses, longest_loss_max_s, occluded_sum_s / n, out_of_image_sum_s / n, distance_sum / n,
-      planned_trials > 0 ? plan_p50_sum / planned_trials : 0.0, plan_p99_max, collisions);
-  if (stop.load()) return signals.stoppedStatus();
-  return failed_runs == 0 ? 0 : 1;
-}
-
-namespace {
-
-int suiteCommand(const ParsedArgs& args, const std::string& self, std::int64_t jobs) {
-  const auto suite = loadSuite(args.values.at("suite"));
-  if (!suite) return failCommand("bench", suite.error().message);
-  const std::string out_dir = args.valueOr("out", "out/suite-" + suite->name);
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return failCommand("bench", out_dir + ": cannot create directory: " + ec.message());
-
+  const auto points = sweepPoints(plan.sweep, 10000);
+  if (!points) return failCommand("bench", points.error().message);
+  if (auto checked = checkSweep(plan.suite, *points); !checked) return failCommand("bench", checked.error().message);
+  applySweep(plan.suite, *points);
+  if (executor == "slurm") {
+    auto settings = slurmSettings(args, *jobs);
+    if (!settings) return failCommand("bench", settings.error().message);
+    plan.slurm = *settings;
+  }
+  std::filesystem::create_directories(plan.out_dir, ec);
+  if (ec) return failCommand("bench", plan.out_dir + ": cannot create directory: " + ec.message());
   // A cell whose scenario (or config) file is missing is an error line in the report, not an abort:
   // the other cells still run.
-  std::vector<std::string> errors;
-  std::vector<TrialJob> trial_jobs;
-  std::size_t done_before = 0;
-  for (const SuiteCell& cell : suite->cells) {
-    errors.push_back(cellError(cell));
-    if (!errors.back().empty()) {
-      std::fprintf(stderr, "aerotrack bench: cell %s: %s; skipped\n", cell.id.c_str(), errors.back().c_str());
-      continue;
-    }
-    const std::vector<std::int64_t> seeds = remainingSeeds(out_dir, cell, suite->first_seed, suite->last_seed);
-    done_before += static_cast<std::size_t>(suite->last_seed - suite->first_seed + 1) - seeds.size();
-    for (const std::int64_t seed : seeds) {
-      const std::string dir = trialDir(out_dir, cell, seed);
-      TrialJob job{{"--scenario", cell.scenario, "--seed", std::to_string(seed), "--out", dir, "--mode", cell.mode,
-                    "--camera", cell.camera},
-                   dir};
-      if (cell.speed_mps) {
-        char speed[32];
-        std::snprintf(speed, sizeof(speed), "%.17g", *cell.speed_mps);
-        job.args.insert(job.args.end(), {"--speed", speed});
-      }
-      if (!cell.config.empty()) job.args.insert(job.args.end(), {"--config", cell.config});
-      trial_jobs.push_back(std::move(job));
-    }
+  for (const SuiteCell& cell : plan.suite.cells) {
+    plan.cell_errors.push_back(cellError(cell));
+    if (!plan.cell_errors.back().empty())
+      std::fprintf(stderr, "aerotrack bench: cell %s: %s; skipped\n", cell.id.c_str(), plan.cell_errors.back().c_str());
   }
-  std::printf("suite %s: %zu cells, %zu trials complete already, %zu to run, %lld at a time\n", suite->name.c_str(),
-              suite->cells.size(), done_before, trial_jobs.size(), static_cast<long long>(jobs));
+  if (plan.kind == "bench" && !plan.cell_errors.front().empty()) return failCommand("bench", plan.cell_errors.front());
+  planTrials(plan);
+  if (auto written = writePlan(plan); !written) return failCommand("bench", written.error().message);
+  // A suite resumes: its complete trials are kept. A bench runs every trial again.
+  std::vector<std::size_t> to_run;
+  if (plan.kind == "suite") {
+    to_run = incompleteTrials(plan);
+  } else {
+    for (std::size_t i = 0; i < plan.trials.size(); ++i) to_run.push_back(i);
+  }
+  std::printf("%s %s: %zu cells, %zu trials complete already, %zu to run, %s\n", plan.kind.c_str(),
+              plan.suite.name.c_str(), plan.suite.cells.size(), plan.trials.size() - to_run.size(), to_run.size(),
+              executor == "slurm" ? "as Slurm job arrays" : (std::to_string(*jobs) + " at a time").c_str());
+  std::printf("plan: %s/plan.json (trials.txt: one command per trial; run_trial.sh INDEX runs one)\n",
+              plan.out_dir.c_str());
   std::fflush(stdout);
+  if (executor == "slurm") return runOnSlurm(plan, to_run, !args.has("no-wait"), "bench");
 
+  std::vector<TrialJob> trial_jobs;
+  for (const std::size_t i : to_run) {
+    std::vector<std::string> argv = trialCommand(plan, i);
+    trial_jobs.push_back({std::vector<std::string>(argv.begin() + 2, argv.end()), plan.trials[i].dir});
+  }
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);
   std::map<std::size_t, int> exit_status;
   std::string run_error;
-  if (!runTrials(self, trial_jobs, jobs, stop, exit_status, run_error)) return failCommand("bench", run_error);
-
-  const std::vector<CellResult> results = collectResults(out_dir, *suite, errors);
-  std::ofstream json_file(out_dir + "/suite.json");
-  json_file << suiteJson(*suite, results).dump(2) << "\n";
-  json_file.close();
-  if (!json_file) return failCommand("bench", out_dir + "/suite.json: write failed");
-  const auto plots = writeSuitePlots(out_dir, *suite, results);
-  if (!plots) return failCommand("bench", plots.error().message);
-  std::ofstream report(out_dir + "/report.md");
-  report << suiteReport(*suite, results, *plots);
-  report.close();
-  if (!report) return failCommand("bench", out_dir + "/report.md: write failed");
-
-  int missing = 0, error_cells = 0;
-  std::printf("%-44s %12s %22s %22s %8s\n", "cell", "trials", "followed [95% CI]", "ours [95% CI]", "visible");
-  for (const CellResult& r : results) {
-    if (!r.error.empty()) {
-      ++error_cells;
-      std::printf("%-44s error: %s\n", r.cell.id.c_str(), r.error.c_str());
-      continue;
-    }
-    missing += static_cast<int>(r.missing_seeds.size());
-    const nlohmann::json stats = aggregateSummaries(r.summaries);
-    char followed[48], ours[48], trials[24];
-    std::snprintf(followed, sizeof(followed), "%d %s", stats["followed_all_the_way"].get<int>(),
-                  formatInterval(stats["followed_ci95"]).c_str());
-    std::snprintf(ours, sizeof(ours), "%d %s", stats["successes"].get<int>(),
-                  formatInterval(stats["success_ci95"]).c_str());
-    std::snprintf(trials, sizeof(trials), "%d/%lld", stats["completed"].get<int>(),
-                  static_cast<long long>(suite->last_seed) - static_cast<long long>(suite->first_seed) + 1);
-    std::printf("%-44s %12s %22s %22s %7.0f%%\n", r.cell.id.c_str(), trials, followed, ours,
-                stats["visible_ratio_mean"].is_number() ? 100.0 * stats["visible_ratio_mean"].get<double>() : 0.0);
-  }
-  std::printf("suite %s: %s/report.md, %s/suite.json; %d trial(s) without a result, %d cell(s) in error\n",
-              suite->name.c_str(), out_dir.c_str(), out_dir.c_str(), missing, error_cells);
+  if (!runTrials(self, trial_jobs, *jobs, stop, exit_status, run_error)) return failCommand("bench", run_error);
+  const int merged = mergeAndReport(plan, "bench");
   if (stop.load()) return signals.stoppedStatus();
-  return missing == 0 && error_cells == 0 ? 0 : 1;
+  return merged;
 }
 
-}  // namespace
+int benchMergeCommand(const ParsedArgs& args) {
+  const std::string dir = *args.positional;
+  auto plan = readPlan(dir);
+  if (!plan) return failCommand("bench merge", plan.error().message);
+  if (!args.has("resubmit-missing")) {
+    if (args.has("no-wait")) return failCommand("bench merge", "--no-wait goes with --resubmit-missing");
+    return mergeAndReport(*plan, "bench merge");
+  }
+  if (!plan->slurm)
+    return failCommand("bench merge",
+                       "--resubmit-missing: " + dir +
+                           " was run by local processes; run the same `aerotrack bench` again (a suite keeps its "
+                           "finished trials)");
+  return runOnSlurm(*plan, incompleteTrials(*plan), !args.has("no-wait"), "bench merge");
+}
 
 }  // namespace aerotrack::app

@@ -16,12 +16,29 @@ std::string ParsedArgs::valueOr(const std::string& name, const std::string& fall
   return it == values.end() ? fallback : it->second;
 }
 
+rt::Expected<std::vector<rt::ConfigOverride>> configOverrides(const ParsedArgs& args) {
+  std::vector<rt::ConfigOverride> out;
+  for (const std::string& text : args.listOf("set")) {
+    auto o = rt::parseConfigOverride(text);
+    if (!o) return o.error();
+    out.push_back(*o);
+  }
+  return out;
+}
+
+std::vector<std::string> ParsedArgs::listOf(const std::string& name) const {
+  const auto it = lists.find(name);
+  return it == lists.end() ? std::vector<std::string>{} : it->second;
+}
+
 std::vector<CommandSpec> commandTable() {
   return {
       {"run",
        "the onboard executable: devices from config, real-time executor",
        "",
        {{"config", "FILE", true, "configuration YAML (backends, tasks, parameters)"},
+        {"set", "KEY=VALUE", false,
+         "replace a config value (repeatable; a key path as errors name it, e.g. planning.replan_hz=20)", true},
         {"print-config", "", false, "print the effective configuration and exit"},
         {"duration-s", "S", false, "stop after S seconds (default: until SIGINT/SIGTERM)"},
         {"record", "DIR", false, "record what the devices deliver and are told into a dataset in DIR"},
@@ -47,7 +64,9 @@ std::vector<CommandSpec> commandTable() {
         {"mcap", "FILE", false, "write a flight log for Foxglove/Lichtblick (MCAP, Foxglove schemas) to FILE"},
         {"mcap-compression", "zstd|lz4|none", false, "the flight log's chunk compression (default zstd)"},
         {"live", "PORT|HOST:PORT", false, "with --realtime: serve the flight live to Foxglove/Lichtblick (WebSocket)"},
-        {"config", "FILE", false, "configuration YAML (default config/sim.yaml)"}},
+        {"config", "FILE", false, "configuration YAML (default config/sim.yaml)"},
+        {"set", "KEY=VALUE", false,
+         "replace a config value (repeatable; a key path as errors name it, e.g. planning.replan_hz=20)", true}},
        ""},
       {"replay",
        "re-run the modules on a recorded dataset (lockstep unless --realtime)",
@@ -55,6 +74,8 @@ std::vector<CommandSpec> commandTable() {
        {{"compare", "", false,
          "record the replay (OUT/replayed) and compare its outputs with the recording's, record by record"},
         {"config", "FILE", false, "configuration YAML (default DIR/config.yaml, the recorded run's)"},
+        {"set", "KEY=VALUE", false,
+         "replace a config value (repeatable; a key path as errors name it, e.g. planning.replan_hz=20)", true},
         {"out", "DIR", false, "where --compare writes the replay's recording (default out/replay-<name>)"},
         {"record", "DIR", false, "record the replay (its inputs and outputs) into a dataset in DIR"},
         {"offset-s", "S", false, "start this far into the recording"},
@@ -95,8 +116,25 @@ std::vector<CommandSpec> commandTable() {
         {"mode", "proposed|baseline", false,
          "this system, or Fast-Tracker 1.0 as the paper's baseline (default proposed)"},
         {"out", "DIR", false, "results folder (default out/bench-<scenario>)"},
-        {"jobs", "J", false, "trials run at once (default: the number of CPUs)"},
-        {"config", "FILE", false, "configuration YAML passed to every trial"}},
+        {"jobs", "J", false,
+         "trials run at once (default: the number of CPUs); with --executor slurm the array's limit (default 16)"},
+        {"config", "FILE", false, "configuration YAML passed to every trial"},
+        {"set", "KEY=V1,V2,...", false,
+         "sweep a config key over values (repeatable: every combination is a cell; sweep-KEY.png plots against it)",
+         true},
+        {"executor", "local|slurm", false,
+         "run trials as local processes (default) or as Slurm job arrays (sbatch; a shared filesystem)"},
+        {"no-wait", "", false, "with --executor slurm: submit and return; `aerotrack bench merge DIR` later"},
+        {"slurm-partition", "NAME", false, "the partition (default: the cluster's default)"},
+        {"slurm-time", "MIN", false, "time limit of one trial, minutes (default 30)"},
+        {"slurm-mem", "MB", false, "memory limit of one trial, MB (default 2048)"},
+        {"slurm-option", "--OPT=VALUE", false, "another sbatch option, e.g. --account=x (repeatable)", true}},
+       ""},
+      {"bench merge",
+       "merge the trials of DIR/plan.json that have finished (any engine ran them): the reports, and the missing",
+       "DIR",
+       {{"resubmit-missing", "", false, "submit the trials without a result to Slurm again, then wait and merge"},
+        {"no-wait", "", false, "with --resubmit-missing: submit and return"}},
        ""},
       {"detect",
        "run the keypoint detector on an image or video",
@@ -146,13 +184,21 @@ rt::Expected<ParsedArgs> parseArgs(const std::vector<std::string>& args, const s
   }
   if (args[0] == "--help" || args[0] == "-h") return out;
   const CommandSpec* command = nullptr;
-  for (const CommandSpec& c : table)
-    if (c.name == args[0]) command = &c;
+  std::size_t first_option = 1;
+  for (const CommandSpec& c : table) {
+    if (c.name == args[0] && command == nullptr) command = &c;
+    // A sub-command ("bench merge") is the command's first word and a second that is not an option.
+    if (args.size() > 1 && c.name == args[0] + " " + args[1]) {
+      command = &c;
+      first_option = 2;
+      break;
+    }
+  }
   if (command == nullptr) return rt::Error{"unknown command '" + args[0] + "'; try 'aerotrack --help'"};
   out.command = command->name;
   if (out.help) return out;
 
-  for (std::size_t i = 1; i < args.size(); ++i) {
+  for (std::size_t i = first_option; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a.rfind("--", 0) != 0) {
       if (command->positional.empty() || out.positional)
@@ -179,6 +225,10 @@ rt::Expected<ParsedArgs> parseArgs(const std::vector<std::string>& args, const s
       if (i + 1 >= args.size())
         return rt::Error{command->name + ": option '--" + name + "' needs a value " + option->value_name};
       inline_value = args[++i];
+    }
+    if (option->repeatable) {
+      out.lists[name].push_back(*inline_value);
+      continue;
     }
     if (out.values.count(name) != 0) return rt::Error{command->name + ": option '--" + name + "' given twice"};
     out.values[name] = *inline_value;
@@ -210,7 +260,7 @@ std::string usage(const CommandSpec& c) {
   out << "usage: aerotrack " << c.name;
   if (!c.positional.empty()) out << " " << c.positional;
   for (const OptionSpec& o : c.options) {
-    std::string text = "--" + o.name + (o.value_name.empty() ? "" : " " + o.value_name);
+    std::string text = "--" + o.name + (o.value_name.empty() ? "" : " " + o.value_name) + (o.repeatable ? "..." : "");
     out << " " << (o.required ? text : "[" + text + "]");
   }
   out << "\n  " << c.summary << "\n";

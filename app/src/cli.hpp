@@ -19,10 +19,11 @@ struct OptionSpec {
   std::string value_name;  ///< Empty: a flag without value.
   bool required = false;
   std::string help;
+  bool repeatable = false;  ///< May be given more than once (ParsedArgs::lists keeps every value in order).
 };
 
 struct CommandSpec {
-  std::string name;
+  std::string name;  ///< One word, or two for a sub-command ("bench merge").
   std::string summary;
   std::string positional;  ///< Name of the one positional argument ("IMAGE|VIDEO"), empty if none.
   std::vector<OptionSpec> options;
@@ -33,11 +34,16 @@ struct ParsedArgs {
   std::string command;
   std::optional<std::string> positional;
   std::map<std::string, std::string> values;
+  std::map<std::string, std::vector<std::string>> lists;  ///< Repeatable options, every value in order.
   std::set<std::string> flags;
   bool help = false;
 
-  bool has(const std::string& name) const { return values.count(name) != 0 || flags.count(name) != 0; }
+  bool has(const std::string& name) const {
+    return values.count(name) != 0 || flags.count(name) != 0 || lists.count(name) != 0;
+  }
   std::string valueOr(const std::string& name, const std::string& fallback) const;
+  /// A repeatable option's values (empty if not given).
+  std::vector<std::string> listOf(const std::string& name) const;
 };
 
 /// The commands of DESIGN.md.

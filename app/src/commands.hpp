@@ -4,6 +4,9 @@
 
 #include <string>
 
+#include <vector>
+
+#include "aerotrack/rt/config_node.hpp"
 #include "cli.hpp"
 
 namespace aerotrack::app {
@@ -14,6 +17,9 @@ int replayCommand(const ParsedArgs& args);
 int importVideoCommand(const ParsedArgs& args);
 int exportMcapCommand(const ParsedArgs& args);
 int benchCommand(const ParsedArgs& args);
+int benchMergeCommand(const ParsedArgs& args);
+/// The --set KEY=VALUE options of run, sim and replay, parsed (rt::ConfigOverride).
+rt::Expected<std::vector<rt::ConfigOverride>> configOverrides(const ParsedArgs& args);
 int detectCommand(const ParsedArgs& args);
 int datasetCommand(const ParsedArgs& args);
 int calibrateCommand(const ParsedArgs& args);

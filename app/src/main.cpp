@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
     if (args->command == "import-video") return importVideoCommand(*args);
     if (args->command == "export-mcap") return exportMcapCommand(*args);
     if (args->command == "bench") return benchCommand(*args);
+    if (args->command == "bench merge") return benchMergeCommand(*args);
     if (args->command == "detect") return detectCommand(*args);
     if (args->command == "dataset") return datasetCommand(*args);
     if (args->command == "calibrate") return calibrateCommand(*args);

@@ -53,7 +53,9 @@ int replayCommand(const ParsedArgs& args) {
   auto manifest = hal::replay::readManifest((fs::path(dir) / "manifest.yaml").string());
   if (!manifest) return failCommand("replay", manifest.error().message);
   const std::string config_path = args.valueOr("config", (fs::path(dir) / "config.yaml").string());
-  auto config = loadAppConfig(config_path);
+  const auto overrides = configOverrides(args);
+  if (!overrides) return failCommand("replay", overrides.error().message);
+  auto config = loadAppConfig(config_path, *overrides);
   if (!config) return failCommand("replay", config.error().message);
   const std::string mode = args.valueOr("mode", "proposed");
   if (mode != "proposed" && mode != "baseline")

@@ -21,7 +21,9 @@
 namespace aerotrack::app {
 
 int runCommand(const ParsedArgs& args) {
-  auto config = loadAppConfig(args.values.at("config"));
+  const auto overrides = configOverrides(args);
+  if (!overrides) return failCommand("run", overrides.error().message);
+  auto config = loadAppConfig(args.values.at("config"), *overrides);
   if (config) {
     config->record_dir = args.valueOr("record", "");
     config->mcap_path = args.valueOr("mcap", "");

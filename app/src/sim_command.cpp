@@ -33,7 +33,9 @@ int simCommand(const ParsedArgs& args) {
     if (!s) return failCommand("sim", s.error().message);
     speed = *s;
   }
-  auto config = loadAppConfig(args.valueOr("config", configDir() + "/sim.yaml"));
+  const auto overrides = configOverrides(args);
+  if (!overrides) return failCommand("sim", overrides.error().message);
+  auto config = loadAppConfig(args.valueOr("config", configDir() + "/sim.yaml"), *overrides);
   if (!config) return failCommand("sim", config.error().message);
   if (!config->hal.usesSim()) return failCommand("sim", config->source + ": hal: no device uses the sim backend");
   config->baseline_mode = mode == "baseline";
@@ -93,12 +95,18 @@ int simCommand(const ParsedArgs& args) {
   info.supervisor = supervisorSummary((*system)->supervisorTask(), start_ns, supervisor_step_s);
 
   const hal::sim::Simulation& sim = *(*system)->devices().simulation;
-  const nlohmann::json summary = simSummary(sim, info);
+  nlohmann::json summary = simSummary(sim, info);
+  // The config values this trial ran with beyond its file (a sweep's point: bench --set).
+  summary["set"] = nlohmann::json::object();
+  for (const rt::ConfigOverride& o : *overrides) summary["set"][o.key] = o.value;
   const std::string summary_path = out_dir + "/summary.json";
-  std::ofstream file(summary_path);
+  // Written aside and renamed: a trial killed while writing leaves no half summary to be merged.
+  std::ofstream file(summary_path + ".tmp", std::ios::trunc);
   file << summary.dump(2) << "\n";
   file.close();
-  if (!file) return failCommand("sim", summary_path + ": write failed");
+  std::error_code renamed;
+  if (file) std::filesystem::rename(summary_path + ".tmp", summary_path, renamed);
+  if (!file || renamed) return failCommand("sim", summary_path + ": write failed");
   const std::string topdown_path = out_dir + "/topdown.png";
   if (const rt::Status s = drawTopdown(sim, topdown_path); !s) return failCommand("sim", s.error().message);
   std::string strip_path;

@@ -119,8 +119,9 @@ std::optional<double> suitePlotSpeed(const CellResult& r, const nlohmann::json& 
 
 std::string suiteSeriesName(const SuiteCell& cell) {
   std::string name = cell.mode;
-  if (cell.camera != "keypoints") name += "/" + cell.camera;
+  if (!cell.camera.empty() && cell.camera != "keypoints") name += "/" + cell.camera;
   if (!cell.config.empty()) name += "/" + suiteScenarioTag(cell.config);
+  if (!cell.sets.empty()) name += " " + sweepPointLabel(cell.sets);
   return name;
 }
 
@@ -136,7 +137,68 @@ rt::Expected<SuiteSpec> loadSuite(const std::string& path) {
 }
 
 std::string trialDir(const std::string& out_dir, const SuiteCell& cell, std::int64_t seed) {
-  return out_dir + "/" + cell.id + "/trial-" + std::to_string(seed);
+  return out_dir + (cell.id.empty() ? "" : "/" + cell.id) + "/trial-" + std::to_string(seed);
+}
+
+void applySweep(SuiteSpec& suite, const std::vector<SweepPoint>& points) {
+  std::vector<SuiteCell> cells;
+  for (const SuiteCell& cell : suite.cells)
+    for (const SweepPoint& point : points) {
+      SuiteCell swept = cell;
+      swept.sets.insert(swept.sets.end(), point.begin(), point.end());
+      const std::string point_id = sweepPointId(point);
+      if (!point_id.empty()) swept.id += (swept.id.empty() ? "" : "-") + point_id;
+      cells.push_back(std::move(swept));
+    }
+  suite.cells = std::move(cells);
+}
+
+std::vector<std::string> trialArgs(const SuiteCell& cell, std::int64_t seed, const std::string& dir) {
+  std::vector<std::string> args{"--scenario", cell.scenario, "--seed", std::to_string(seed),
+                                "--out",      dir,           "--mode", cell.mode};
+  if (!cell.camera.empty()) args.insert(args.end(), {"--camera", cell.camera});  // empty: the scenario's
+  if (cell.speed_mps) {
+    char speed[32];
+    std::snprintf(speed, sizeof(speed), "%.17g", *cell.speed_mps);
+    args.insert(args.end(), {"--speed", speed});
+  }
+  if (!cell.config.empty()) args.insert(args.end(), {"--config", cell.config});
+  for (const std::string& a : sweepArgs(cell.sets)) args.push_back(a);
+  return args;
+}
+
+nlohmann::json cellJson(const SuiteCell& cell) {
+  nlohmann::json sets = nlohmann::json::object();
+  for (const rt::ConfigOverride& o : cell.sets) sets[o.key] = o.value;
+  return {{"id", cell.id},
+          {"scenario", cell.scenario},
+          {"speed_mps", cell.speed_mps ? nlohmann::json(*cell.speed_mps) : nlohmann::json(nullptr)},
+          {"mode", cell.mode},
+          {"camera", cell.camera},
+          {"config", cell.config.empty() ? nlohmann::json(nullptr) : nlohmann::json(cell.config)},
+          {"set", sets},
+          {"set_order", [&] {
+             nlohmann::json keys = nlohmann::json::array();
+             for (const rt::ConfigOverride& o : cell.sets) keys.push_back(o.key);
+             return keys;
+           }()}};
+}
+
+rt::Expected<SuiteCell> cellFromJson(const nlohmann::json& json) {
+  try {
+    SuiteCell cell;
+    cell.id = json.at("id").get<std::string>();
+    cell.scenario = json.at("scenario").get<std::string>();
+    if (!json.at("speed_mps").is_null()) cell.speed_mps = json.at("speed_mps").get<double>();
+    cell.mode = json.at("mode").get<std::string>();
+    cell.camera = json.at("camera").get<std::string>();
+    if (!json.at("config").is_null()) cell.config = json.at("config").get<std::string>();
+    for (const nlohmann::json& key : json.at("set_order"))
+      cell.sets.push_back({key.get<std::string>(), json.at("set").at(key.get<std::string>()).get<std::string>()});
+    return cell;
+  } catch (const nlohmann::json::exception& e) {
+    return rt::Error{std::string("a cell: ") + e.what()};
+  }
 }
 
 bool trialComplete(const std::string& trial_dir) {
@@ -196,16 +258,13 @@ nlohmann::json suiteJson(const SuiteSpec& suite, const std::vector<CellResult>& 
                         {"followed_all_the_way", s.value("followed_all_the_way", false)},
                         {"follow_failure_reason", s.value("follow_failure_reason", nlohmann::json(nullptr))},
                         {"trace_hash", s.value("trace_hash", nlohmann::json(nullptr))}});
-    cells.push_back({{"id", r.cell.id},
-                     {"scenario", r.cell.scenario},
-                     {"speed_mps", r.cell.speed_mps ? nlohmann::json(*r.cell.speed_mps) : nlohmann::json(nullptr)},
-                     {"mode", r.cell.mode},
-                     {"camera", r.cell.camera},
-                     {"config", r.cell.config.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.cell.config)},
-                     {"error", r.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.error)},
-                     {"missing_seeds", r.missing_seeds},
-                     {"stats", aggregateSummaries(r.summaries)},
-                     {"trials", trials}});
+    nlohmann::json cell = cellJson(r.cell);
+    cell.erase("set_order");
+    cell["error"] = r.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.error);
+    cell["missing_seeds"] = r.missing_seeds;
+    cell["stats"] = aggregateSummaries(r.summaries);
+    cell["trials"] = trials;
+    cells.push_back(std::move(cell));
   }
   const auto target = [](const std::optional<double>& t) { return t ? nlohmann::json(*t) : nlohmann::json(nullptr); };
   return {{"name", suite.name},
@@ -252,7 +311,8 @@ std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& r
     for (const CellResult& r : results) {
       if (r.cell.scenario != scenario) continue;
       const std::string speed = r.cell.speed_mps ? suiteSpeedText(*r.cell.speed_mps) + " m/s" : "scenario's";
-      const std::string mode = r.cell.mode + (r.cell.config.empty() ? "" : " (" + r.cell.config + ")");
+      std::string mode = r.cell.mode + (r.cell.config.empty() ? "" : " (" + r.cell.config + ")");
+      if (!r.cell.sets.empty()) mode += ", " + sweepPointLabel(r.cell.sets);
       if (!r.error.empty()) {
         errors += "- **error** " + r.cell.id + ": " + r.error + "\n";
         continue;
@@ -274,7 +334,7 @@ std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& r
       }
       // One cell at a time (appends, not a chain of temporaries).
       for (const std::string& cell :
-           {speed, mode, r.cell.camera,
+           {speed, mode, r.cell.camera.empty() ? std::string("scenario's") : r.cell.camera,
             suiteRateCell(stats, "followed_rate", "followed_ci95", suite.targets.followed_rate),
             suiteRateCell(stats, "success_rate", "success_ci95", suite.targets.success_rate), visible,
             suiteNumberCell(stats["distance_mean_m"], 2, " m"), suiteNumberCell(stats["min_clearance_m"], 2, " m"),
@@ -311,6 +371,8 @@ namespace {
 struct PlotPanel {
   std::string title;
   double y_lo = 0.0, y_hi = 1.0;
+  std::string x_label = "person speed, m/s";
+  std::vector<std::string> x_names;  ///< Set: the x axis is categorical, x = 0, 1, ... named so.
 };
 
 struct PlotPoint {
@@ -336,13 +398,17 @@ void drawSuitePanel(cv::Mat& image, const cv::Rect& area, const PlotPanel& panel
     std::snprintf(text, sizeof(text), "%.2f", y);
     cv::putText(image, text, px(x_lo, y) + cv::Point(-50, 4), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
                 cv::LINE_AA);
+    if (!panel.x_names.empty()) continue;
     const double x = x_lo + (x_hi - x_lo) * i / 4.0;
-    std::snprintf(text, sizeof(text), "%.2f", x);
+    std::snprintf(text, sizeof(text), "%.3g", x);
     cv::putText(image, text, px(x, panel.y_lo) + cv::Point(-14, 16), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0),
                 1, cv::LINE_AA);
   }
-  cv::putText(image, "person speed, m/s", cv::Point((left + right) / 2 - 60, bottom + 34), cv::FONT_HERSHEY_SIMPLEX,
-              0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  for (std::size_t i = 0; i < panel.x_names.size(); ++i)
+    cv::putText(image, panel.x_names[i].substr(0, 12), px(static_cast<double>(i), panel.y_lo) + cv::Point(-14, 16),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(image, panel.x_label, cv::Point((left + right) / 2 - 60, bottom + 34), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   int k = 0;
   for (const auto& [name, points] : series) {
     const cv::Scalar colour = kColours[k % 5];
@@ -366,7 +432,7 @@ void drawSuitePanel(cv::Mat& image, const cv::Rect& area, const PlotPanel& panel
       if (!std::isnan(points[i].y2))  // ours: hollow squares
         cv::drawMarker(image, px(points[i].x, points[i].y2), colour, cv::MARKER_SQUARE, 9, 1, cv::LINE_AA);
     }
-    cv::putText(image, name, cv::Point(right - 130, top + 18 + 16 * k), cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1,
+    cv::putText(image, name, cv::Point(left + 8, top + 18 + 16 * k), cv::FONT_HERSHEY_SIMPLEX, 0.4, colour, 1,
                 cv::LINE_AA);
     ++k;
   }
@@ -421,16 +487,115 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
     cv::putText(image, suite.name + ": " + scenario, cv::Point(10, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     drawSuitePanel(image, cv::Rect(0, 30, w, h),
-                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0}, x_lo, x_hi, success, true);
-    drawSuitePanel(image, cv::Rect(w, 30, w, h), {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0}, x_lo,
+                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0, "person speed, m/s", {}},
+                   x_lo, x_hi, success, true);
+    drawSuitePanel(image, cv::Rect(w, 30, w, h),
+                   {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0, "person speed, m/s", {}}, x_lo,
                    x_hi, visible, true);
-    drawSuitePanel(image, cv::Rect(2 * w, 30, w, h),
-                   {"mean distance per trial, m: median, 10-90 %", 0.0, std::max(1.0, std::ceil(d_hi))}, x_lo, x_hi,
-                   distance, true);
+    drawSuitePanel(
+        image, cv::Rect(2 * w, 30, w, h),
+        {"mean distance per trial, m: median, 10-90 %", 0.0, std::max(1.0, std::ceil(d_hi)), "person speed, m/s", {}},
+        x_lo, x_hi, distance, true);
     const std::string file = "plot-" + suiteScenarioTag(scenario) + ".png";
     std::string path = out_dir;
     path += '/';
     path += file;
+    try {
+      if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
+    } catch (const cv::Exception& e) {
+      return rt::Error{path + ": cannot write image: " + e.what()};
+    }
+    files.push_back(file);
+  }
+  return files;
+}
+
+namespace {
+
+/// The x of every value of a swept key: the number itself when all values are numbers, else the
+/// value's place in the order given (names then label the axis).
+std::map<std::string, double> sweepAxis(const SweepKey& key, std::vector<std::string>& names) {
+  std::map<std::string, double> x;
+  bool numeric = true;
+  for (const std::string& v : key.values) {
+    char* end = nullptr;
+    const double number = std::strtod(v.c_str(), &end);
+    numeric = numeric && !v.empty() && end == v.c_str() + v.size() && std::isfinite(number);
+    x[v] = number;
+  }
+  if (numeric) return x;
+  names = key.values;
+  for (std::size_t i = 0; i < key.values.size(); ++i) x[key.values[i]] = static_cast<double>(i);
+  return x;
+}
+
+}  // namespace
+
+rt::Expected<std::vector<std::string>> writeSweepPlots(const std::string& out_dir, const SuiteSpec& suite,
+                                                       const std::vector<SweepKey>& keys,
+                                                       const std::vector<CellResult>& results) {
+  std::vector<std::string> files;
+  for (const SweepKey& key : keys) {
+    std::vector<std::string> names;
+    const std::map<std::string, double> axis = sweepAxis(key, names);
+    std::map<std::string, std::vector<PlotPoint>> success, visible;
+    for (const CellResult& r : results) {
+      if (!r.error.empty() || r.summaries.empty()) continue;
+      // The series: the cell without this key's value (scenario, speed, mode, camera, the other keys).
+      SuiteCell rest = r.cell;
+      std::string value;
+      rest.sets.clear();
+      for (const rt::ConfigOverride& o : r.cell.sets) {
+        if (o.key == key.key) {
+          value = o.value;
+        } else {
+          rest.sets.push_back(o);
+        }
+      }
+      const auto x = axis.find(value);
+      if (x == axis.end()) continue;
+      std::string name = suiteScenarioTag(rest.scenario) + " " + suiteSeriesName(rest);
+      if (rest.speed_mps) name += " " + suiteSpeedText(*rest.speed_mps) + " m/s";
+      const nlohmann::json stats = aggregateSummaries(r.summaries);
+      success[name].push_back({x->second, stats["followed_rate"].get<double>(), stats["followed_ci95"][0].get<double>(),
+                               stats["followed_ci95"][1].get<double>(), stats["success_rate"].get<double>()});
+      std::vector<double> v;
+      for (const nlohmann::json& trial : r.summaries) {
+        double ratio = 0.0;
+        if (suiteNumber(trial, "visible_ratio", ratio)) v.push_back(ratio);
+      }
+      if (!v.empty()) visible[name].push_back({x->second, quantileOf(v, 0.5), quantileOf(v, 0.1), quantileOf(v, 0.9)});
+    }
+    if (success.empty()) continue;
+    double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
+    for (const auto& [value, x] : axis) {
+      x_lo = std::min(x_lo, x);
+      x_hi = std::max(x_hi, x);
+    }
+    if (x_hi <= x_lo) {
+      x_lo -= 0.5;
+      x_hi += 0.5;
+    } else if (!names.empty()) {  // room for the first and last names
+      x_lo -= 0.3;
+      x_hi += 0.3;
+    }
+    for (auto* m : {&success, &visible})
+      for (auto& [name, points] : *m)
+        std::sort(points.begin(), points.end(), [](const PlotPoint& a, const PlotPoint& b) { return a.x < b.x; });
+    const int w = 560, h = 380;
+    cv::Mat image(h + 30, 2 * w, CV_8UC3, cv::Scalar(255, 255, 255));
+    cv::putText(image, suite.name + ": sweep of " + key.key, cv::Point(10, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    drawSuitePanel(image, cv::Rect(0, 30, w, h),
+                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0, key.key, names}, x_lo, x_hi,
+                   success, true);
+    drawSuitePanel(image, cv::Rect(w, 30, w, h),
+                   {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0, key.key, names}, x_lo, x_hi,
+                   visible, true);
+    std::string file = "sweep-" + sweepPointId({{key.key, ""}});
+    file.pop_back();  // the '=' of the empty value
+    file += ".png";
+    const std::string path = out_dir + "/" + file;
     try {
       if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
     } catch (const cv::Exception& e) {

@@ -14,6 +14,7 @@
 
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/expected.hpp"
+#include "sweep.hpp"
 
 namespace aerotrack::app {
 
@@ -24,7 +25,8 @@ struct SuiteCell {
   std::string mode;                 ///< proposed | baseline.
   std::string camera;               ///< keypoints | image.
   std::string config;               ///< --config; empty: the default (config/sim.yaml).
-  std::string id;                   ///< Folder name under the suite's output folder.
+  SweepPoint sets;                  ///< --set KEY=VALUE of a sweep (sweep.hpp); empty: none.
+  std::string id;                   ///< Folder name under the suite's output folder; empty: the folder itself.
 };
 
 /// Optional targets; a rate under its target is flagged in report.md.
@@ -50,7 +52,17 @@ struct SuiteSpec {
 rt::Expected<SuiteSpec> parseSuite(const rt::Expected<rt::ConfigNode>& root);
 rt::Expected<SuiteSpec> loadSuite(const std::string& path);
 
-/// DIR/<cell id>/trial-SEED.
+/// Every cell once per sweep point (the point's id appended to the cell's), cell by cell.
+void applySweep(SuiteSpec& suite, const std::vector<SweepPoint>& points);
+
+/// The `sim` options of one trial of a cell (without the program and "sim").
+std::vector<std::string> trialArgs(const SuiteCell& cell, std::int64_t seed, const std::string& dir);
+
+/// suite.json's description of a cell, and back (plan.json keeps the cells this way).
+nlohmann::json cellJson(const SuiteCell& cell);
+rt::Expected<SuiteCell> cellFromJson(const nlohmann::json& json);
+
+/// DIR/<cell id>/trial-SEED (DIR/trial-SEED for a cell without an id).
 std::string trialDir(const std::string& out_dir, const SuiteCell& cell, std::int64_t seed);
 
 /// Whether a trial has finished: its summary.json parses as an object with a verdict and was not
@@ -82,6 +94,14 @@ nlohmann::json suiteJson(const SuiteSpec& suite, const std::vector<CellResult>& 
 /// report.md: per scenario a table (speed x mode x camera) and its error lines, and the plots' links.
 std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& results,
                         const std::vector<std::string>& plot_files);
+
+/// With a sweep: for every swept key, DIR/sweep-<key>.png -- the paper's success rate (with its 95 %
+/// Wilson band) and ours, and the visible ratio per trial (median, 10-90 %), against the key's value,
+/// one series per cell of the matrix and values of the other keys. Values that are not all numbers are
+/// placed in the order given. Returns the file names written.
+rt::Expected<std::vector<std::string>> writeSweepPlots(const std::string& out_dir, const SuiteSpec& suite,
+                                                       const std::vector<SweepKey>& keys,
+                                                       const std::vector<CellResult>& results);
 
 /// One PNG per scenario, DIR/plot-<scenario>.png: success rate (the paper's verdict, with its 95 %
 /// Wilson band, and ours) against person speed per mode; the visible ratio and the mean distance per trial

@@ -43,6 +43,86 @@ Status checkUniqueKeys(const YAML::Node& node, const std::string& source, const 
   return ok();
 }
 
+/// One step of an override's key path: a map key, or a list index (key empty).
+struct PathStep {
+  std::string key;
+  std::size_t index = 0;
+};
+
+/// "tasks[2].rate_hz" -> tasks, [2], rate_hz. Empty if the text is not a key path.
+std::vector<PathStep> splitKeyPath(const std::string& path) {
+  std::vector<PathStep> steps;
+  std::size_t i = 0;
+  const auto word_char = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  };
+  while (i < path.size()) {
+    const std::size_t start = i;
+    while (i < path.size() && word_char(path[i])) ++i;
+    if (i == start) return {};
+    steps.push_back({path.substr(start, i - start), 0});
+    while (i < path.size() && path[i] == '[') {
+      const std::size_t close = path.find(']', i);
+      if (close == std::string::npos || close == i + 1 || close - i > 7) return {};
+      std::size_t index = 0;
+      for (std::size_t k = i + 1; k < close; ++k) {
+        if (path[k] < '0' || path[k] > '9') return {};
+        index = index * 10 + static_cast<std::size_t>(path[k] - '0');
+      }
+      steps.push_back({"", index});
+      i = close + 1;
+    }
+    if (i == path.size()) break;
+    if (path[i] != '.' || i + 1 == path.size()) return {};
+    ++i;
+  }
+  return steps;
+}
+
+/// Puts `value` at `key_path` of `root`: every step but the last must exist; the last may add a key
+/// to a map (the parser then accepts or rejects it like any key of the file).
+Status applyOverride(YAML::Node& root, const ConfigOverride& o, const std::string& source) {
+  const std::string what = "--set " + o.key;
+  const std::vector<PathStep> steps = splitKeyPath(o.key);
+  if (steps.empty()) return Error{what + ": not a key path (expected words joined by '.', e.g. planning.rate_hz)"};
+  YAML::Node value;
+  try {
+    value = YAML::Load(o.value);
+  } catch (const YAML::Exception& e) {
+    return Error{what + ": invalid YAML value '" + o.value + "': " + e.msg};
+  }
+  // yaml-cpp: `node = other` would overwrite the referenced node's content; reset() rebinds.
+  YAML::Node at;
+  at.reset(root);
+  std::string reached;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const PathStep& step = steps[i];
+    const bool last = i + 1 == steps.size();
+    if (!step.key.empty()) {
+      if (!at.IsMap())
+        return Error{what + ": " + (reached.empty() ? source : reached) + " is not a map of keys in " + source};
+      if (last) {
+        at[step.key] = value;
+        return ok();
+      }
+      if (!at[step.key].IsDefined())
+        return Error{what + ": " + source + " has no key " + (reached.empty() ? "" : reached + ".") + step.key};
+      at.reset(at[step.key]);
+      reached += (reached.empty() ? "" : ".") + step.key;
+    } else {
+      if (!at.IsSequence() || step.index >= at.size())
+        return Error{what + ": " + reached + " has no item [" + std::to_string(step.index) + "] in " + source};
+      if (last) {
+        at[step.index] = value;
+        return ok();
+      }
+      at.reset(at[step.index]);
+      reached += "[" + std::to_string(step.index) + "]";
+    }
+  }
+  return ok();
+}
+
 std::string shortValue(const YAML::Node& value) {
   if (value.IsScalar()) return "'" + value.Scalar() + "'";
   if (value.IsMap()) return "a map";
@@ -73,28 +153,45 @@ std::string Range::toString() const {
   return (lo_excluded ? "(" : "[") + formatConfigNumber(lo) + ", " + formatConfigNumber(hi) + (hi_excluded ? ")" : "]");
 }
 
-ConfigNode::ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path)
+Expected<ConfigOverride> parseConfigOverride(const std::string& assignment) {
+  const std::size_t eq = assignment.find('=');
+  if (eq == std::string::npos) return Error{"--set: expected KEY=VALUE, got '" + assignment + "'"};
+  ConfigOverride o{assignment.substr(0, eq), assignment.substr(eq + 1)};
+  if (splitKeyPath(o.key).empty())
+    return Error{"--set: '" + o.key + "' is not a key path (expected words joined by '.', e.g. planning.rate_hz)"};
+  return o;
+}
+
+ConfigNode::ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path,
+                       std::shared_ptr<const std::set<std::string>> overridden)
     : node_(node),
       source_(std::move(source)),
       path_(std::move(path)),
-      used_(std::make_shared<std::set<std::string>>()) {}
+      used_(std::make_shared<std::set<std::string>>()),
+      overridden_(std::move(overridden)) {}
 
-Expected<ConfigNode> ConfigNode::fromString(const std::string& text, const std::string& source_name) {
+Expected<ConfigNode> ConfigNode::fromString(const std::string& text, const std::string& source_name,
+                                            const std::vector<ConfigOverride>& overrides) {
   auto source = std::make_shared<const std::string>(source_name);
+  auto overridden = std::make_shared<std::set<std::string>>();
   try {
     YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) return Error{source_name + ": the top level must be a map of keys"};
     if (auto status = checkUniqueKeys(root, source_name, ""); !status) return status.error();
-    return ConfigNode(root, source, "");
+    for (const ConfigOverride& o : overrides) {
+      if (auto status = applyOverride(root, o, source_name); !status) return status.error();
+      overridden->insert(o.key);
+    }
+    return ConfigNode(root, source, "", overridden);
   } catch (const YAML::Exception& e) {
     return Error{source_name + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg};
   }
 }
 
-Expected<ConfigNode> ConfigNode::loadFile(const std::string& path) {
+Expected<ConfigNode> ConfigNode::loadFile(const std::string& path, const std::vector<ConfigOverride>& overrides) {
   Expected<std::string> text = readBoundedFile(path, limits::kMaxYamlBytes);
   if (!text) return text.error();
-  return fromString(text.value(), path);
+  return fromString(text.value(), path, overrides);
 }
 
 std::string ConfigNode::keyPath(const std::string& key) const {
@@ -103,6 +200,12 @@ std::string ConfigNode::keyPath(const std::string& key) const {
 }
 
 std::string ConfigNode::locateAt(const YAML::Node& node, const std::string& full_path) const {
+  // A value from the command line has no line in the file: name the --set that gave it.
+  for (const std::string& set : *overridden_) {
+    if (full_path.compare(0, set.size(), set) == 0 &&
+        (full_path.size() == set.size() || full_path[set.size()] == '.' || full_path[set.size()] == '['))
+      return "--set " + full_path;
+  }
   const YAML::Mark mark = node.Mark();
   std::string out = *source_;
   if (!mark.is_null()) out += ":" + std::to_string(mark.line + 1);
@@ -318,7 +421,7 @@ std::string ConfigNode::getStringOr(const std::string& key, const std::string& f
 ConfigNode ConfigNode::child(const std::string& key) const {
   const YAML::Node value = require(key);
   if (!value.IsMap()) fail(key, "expected a map of keys, got " + shortValue(value));
-  return ConfigNode(value, source_, keyPath(key));
+  return ConfigNode(value, source_, keyPath(key), overridden_);
 }
 
 std::vector<ConfigNode> ConfigNode::childList(const std::string& key) const {
@@ -329,7 +432,7 @@ std::vector<ConfigNode> ConfigNode::childList(const std::string& key) const {
     const std::string item_path = keyPath(key) + "[" + std::to_string(i) + "]";
     if (!value[i].IsMap())
       throw ConfigError(locateAt(value[i], item_path) + ": expected a map of keys, got " + shortValue(value[i]));
-    out.push_back(ConfigNode(value[i], source_, item_path));
+    out.push_back(ConfigNode(value[i], source_, item_path, overridden_));
   }
   return out;
 }

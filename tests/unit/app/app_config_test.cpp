@@ -148,6 +148,23 @@ TEST(AppConfig, GivenBadRealDriverKeysThenErrorsNameThem) {
             std::string::npos);
 }
 
+TEST(AppConfig, GivenSetOverridesThenTheyAreAppliedAndCheckedLikeTheFile) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml",
+                               {{"vehicle.max_speed_mps", "4.5"}, {"planning.goal.tracking_distance_m", "3.25"}});
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->vehicle.max_speed_mps, 4.5);
+  ASSERT_TRUE(c->planning);
+  EXPECT_NE(toYaml(*c).find("tracking_distance_m: 3.25"), std::string::npos);  // a recording says what ran
+  EXPECT_EQ(loadAppConfig(kConfigDir + "/sim.yaml", {{"vehicle.max_sped_mps", "2"}}).error().message,
+            "--set vehicle.max_sped_mps: unknown key");
+  EXPECT_EQ(loadAppConfig(kConfigDir + "/sim.yaml", {{"vehicle.max_speed_mps", "fast"}})
+                .error()
+                .message.rfind("--set vehicle.max_speed_mps: expected a number", 0),
+            0U);
+  EXPECT_EQ(loadAppConfig(kConfigDir + "/sim.yaml", {{"vehicles.max_speed_mps", "2"}}).error().message,
+            "--set vehicles.max_speed_mps: " + kConfigDir + "/sim.yaml has no key vehicles");
+}
+
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
   const std::string yaml = simYamlWith("  max_speed_mps: 6.0", "  max_speed_mps: 6.0\n  max_sped_mps: 2.0");
   EXPECT_EQ(errorOf(yaml), at(yaml, "max_sped_mps") + ": vehicle.max_sped_mps: unknown key");

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "cli.hpp"
+#include "commands.hpp"
 
 namespace aerotrack::app {
 namespace {
@@ -49,6 +50,34 @@ TEST(Cli, GivenBadOptionsThenOneLineErrors) {
             "sim: option '--realtime' takes no value");
   EXPECT_EQ(parse({"run", "--config", "a", "extra"}).error().message, "run: unexpected argument 'extra'");
   EXPECT_EQ(parse({"detect"}).error().message, "detect: missing argument IMAGE|VIDEO");
+}
+
+TEST(Cli, GivenARepeatableOptionThenEveryValueIsKeptInOrder) {
+  const auto a = parse({"sim", "--scenario", "open", "--set", "a.b=1", "--set=c=2,3", "--set", "a.b=4"});
+  ASSERT_TRUE(a) << a.error().message;
+  EXPECT_EQ(a->listOf("set"), (std::vector<std::string>{"a.b=1", "c=2,3", "a.b=4"}));
+  EXPECT_TRUE(a->has("set"));
+  EXPECT_TRUE(a->listOf("slurm-option").empty());
+  const auto overrides = configOverrides(*a);
+  ASSERT_TRUE(overrides);
+  ASSERT_EQ(overrides->size(), 3U);
+  EXPECT_EQ((*overrides)[1].key, "c");
+  EXPECT_EQ((*overrides)[1].value, "2,3");
+  EXPECT_EQ(configOverrides(*parse({"sim", "--scenario", "o", "--set", "novalue"})).error().message,
+            "--set: expected KEY=VALUE, got 'novalue'");
+}
+
+TEST(Cli, GivenASubCommandThenItsOwnOptionsAndArgumentAreParsed) {
+  const auto merge = parse({"bench", "merge", "out/x", "--resubmit-missing"});
+  ASSERT_TRUE(merge) << merge.error().message;
+  EXPECT_EQ(merge->command, "bench merge");
+  EXPECT_EQ(*merge->positional, "out/x");
+  EXPECT_TRUE(merge->flags.count("resubmit-missing"));
+  EXPECT_EQ(parse({"bench", "merge"}).error().message, "bench merge: missing argument DIR");
+  EXPECT_EQ(parse({"bench", "merge", "d", "--trials", "3"}).error().message, "bench merge: unknown option '--trials'");
+  const auto bench = parse({"bench", "--suite", "s.yaml"});  // the command itself is still there
+  ASSERT_TRUE(bench);
+  EXPECT_EQ(bench->command, "bench");
 }
 
 TEST(Cli, NumbersAreCheckedAndNamed) {

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "aerotrack/rt/config_node.hpp"
 #include "aerotrack/rt/field_table.hpp"
@@ -34,6 +36,58 @@ TEST(ConfigNode, GivenValidKeysThenValuesRead) {
   EXPECT_EQ(root->getDoubleList("e", 3, 0, 10), (std::vector<double>{1, 2, 3}));
   EXPECT_EQ(root->child("f").getInt("g", 0, 9), 2);
   EXPECT_EQ(root->getDoubleOr("missing", 4.0, 0, 10), 4.0);
+}
+
+/// Parses `yaml` as "test.yaml" with `--set` assignments; the root or the error message.
+Expected<ConfigNode> withSets(const std::string& yaml, const std::vector<std::string>& sets) {
+  std::vector<ConfigOverride> overrides;
+  for (const std::string& s : sets) {
+    auto o = parseConfigOverride(s);
+    if (!o) return o.error();
+    overrides.push_back(*o);
+  }
+  return ConfigNode::fromString(yaml, "test.yaml", overrides);
+}
+
+TEST(ConfigOverride, GivenSetsThenTheyReplaceValuesInMapsAndListsInOrder) {
+  const auto root = withSets("a: 1\nf: {g: 2, h: [1, 2]}\ntasks:\n  - {rate_hz: 10}\n  - {rate_hz: 20}\n",
+                             {"a=3.5", "f.g=4", "f.h=[7, 8, 9]", "tasks[1].rate_hz=50", "a=4.5", "f.new=true"});
+  ASSERT_TRUE(root) << root.error().message;
+  EXPECT_EQ(root->getDouble("a", 0, 9), 4.5);  // the last --set of a key wins
+  EXPECT_EQ(root->child("f").getInt("g", 0, 9), 4);
+  EXPECT_EQ(root->child("f").getDoubleList("h", 0, 0, 10), (std::vector<double>{7, 8, 9}));
+  EXPECT_TRUE(root->child("f").getBool("new"));
+  EXPECT_EQ(root->childList("tasks")[1].getDouble("rate_hz", 0, 100), 50.0);
+  EXPECT_EQ(root->childList("tasks")[0].getDouble("rate_hz", 0, 100), 10.0);
+}
+
+TEST(ConfigOverride, GivenABadSetValueOrKeyThenTheParsersErrorNamesTheSetNotAFileLine) {
+  const auto bad_value = withSets("f: {g: 2}\n", {"f.g=fast"});
+  ASSERT_TRUE(bad_value);
+  const auto read = parseConfig<double>([&] { return bad_value->child("f").getDouble("g", 0, 9); });
+  ASSERT_FALSE(read);
+  EXPECT_EQ(read.error().message.rfind("--set f.g: expected a number", 0), 0U) << read.error().message;
+
+  const auto typo = withSets("f: {g: 2}\n", {"f.typo=1"});
+  ASSERT_TRUE(typo);
+  const auto unknown = parseConfig<int>([&] {
+    const ConfigNode f = typo->child("f");
+    f.getDouble("g", 0, 9);
+    f.finish();
+    return 0;
+  });
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().message, "--set f.typo: unknown key");
+}
+
+TEST(ConfigOverride, GivenAPathThatDoesNotLeadIntoTheFileThenOneLineNamesIt) {
+  EXPECT_EQ(withSets("a: 1\n", {"b.c=1"}).error().message, "--set b.c: test.yaml has no key b");
+  EXPECT_EQ(withSets("a: 1\n", {"a.c=1"}).error().message, "--set a.c: a is not a map of keys in test.yaml");
+  EXPECT_EQ(withSets("l: [1]\n", {"l[3]=1"}).error().message, "--set l[3]: l has no item [3] in test.yaml");
+  EXPECT_EQ(withSets("a: 1\n", {"a"}).error().message, "--set: expected KEY=VALUE, got 'a'");
+  EXPECT_EQ(withSets("a: 1\n", {"=1"}).error().message.rfind("--set: '' is not a key path", 0), 0U);
+  EXPECT_EQ(withSets("a: 1\n", {"a..b=1"}).error().message.rfind("--set: 'a..b' is not a key path", 0), 0U);
+  EXPECT_EQ(withSets("a: 1\n", {"a=[1, 2"}).error().message.rfind("--set a: invalid YAML value '[1, 2'", 0), 0U);
 }
 
 TEST(ConfigNode, GivenMissingKeyThenErrorNamesFileAndKey) {

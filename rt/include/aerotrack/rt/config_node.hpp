@@ -58,12 +58,29 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// One `--set KEY=VALUE` of the command line: KEY a key path as messages write it
+/// ("planning.search.time_step_s", "tasks[2].rate_hz"), VALUE YAML text ("0.05", "true", "[1, 2]").
+/// The value replaces the file's (or adds the key to a map that exists), and is then read and checked
+/// by the same parser as the file: a misspelt key is an unknown key, a bad value is out of range.
+struct ConfigOverride {
+  std::string key;
+  std::string value;
+};
+
+/// Splits "KEY=VALUE" at the first '='. Error ("--set: ...") if there is none or KEY is empty or
+/// not a key path (words of letters, digits, '_' and '-', joined by '.', each with optional [i]).
+Expected<ConfigOverride> parseConfigOverride(const std::string& assignment);
+
 class ConfigNode {
  public:
-  /// Reads and parses a YAML file. Error if it is missing, unreadable or not valid YAML.
-  static Expected<ConfigNode> loadFile(const std::string& path);
+  /// Reads and parses a YAML file, then applies `overrides` in order. Error if it is missing,
+  /// unreadable or not valid YAML, or an override's path does not lead into the file (a missing
+  /// parent map, a list index out of range) or its value is not valid YAML. Messages about a key an
+  /// override set say "--set KEY" instead of the file and line.
+  static Expected<ConfigNode> loadFile(const std::string& path, const std::vector<ConfigOverride>& overrides = {});
   /// Parses YAML text; source_name stands for the file name in messages.
-  static Expected<ConfigNode> fromString(const std::string& text, const std::string& source_name);
+  static Expected<ConfigNode> fromString(const std::string& text, const std::string& source_name,
+                                         const std::vector<ConfigOverride>& overrides = {});
 
   bool has(const std::string& key) const;
   /// Whether the key is present and a list (for keys that take a scalar or a list).
@@ -112,7 +129,8 @@ class ConfigNode {
   const std::string& sourceName() const { return *source_; }
 
  private:
-  ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path);
+  ConfigNode(const YAML::Node& node, std::shared_ptr<const std::string> source, std::string path,
+             std::shared_ptr<const std::set<std::string>> overridden);
   YAML::Node require(const std::string& key) const;
   std::string keyPath(const std::string& key) const;
   std::string locate(const YAML::Node& node, const std::string& key) const;
@@ -123,7 +141,8 @@ class ConfigNode {
   YAML::Node node_;
   std::shared_ptr<const std::string> source_;
   std::string path_;
-  std::shared_ptr<std::set<std::string>> used_;  // shared so copies of a node agree
+  std::shared_ptr<std::set<std::string>> used_;              // shared so copies of a node agree
+  std::shared_ptr<const std::set<std::string>> overridden_;  // key paths set by --set (and everything under them)
 };
 
 /// Runs a parse function and turns a thrown ConfigError into an Error value. A YAML exception that a
