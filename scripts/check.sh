@@ -7,15 +7,17 @@
 #            a sanitizer owns malloc, so under test.sh they skip
 #   vcan     the CAN gimbal driver over real SocketCAN (vcan0) in QEMU (scripts/vcan_test.sh, ~10 s once the
 #            kernel is cached; the first run downloads Debian's kernel package, 70 MB)
+#   slurm    `bench --executor slurm` against a real single-node Slurm from Debian's packages (scripts/slurm_test.sh,
+#            ~10 s; installs slurm-wlm and munge when missing)
 #   tsan     a build with ThreadSanitizer runs the concurrency tests
 #   tidy     clang-tidy (.clang-tidy) on every production source, warnings are errors
-# usage: scripts/check.sh [format|release|vcan|tsan|tidy|all]...   (default: all)
+# usage: scripts/check.sh [format|release|vcan|slurm|tsan|tidy|all]...   (default: all)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 jobs=$(nproc)
 steps=("$@")
 ((${#steps[@]})) || steps=(all)
-[[ ${steps[*]} == all ]] && steps=(format release vcan tsan tidy)
+[[ ${steps[*]} == all ]] && steps=(format release vcan slurm tsan tidy)
 
 sources() { git ls-files "$@"; }
 
@@ -32,6 +34,10 @@ for step in "${steps[@]}"; do
     vcan)
       scripts/build.sh --tree release hal_real_can_vcan_tests
       scripts/vcan_test.sh build/bin/hal_real_can_vcan_tests
+      ;;
+    slurm)
+      scripts/build.sh --tree release aerotrack
+      scripts/slurm_test.sh build/bin/aerotrack
       ;;
     tsan)
       scripts/build.sh --tree tsan rt_executor_tests rt_stress_tests sim_world_concurrency_tests sim_realtime_tests \
@@ -62,7 +68,7 @@ for step in "${steps[@]}"; do
         { grep -v ' warnings generated\.$' || true; }
       ;;
     *)
-      echo "check.sh: unknown step '$step' (format, release, vcan, tsan, tidy, all)" >&2
+      echo "check.sh: unknown step '$step' (format, release, vcan, slurm, tsan, tidy, all)" >&2
       exit 1
       ;;
   esac
