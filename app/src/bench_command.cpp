@@ -225,8 +225,8 @@ int benchCommand(const ParsedArgs& args) {
       "jobs", args.valueOr("jobs", std::to_string(std::max(1U, std::thread::hardware_concurrency()))), 1, 1024);
   if (!jobs) return failCommand("bench", jobs.error().message);
   const std::string executor = args.valueOr("executor", "local");
-  if (executor != "local" && executor != "slurm")
-    return failCommand("bench", "--executor: expected local or slurm, got '" + executor + "'");
+  if (executor != "local" && executor != "slurm" && executor != "none")
+    return failCommand("bench", "--executor: expected local, slurm or none, got '" + executor + "'");
   if (executor != "slurm")
     for (const char* slurm_only : {"no-wait", "slurm-partition", "slurm-time", "slurm-mem", "slurm-option"})
       if (args.has(slurm_only))
@@ -293,11 +293,18 @@ int benchCommand(const ParsedArgs& args) {
   }
   std::printf("%s %s: %zu cells, %zu trials complete already, %zu to run, %s\n", plan.kind.c_str(),
               plan.suite.name.c_str(), plan.suite.cells.size(), plan.trials.size() - to_run.size(), to_run.size(),
-              executor == "slurm" ? "as Slurm job arrays" : (std::to_string(*jobs) + " at a time").c_str());
+              executor == "slurm"  ? "as Slurm job arrays"
+              : executor == "none" ? "by another engine"
+                                   : (std::to_string(*jobs) + " at a time").c_str());
   std::printf("plan: %s/plan.json (trials.txt: one command per trial; run_trial.sh INDEX runs one)\n",
               plan.out_dir.c_str());
   std::fflush(stdout);
   if (executor == "slurm") return runOnSlurm(plan, to_run, !args.has("no-wait"), "bench");
+  if (executor == "none") {  // another engine runs the plan (docs/scale-out.md)
+    std::printf("not run: %s/run_trial.sh INDEX runs trial INDEX (0..%zu); then `aerotrack bench merge %s`\n",
+                plan.out_dir.c_str(), plan.trials.size() - 1, plan.out_dir.c_str());
+    return 0;
+  }
 
   std::vector<TrialJob> trial_jobs;
   for (const std::size_t i : to_run) {

@@ -122,8 +122,9 @@ std::vector<CommandSpec> commandTable() {
         {"set", "KEY=V1,V2,...", false,
          "sweep a config key over values (repeatable: every combination is a cell; sweep-KEY.png plots against it)",
          true},
-        {"executor", "local|slurm", false,
-         "run trials as local processes (default) or as Slurm job arrays (sbatch; a shared filesystem)"},
+        {"executor", "local|slurm|none", false,
+         "run trials as local processes (default) or as Slurm job arrays (sbatch; a shared filesystem), or only "
+         "write the plan (DIR/run_trial.sh INDEX) for another engine"},
         {"no-wait", "", false, "with --executor slurm: submit and return; `aerotrack bench merge DIR` later"},
         {"slurm-partition", "NAME", false, "the partition (default: the cluster's default)"},
         {"slurm-time", "MIN", false, "time limit of one trial, minutes (default 30)"},
