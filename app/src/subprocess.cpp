@@ -97,7 +97,7 @@ std::string firstLine(const std::string& text) {
   while (start < text.size()) {
     std::size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
-    const std::string line = text.substr(start, end - start);
+    std::string line = text.substr(start, end - start);
     if (line.find_first_not_of(" \t\r") != std::string::npos) return line;
     start = end + 1;
   }

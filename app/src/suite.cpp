@@ -373,6 +373,7 @@ struct PlotPanel {
   double y_lo = 0.0, y_hi = 1.0;
   std::string x_label = "person speed, m/s";
   std::vector<std::string> x_names;  ///< Set: the x axis is categorical, x = 0, 1, ... named so.
+  std::vector<double> x_ticks;       ///< Set: the x axis is labelled at these values (else at quarters).
 };
 
 struct PlotPoint {
@@ -398,8 +399,13 @@ void drawSuitePanel(cv::Mat& image, const cv::Rect& area, const PlotPanel& panel
     std::snprintf(text, sizeof(text), "%.2f", y);
     cv::putText(image, text, px(x_lo, y) + cv::Point(-50, 4), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
                 cv::LINE_AA);
-    if (!panel.x_names.empty()) continue;
+    if (!panel.x_names.empty() || !panel.x_ticks.empty()) continue;
     const double x = x_lo + (x_hi - x_lo) * i / 4.0;
+    std::snprintf(text, sizeof(text), "%.3g", x);
+    cv::putText(image, text, px(x, panel.y_lo) + cv::Point(-14, 16), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0),
+                1, cv::LINE_AA);
+  }
+  for (const double x : panel.x_ticks) {
     std::snprintf(text, sizeof(text), "%.3g", x);
     cv::putText(image, text, px(x, panel.y_lo) + cv::Point(-14, 16), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0),
                 1, cv::LINE_AA);
@@ -486,16 +492,21 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
     cv::Mat image(h + 30, 3 * w, CV_8UC3, cv::Scalar(255, 255, 255));
     cv::putText(image, suite.name + ": " + scenario, cv::Point(10, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    drawSuitePanel(image, cv::Rect(0, 30, w, h),
-                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0, "person speed, m/s", {}},
-                   x_lo, x_hi, success, true);
-    drawSuitePanel(image, cv::Rect(w, 30, w, h),
-                   {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0, "person speed, m/s", {}}, x_lo,
-                   x_hi, visible, true);
     drawSuitePanel(
-        image, cv::Rect(2 * w, 30, w, h),
-        {"mean distance per trial, m: median, 10-90 %", 0.0, std::max(1.0, std::ceil(d_hi)), "person speed, m/s", {}},
-        x_lo, x_hi, distance, true);
+        image, cv::Rect(0, 30, w, h),
+        {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0, "person speed, m/s", {}, {}}, x_lo,
+        x_hi, success, true);
+    drawSuitePanel(image, cv::Rect(w, 30, w, h),
+                   {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0, "person speed, m/s", {}, {}}, x_lo,
+                   x_hi, visible, true);
+    drawSuitePanel(image, cv::Rect(2 * w, 30, w, h),
+                   {"mean distance per trial, m: median, 10-90 %",
+                    0.0,
+                    std::max(1.0, std::ceil(d_hi)),
+                    "person speed, m/s",
+                    {},
+                    {}},
+                   x_lo, x_hi, distance, true);
     const std::string file = "plot-" + suiteScenarioTag(scenario) + ".png";
     std::string path = out_dir;
     path += '/';
@@ -538,7 +549,8 @@ rt::Expected<std::vector<std::string>> writeSweepPlots(const std::string& out_di
   for (const SweepKey& key : keys) {
     std::vector<std::string> names;
     const std::map<std::string, double> axis = sweepAxis(key, names);
-    std::map<std::string, std::vector<PlotPoint>> success, visible;
+    std::map<std::string, std::vector<PlotPoint>> success, visible, distance;
+    double d_hi = 0.0;
     for (const CellResult& r : results) {
       if (!r.error.empty() || r.summaries.empty()) continue;
       // The series: the cell without this key's value (scenario, speed, mode, camera, the other keys).
@@ -559,12 +571,17 @@ rt::Expected<std::vector<std::string>> writeSweepPlots(const std::string& out_di
       const nlohmann::json stats = aggregateSummaries(r.summaries);
       success[name].push_back({x->second, stats["followed_rate"].get<double>(), stats["followed_ci95"][0].get<double>(),
                                stats["followed_ci95"][1].get<double>(), stats["success_rate"].get<double>()});
-      std::vector<double> v;
+      std::vector<double> v, d;
       for (const nlohmann::json& trial : r.summaries) {
-        double ratio = 0.0;
-        if (suiteNumber(trial, "visible_ratio", ratio)) v.push_back(ratio);
+        double number = 0.0;
+        if (suiteNumber(trial, "visible_ratio", number)) v.push_back(number);
+        if (suiteNumber(trial, "distance_mean_m", number)) d.push_back(number);
       }
       if (!v.empty()) visible[name].push_back({x->second, quantileOf(v, 0.5), quantileOf(v, 0.1), quantileOf(v, 0.9)});
+      if (!d.empty()) {
+        distance[name].push_back({x->second, quantileOf(d, 0.5), quantileOf(d, 0.1), quantileOf(d, 0.9)});
+        d_hi = std::max(d_hi, quantileOf(d, 0.9));
+      }
     }
     if (success.empty()) continue;
     double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
@@ -579,23 +596,33 @@ rt::Expected<std::vector<std::string>> writeSweepPlots(const std::string& out_di
       x_lo -= 0.3;
       x_hi += 0.3;
     }
-    for (auto* m : {&success, &visible})
+    for (auto* m : {&success, &visible, &distance})
       for (auto& [name, points] : *m)
         std::sort(points.begin(), points.end(), [](const PlotPoint& a, const PlotPoint& b) { return a.x < b.x; });
-    const int w = 560, h = 380;
-    cv::Mat image(h + 30, 2 * w, CV_8UC3, cv::Scalar(255, 255, 255));
+    std::vector<double> ticks;
+    if (names.empty() && axis.size() <= 8)
+      for (const auto& [value, x] : axis) ticks.push_back(x);
+    const int w = 480, h = 380;
+    cv::Mat image(h + 30, 3 * w, CV_8UC3, cv::Scalar(255, 255, 255));
     cv::putText(image, suite.name + ": sweep of " + key.key, cv::Point(10, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6,
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     drawSuitePanel(image, cv::Rect(0, 30, w, h),
-                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0, key.key, names}, x_lo, x_hi,
-                   success, true);
+                   {"success: followed all the way (95% Wilson), ours (squares)", 0.0, 1.0, key.key, names, ticks},
+                   x_lo, x_hi, success, true);
     drawSuitePanel(image, cv::Rect(w, 30, w, h),
-                   {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0, key.key, names}, x_lo, x_hi,
+                   {"visible ratio per trial: median, 10-90 % of trials", 0.0, 1.0, key.key, names, ticks}, x_lo, x_hi,
                    visible, true);
-    std::string file = "sweep-" + sweepPointId({{key.key, ""}});
+    drawSuitePanel(
+        image, cv::Rect(2 * w, 30, w, h),
+        {"mean distance per trial, m: median, 10-90 %", 0.0, std::max(1.0, std::ceil(d_hi)), key.key, names, ticks},
+        x_lo, x_hi, distance, true);
+    std::string file = "sweep-";
+    file += sweepPointId({{key.key, ""}});
     file.pop_back();  // the '=' of the empty value
     file += ".png";
-    const std::string path = out_dir + "/" + file;
+    std::string path = out_dir;
+    path += '/';
+    path += file;
     try {
       if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
     } catch (const cv::Exception& e) {

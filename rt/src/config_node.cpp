@@ -9,6 +9,7 @@
 #include <locale>
 #include <map>
 #include <sstream>
+#include <string_view>
 
 #include "aerotrack/rt/input_file.hpp"
 #include "aerotrack/rt/input_limits.hpp"
@@ -94,30 +95,39 @@ Status applyOverride(YAML::Node& root, const ConfigOverride& o, const std::strin
   // yaml-cpp: `node = other` would overwrite the referenced node's content; reset() rebinds.
   YAML::Node at;
   at.reset(root);
-  std::string reached;
+  std::string reached;  // the path walked so far, as messages write it
+  const auto failure = [&](std::initializer_list<std::string_view> parts) {
+    std::string message = what;
+    message += ": ";
+    for (const std::string_view part : parts) message += part;
+    return Error{message};
+  };
   for (std::size_t i = 0; i < steps.size(); ++i) {
     const PathStep& step = steps[i];
     const bool last = i + 1 == steps.size();
     if (!step.key.empty()) {
-      if (!at.IsMap())
-        return Error{what + ": " + (reached.empty() ? source : reached) + " is not a map of keys in " + source};
+      if (!at.IsMap()) return failure({reached.empty() ? source : reached, " is not a map of keys in ", source});
       if (last) {
         at[step.key] = value;
         return ok();
       }
       if (!at[step.key].IsDefined())
-        return Error{what + ": " + source + " has no key " + (reached.empty() ? "" : reached + ".") + step.key};
+        return failure({source, " has no key ", reached, reached.empty() ? "" : ".", step.key});
       at.reset(at[step.key]);
-      reached += (reached.empty() ? "" : ".") + step.key;
+      if (!reached.empty()) reached += '.';
+      reached += step.key;
     } else {
+      const std::string index = std::to_string(step.index);
       if (!at.IsSequence() || step.index >= at.size())
-        return Error{what + ": " + reached + " has no item [" + std::to_string(step.index) + "] in " + source};
+        return failure({reached, " has no item [", index, "] in ", source});
       if (last) {
         at[step.index] = value;
         return ok();
       }
       at.reset(at[step.index]);
-      reached += "[" + std::to_string(step.index) + "]";
+      reached += '[';
+      reached += index;
+      reached += ']';
     }
   }
   return ok();
