@@ -100,6 +100,9 @@ bool runTrials(const std::string& self, const std::vector<TrialJob>& trials, std
   return true;
 }
 
+constexpr std::size_t kMaxPlanCells = 10000;
+constexpr std::size_t kMaxPlanTrials = 100000;
+
 /// A path as every node sees it: absolute. A scenario name (no '/', no .yaml) stays a name.
 std::string absolutePath(const std::string& path) {
   return std::filesystem::absolute(path).lexically_normal().string();
@@ -267,6 +270,14 @@ int benchCommand(const ParsedArgs& args) {
   if (!points) return failCommand("bench", points.error().message);
   if (auto checked = checkSweep(plan.suite, *points); !checked) return failCommand("bench", checked.error().message);
   applySweep(plan.suite, *points);
+  // Bounds on what one plan may hold (plan.json and trials.txt stay tens of MB, a merge minutes).
+  const auto seeds = static_cast<std::size_t>(plan.suite.last_seed - plan.suite.first_seed + 1);
+  if (plan.suite.cells.size() > kMaxPlanCells)
+    return failCommand("bench", std::to_string(plan.suite.cells.size()) + " cells with the sweep; at most " +
+                                    std::to_string(kMaxPlanCells) + " in one plan");
+  if (plan.suite.cells.size() * seeds > kMaxPlanTrials)
+    return failCommand("bench", std::to_string(plan.suite.cells.size() * seeds) + " trials; at most " +
+                                    std::to_string(kMaxPlanTrials) + " in one plan (split it into several)");
   if (executor == "slurm") {
     auto settings = slurmSettings(args, *jobs);
     if (!settings) return failCommand("bench", settings.error().message);
@@ -301,8 +312,9 @@ int benchCommand(const ParsedArgs& args) {
   std::fflush(stdout);
   if (executor == "slurm") return runOnSlurm(plan, to_run, !args.has("no-wait"), "bench");
   if (executor == "none") {  // another engine runs the plan (docs/scale-out.md)
-    std::printf("not run: %s/run_trial.sh INDEX runs trial INDEX (0..%zu); then `aerotrack bench merge %s`\n",
-                plan.out_dir.c_str(), plan.trials.size() - 1, plan.out_dir.c_str());
+    std::printf(
+        "not run: %s/run_trial.sh INDEX runs trial INDEX (0 to %zu trials - 1); then `aerotrack bench merge %s`\n",
+        plan.out_dir.c_str(), plan.trials.size(), plan.out_dir.c_str());
     return 0;
   }
 

@@ -48,7 +48,7 @@ rt::Expected<std::vector<SweepPoint>> sweepPoints(const std::vector<SweepKey>& k
     if (!seen.insert(k.key).second) return rt::Error{"--set " + k.key + ": the key is swept twice"};
     count *= k.values.size();
     if (count > max_points)
-      return rt::Error{"--set: " + std::to_string(count) + "+ combinations; at most " + std::to_string(max_points)};
+      return rt::Error{"--set: more than " + std::to_string(max_points) + " combinations of values"};
   }
   std::vector<SweepPoint> points{SweepPoint{}};
   for (const SweepKey& k : keys) {
