@@ -266,6 +266,12 @@ nlohmann::json suiteJson(const SuiteSpec& suite, const std::vector<CellResult>& 
     cell["trials"] = trials;
     cells.push_back(std::move(cell));
   }
+  nlohmann::json out = suiteHeaderJson(suite);
+  out["cells"] = cells;
+  return out;
+}
+
+nlohmann::json suiteHeaderJson(const SuiteSpec& suite) {
   const auto target = [](const std::optional<double>& t) { return t ? nlohmann::json(*t) : nlohmann::json(nullptr); };
   return {{"name", suite.name},
           {"source", suite.source},
@@ -273,8 +279,7 @@ nlohmann::json suiteJson(const SuiteSpec& suite, const std::vector<CellResult>& 
           {"targets",
            {{"followed_rate", target(suite.targets.followed_rate)},
             {"success_rate", target(suite.targets.success_rate)},
-            {"visible_ratio", target(suite.targets.visible_ratio)}}},
-          {"cells", cells}};
+            {"visible_ratio", target(suite.targets.visible_ratio)}}}};
 }
 
 std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& results,
@@ -366,6 +371,15 @@ std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& r
 }
 
 namespace {
+
+rt::Status writePlotImage(const cv::Mat& image, const std::string& path) {
+  try {
+    if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
+  } catch (const cv::Exception& e) {
+    return rt::Error{path + ": cannot write image: " + e.what()};
+  }
+  return rt::ok();
+}
 
 /// One panel of a plot: axes from the data, a series per mode.
 struct PlotPanel {
@@ -511,11 +525,7 @@ rt::Expected<std::vector<std::string>> writeSuitePlots(const std::string& out_di
     std::string path = out_dir;
     path += '/';
     path += file;
-    try {
-      if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
-    } catch (const cv::Exception& e) {
-      return rt::Error{path + ": cannot write image: " + e.what()};
-    }
+    if (auto written = writePlotImage(image, path); !written) return written.error();
     files.push_back(file);
   }
   return files;
@@ -623,11 +633,7 @@ rt::Expected<std::vector<std::string>> writeSweepPlots(const std::string& out_di
     std::string path = out_dir;
     path += '/';
     path += file;
-    try {
-      if (!cv::imwrite(path, image)) return rt::Error{path + ": cannot write image"};
-    } catch (const cv::Exception& e) {
-      return rt::Error{path + ": cannot write image: " + e.what()};
-    }
+    if (auto written = writePlotImage(image, path); !written) return written.error();
     files.push_back(file);
   }
   return files;

@@ -91,6 +91,9 @@ std::vector<CellResult> collectResults(const std::string& out_dir, const SuiteSp
 /// each trial's verdicts.
 nlohmann::json suiteJson(const SuiteSpec& suite, const std::vector<CellResult>& results);
 
+/// The suite's name, source, seeds and targets (suite.json's and plan.json's head).
+nlohmann::json suiteHeaderJson(const SuiteSpec& suite);
+
 /// report.md: per scenario a table (speed x mode x camera) and its error lines, and the plots' links.
 std::string suiteReport(const SuiteSpec& suite, const std::vector<CellResult>& results,
                         const std::vector<std::string>& plot_files);

@@ -15,17 +15,10 @@ constexpr const char* kPlanFormat = "aerotrack-trial-plan-1";
 constexpr std::size_t kMaxPlanBytes = std::size_t{64} << 20;
 
 nlohmann::json suiteToJson(const SuiteSpec& s) {
-  nlohmann::json cells = nlohmann::json::array();
-  for (const SuiteCell& c : s.cells) cells.push_back(cellJson(c));
-  const auto target = [](const std::optional<double>& t) { return t ? nlohmann::json(*t) : nlohmann::json(nullptr); };
-  return {{"name", s.name},
-          {"source", s.source},
-          {"seeds", {s.first_seed, s.last_seed}},
-          {"targets",
-           {{"followed_rate", target(s.targets.followed_rate)},
-            {"success_rate", target(s.targets.success_rate)},
-            {"visible_ratio", target(s.targets.visible_ratio)}}},
-          {"cells", cells}};
+  nlohmann::json json = suiteHeaderJson(s);
+  json["cells"] = nlohmann::json::array();
+  for (const SuiteCell& c : s.cells) json["cells"].push_back(cellJson(c));
+  return json;
 }
 
 SuiteSpec suiteFromJson(const nlohmann::json& j) {

@@ -8,6 +8,7 @@
 
 #include "bench_stats.hpp"
 #include "suite.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::app {
 namespace {
@@ -15,25 +16,6 @@ namespace {
 rt::Expected<SuiteSpec> suiteFrom(const std::string& yaml) {
   return parseSuite(rt::ConfigNode::fromString(yaml, "suite.yaml"));
 }
-
-/// A fresh folder under the system's temporary folder, removed at the end of the test.
-class SuiteTempDir {
- public:
-  SuiteTempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            ("aerotrack-suite-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~SuiteTempDir() { std::filesystem::remove_all(path_); }
-  SuiteTempDir(const SuiteTempDir&) = delete;
-  SuiteTempDir& operator=(const SuiteTempDir&) = delete;
-  std::string path() const { return path_.string(); }
-
- private:
-  std::filesystem::path path_;
-};
 
 void writeFile(const std::string& path, const std::string& text) {
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
@@ -106,7 +88,7 @@ TEST(SuiteParse, GivenBadInputThenOneLineNamingFileLineAndKey) {
 const char* kCompleteSummary = R"({"seed": 1, "success": true, "followed_all_the_way": false})";
 
 TEST(SuiteResume, GivenSomeTrialsCompleteThenOnlyTheOthersRemain) {
-  SuiteTempDir dir;
+  test::TempDir dir;
   SuiteCell cell;
   cell.id = "sharp_turn-0.85mps-proposed-keypoints";
   writeFile(trialDir(dir.path(), cell, 1) + "/summary.json", kCompleteSummary);
@@ -147,7 +129,7 @@ std::string syntheticSummary(int seed, bool success, bool followed, double visib
 }
 
 TEST(SuiteReport, GivenSyntheticSummariesThenTablesIntervalsErrorsAndPlots) {
-  SuiteTempDir dir;
+  test::TempDir dir;
   const auto suite = suiteFrom(R"(name: synth
 seeds: 4
 targets: {followed_rate: 0.9}

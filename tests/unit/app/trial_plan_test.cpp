@@ -9,29 +9,12 @@
 
 #include "slurm_executor.hpp"
 #include "subprocess.hpp"
+#include "support/temp_dir.hpp"
 #include "sweep.hpp"
 #include "trial_plan.hpp"
 
 namespace aerotrack::app {
 namespace {
-
-class PlanTempDir {
- public:
-  PlanTempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            ("aerotrack-plan-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~PlanTempDir() { std::filesystem::remove_all(path_); }
-  PlanTempDir(const PlanTempDir&) = delete;
-  PlanTempDir& operator=(const PlanTempDir&) = delete;
-  std::string path() const { return path_.string(); }
-
- private:
-  std::filesystem::path path_;
-};
 
 void writeText(const std::string& path, const std::string& text) {
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
@@ -97,7 +80,7 @@ TrialPlan examplePlan(const std::string& dir) {
 }
 
 TEST(TrialPlan, GivenAPlanThenItIsWrittenAndReadBackWithEveryTrial) {
-  PlanTempDir dir;
+  test::TempDir dir;
   const TrialPlan plan = examplePlan(dir.path());
   ASSERT_EQ(plan.suite.cells.size(), 4U);
   EXPECT_EQ(plan.suite.cells[1].id, "sharp_turn-1.5mps-proposed-keypoints-planning.goal.tracking_distance_m=3");
@@ -128,7 +111,7 @@ TEST(TrialPlan, GivenAPlanThenItIsWrittenAndReadBackWithEveryTrial) {
 }
 
 TEST(TrialPlan, GivenABrokenPlanFileThenOneLineNamesIt) {
-  PlanTempDir dir;
+  test::TempDir dir;
   EXPECT_EQ(readPlan(dir.path()).error().message,
             dir.path() + "/plan.json: cannot open file: no such file or directory");
   writeText(dir.path() + "/plan.json", "{\"format\": \"aerotrack-trial-plan-1\", \"kind\": \"bench\"");
@@ -140,7 +123,7 @@ TEST(TrialPlan, GivenABrokenPlanFileThenOneLineNamesIt) {
 }
 
 TEST(TrialPlan, GivenAPlanThatMovedThenItsTrialsAreUnderItsNewFolder) {
-  PlanTempDir dir;
+  test::TempDir dir;
   const TrialPlan plan = examplePlan(dir.path() + "/old");
   ASSERT_TRUE(std::filesystem::create_directories(plan.out_dir));
   ASSERT_TRUE(writePlan(plan));
@@ -151,7 +134,7 @@ TEST(TrialPlan, GivenAPlanThatMovedThenItsTrialsAreUnderItsNewFolder) {
 }
 
 TEST(TrialPlan, GivenEachWayATrialCanEndThenItsStateSaysWhy) {
-  PlanTempDir dir;
+  test::TempDir dir;
   const std::string d = dir.path();
   const std::string complete = R"({"seed": 1, "success": true, "interrupted": false})";
   writeText(d + "/ok/summary.json", complete);
@@ -190,7 +173,7 @@ TEST(SlurmExecutor, GivenIndicesThenArraysAndTheirSpecsStayUnderMaxArraySize) {
 }
 
 TEST(SlurmExecutor, GivenJobsSubmittedThenEachTrialsLatestLogIsFound) {
-  PlanTempDir dir;
+  test::TempDir dir;
   TrialPlan plan = examplePlan(dir.path());
   writeText(dir.path() + "/slurm/jobs.txt", "41 0 0,1,2,3\n57 2 2\n");
   const auto logs = slurmLogs(plan);

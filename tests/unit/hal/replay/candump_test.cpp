@@ -9,7 +9,7 @@
 
 #include <fstream>
 
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

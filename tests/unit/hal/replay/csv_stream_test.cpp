@@ -18,7 +18,7 @@
 #include <thread>
 
 #include "aerotrack/hal/replay/stream_codecs.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

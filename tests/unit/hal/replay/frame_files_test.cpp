@@ -13,7 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "aerotrack/hal/replay/mcap_writer.hpp"
-#include "unit/hal/replay/temp_dir.hpp"
+#include "support/temp_dir.hpp"
 #include "unit/malloc_counter.hpp"
 
 namespace aerotrack::hal::replay {

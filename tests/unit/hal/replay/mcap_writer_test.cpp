@@ -14,7 +14,7 @@
 #include <random>
 
 #include "support/mcap_reference_reader.hpp"
-#include "unit/hal/replay/temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

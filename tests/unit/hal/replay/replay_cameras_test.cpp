@@ -11,7 +11,7 @@
 
 #include "aerotrack/hal/replay/frame_files.hpp"
 #include "aerotrack/hal/replay/replay_devices.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

@@ -12,7 +12,7 @@
 #include <fstream>
 
 #include "aerotrack/hal/replay/stream_codecs.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

@@ -16,7 +16,7 @@
 
 #include "aerotrack/hal/replay/manifest.hpp"
 #include "aerotrack/hal/replay/replay_devices.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace aerotrack::hal::replay {
 namespace {

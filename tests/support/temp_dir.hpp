@@ -1,5 +1,5 @@
-// A scratch folder per test for the dataset tests: named after the test and the process (so parallel
-// ctest runs never share one), emptied on creation and removed with the object.
+// A scratch folder per test: named after the test and the process (so parallel ctest runs never share
+// one), emptied on creation and removed with the object.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-namespace aerotrack::hal::replay::test {
+namespace aerotrack::test {
 
 class TempDir {
  public:
@@ -30,4 +30,4 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-}  // namespace aerotrack::hal::replay::test
+}  // namespace aerotrack::test
