@@ -43,7 +43,9 @@ rt::Status benchCellReport(const TrialPlan& plan, const SuiteCell& cell,
   for (std::int64_t seed = plan.suite.first_seed; seed <= plan.suite.last_seed; ++seed) {
     const std::string dir = trialDir(plan.out_dir, cell, seed);
     if (!trialComplete(dir)) {
-      std::printf("%6lld   (no result: %s)\n", static_cast<long long>(seed), reasons_by_dir.at(dir).c_str());
+      const auto reason = reasons_by_dir.find(dir);  // absent: its result went away while the merge ran
+      std::printf("%6lld   (no result: %s)\n", static_cast<long long>(seed),
+                  reason == reasons_by_dir.end() ? "its summary.json went away" : reason->second.c_str());
       ++failed_runs;
       continue;
     }
