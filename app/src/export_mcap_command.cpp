@@ -184,9 +184,7 @@ int exportMcapCommand(const ParsedArgs& args) {
   foxglove::CameraCalibration calibration;
   foxglove::PointCloud points;
   foxglove::SceneUpdate scene;
-  std::vector<Eigen::Vector3d> path_W_m;
-  rt::TimeNs path_start_ns = -1;
-  int path_segments = 0;
+  foxglove_log::FlownPath flown_path(1.0);  // seconds a stretch, as the live log's default
   std::size_t gimbal_next = 0;
   double gimbal_angle_rad = 0.0;
   std::uint64_t unreadable_frames = 0;
@@ -210,14 +208,7 @@ int exportMcapCommand(const ParsedArgs& args) {
         foxglove_log::fillTransforms(transforms, o, gimbal_angle_rad, extrinsics ? &*extrinsics : nullptr,
                                      T_BD ? &*T_BD : nullptr);
         w.write(Topic::kTf, o.stamp_ns, transforms);
-        if (path_start_ns < 0) path_start_ns = o.stamp_ns;
-        path_W_m.push_back(o.p_WB_m);
-        if (rt::nsToSeconds(o.stamp_ns - path_start_ns) >= 1.0 && path_W_m.size() > 1) {
-          foxglove_log::fillPathSegment(scene, o.stamp_ns, path_segments++, path_W_m);
-          w.write(Topic::kPath, o.stamp_ns, scene);
-          path_W_m.erase(path_W_m.begin(), path_W_m.end() - 1);
-          path_start_ns = o.stamp_ns;
-        }
+        if (flown_path.add(o.stamp_ns, o.p_WB_m, scene)) w.write(Topic::kPath, o.stamp_ns, scene);
         break;
       }
       case Source::kImage: {
@@ -273,8 +264,7 @@ int exportMcapCommand(const ParsedArgs& args) {
       }
       case Source::kTrajectory: {
         const RecordedTrajectory& t = (*trajectories)[e.index];
-        foxglove_log::fillPathSegment(scene, t.stamp_ns, 0, t.points_W_m);
-        scene.mutable_entities(0)->set_id("plan/trajectory");  // the newest replaces the last
+        foxglove_log::fillTrajectoryPoints(scene, t.stamp_ns, t.points_W_m);  // the newest replaces the last
         w.write(Topic::kTrajectory, t.stamp_ns, scene);
         break;
       }
@@ -292,6 +282,7 @@ int exportMcapCommand(const ParsedArgs& args) {
       }
     }
   }
+  if (flown_path.flush(scene)) w.write(Topic::kPath, flown_path.lastStampNs(), scene);  // the last stretch
   const rt::Status closed = w.close();
   std::printf("%s; %zu records of %s", w.summary().c_str(), events.size(), dir.c_str());
   if (skipped > 0 || unreadable_frames > 0) {

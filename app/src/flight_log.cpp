@@ -14,14 +14,6 @@
 namespace aerotrack::app {
 namespace {
 
-double seconds(rt::TimeNs ns) {
-  return rt::nsToSeconds(ns);
-}
-
-}  // namespace
-
-namespace {
-
 google::protobuf::ArenaOptions arenaOn(std::vector<char>& block) {
   google::protobuf::ArenaOptions options;
   options.initial_block = block.data();
@@ -37,9 +29,8 @@ FlightLogTask::FlightLogTask(const FlightLogOptions& options, const FlightLogSou
       sources_(sources),
       log_(std::move(log)),
       arena_block_(kArenaBytes),
-      arena_(arenaOn(arena_block_)) {
-  path_W_m_.reserve(256);
-}
+      arena_(arenaOn(arena_block_)),
+      flown_path_(options.path_segment_s) {}
 
 FlightLogTask::~FlightLogTask() = default;
 
@@ -52,7 +43,7 @@ rt::Expected<std::unique_ptr<FlightLogTask>> FlightLogTask::create(const FlightL
 
 void FlightLogTask::step(rt::TimeNs now_ns) {
   if (!log_->active()) return;  // the log has ended; the flight goes on
-  logOdometry(now_ns);
+  logOdometry();
   logSetpoint();
   logCamera();
   logDepth(now_ns);
@@ -63,7 +54,7 @@ void FlightLogTask::step(rt::TimeNs now_ns) {
   arena_.Reset();  // every message of this step is written: their storage goes back to the initial block
 }
 
-void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
+void FlightLogTask::logOdometry() {
   const auto odometry = sources_.channels.odometry.read();
   if (!odometry || odometry->stamp_ns <= last_odometry_ns_) return;
   last_odometry_ns_ = odometry->stamp_ns;
@@ -73,16 +64,9 @@ void FlightLogTask::logOdometry(rt::TimeNs now_ns) {
   foxglove_log::fillTransforms(transforms, *odometry, gimbal ? gimbal->angle_rad : 0.0, sources_.extrinsics,
                                depth ? &depth->T_BC : nullptr);
   log_->write(Topic::kTf, odometry->stamp_ns, transforms);
-  // The flown path, a stretch at a time (each stretch starts where the last ended).
-  if (path_segment_start_ns_ < 0) path_segment_start_ns_ = odometry->stamp_ns;
-  path_W_m_.push_back(odometry->p_WB_m);
-  if (seconds(odometry->stamp_ns - path_segment_start_ns_) >= options_.path_segment_s && path_W_m_.size() > 1) {
-    auto& scene = fresh<foxglove::SceneUpdate>();
-    foxglove_log::fillPathSegment(scene, now_ns, path_segments_++, path_W_m_);
+  auto& scene = fresh<foxglove::SceneUpdate>();
+  if (flown_path_.add(odometry->stamp_ns, odometry->p_WB_m, scene))
     log_->write(Topic::kPath, odometry->stamp_ns, scene);
-    path_W_m_.erase(path_W_m_.begin(), path_W_m_.end() - 1);
-    path_segment_start_ns_ = odometry->stamp_ns;
-  }
 }
 
 void FlightLogTask::logSetpoint() {
@@ -244,10 +228,9 @@ void FlightLogTask::logStatus(rt::TimeNs now_ns) {
 }
 
 rt::Status FlightLogTask::finish() {
-  if (!path_W_m_.empty() && path_W_m_.size() > 1 && log_->active()) {
+  if (log_->active()) {
     auto& scene = fresh<foxglove::SceneUpdate>();
-    foxglove_log::fillPathSegment(scene, last_odometry_ns_, path_segments_++, path_W_m_);
-    log_->write(Topic::kPath, last_odometry_ns_, scene);
+    if (flown_path_.flush(scene)) log_->write(Topic::kPath, flown_path_.lastStampNs(), scene);
   }
   return log_->close();
 }

@@ -35,6 +35,7 @@
 #include "aerotrack/rt/task.hpp"
 #include "aerotrack/rt/task_set.hpp"
 #include "flight_log_writer.hpp"
+#include "foxglove_messages.hpp"
 
 namespace aerotrack::app {
 
@@ -77,7 +78,7 @@ class FlightLogTask final : public rt::Task {
 
  private:
   FlightLogTask(const FlightLogOptions& options, const FlightLogSources& sources, std::unique_ptr<FlightLogWriter> log);
-  void logOdometry(rt::TimeNs now_ns);
+  void logOdometry();
   void logSetpoint();
   void logCamera();
   void logDepth(rt::TimeNs now_ns);
@@ -102,9 +103,7 @@ class FlightLogTask final : public rt::Task {
   }
   foxglove::CompressedImage image_;
   foxglove::PointCloud points_;
-  std::vector<Eigen::Vector3d> path_W_m_;
-  int path_segments_ = 0;
-  rt::TimeNs path_segment_start_ns_ = -1;
+  foxglove_log::FlownPath flown_path_;
   rt::TimeNs last_odometry_ns_ = INT64_MIN;
   rt::TimeNs last_estimate_ns_ = INT64_MIN;
   rt::TimeNs last_detection_ns_ = INT64_MIN;

@@ -205,16 +205,32 @@ void fillEstimate(foxglove::SceneUpdate& m, const estimation::TargetEstimate& e)
   }
 }
 
-void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const trajectory_server::TimedTrajectory& t,
-                    int samples) {
-  m.Clear();
-  foxglove::SceneEntity& entity = addEntity(m, stamp_ns, "plan/trajectory");
-  if (!t.trajectory) return;
+namespace {
+
+/// The trajectory's line (cyan, 6 cm), points added by the caller.
+foxglove::LinePrimitive& addTrajectoryLine(foxglove::SceneEntity& entity) {
   foxglove::LinePrimitive& line = *entity.add_lines();
   line.set_type(foxglove::LinePrimitive::LINE_STRIP);
   setPose(*line.mutable_pose(), Eigen::Vector3d::Zero());
   line.set_thickness(0.06);
   setColor(*line.mutable_color(), Rgba{0.1, 0.8, 0.9, 1.0});
+  return line;
+}
+
+}  // namespace
+
+void fillTrajectoryPoints(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, std::span<const Eigen::Vector3d> points_W_m) {
+  m.Clear();
+  foxglove::LinePrimitive& line = addTrajectoryLine(addEntity(m, stamp_ns, "plan/trajectory"));
+  for (const Eigen::Vector3d& p : points_W_m) setPoint(*line.add_points(), p);
+}
+
+void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const trajectory_server::TimedTrajectory& t,
+                    int samples) {
+  m.Clear();
+  foxglove::SceneEntity& entity = addEntity(m, stamp_ns, "plan/trajectory");
+  if (!t.trajectory) return;
+  foxglove::LinePrimitive& line = addTrajectoryLine(entity);
   const double duration_s = t.trajectory->durationS();
   for (int i = 0; i <= samples; ++i) {
     setPoint(*line.add_points(), t.trajectory->sample(duration_s * i / samples).p_W_m);
@@ -254,6 +270,24 @@ void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
   line.set_thickness(0.04);
   setColor(*line.mutable_color(), Rgba{0.3, 0.9, 0.3, 1.0});
   for (const Eigen::Vector3d& p : points_W_m) setPoint(*line.add_points(), p);
+}
+
+bool FlownPath::add(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_WB_m, foxglove::SceneUpdate& scene) {
+  if (start_ns_ < 0) start_ns_ = stamp_ns;
+  last_ns_ = stamp_ns;
+  points_W_m_.push_back(p_WB_m);
+  if (rt::nsToSeconds(stamp_ns - start_ns_) < stretch_s_ || points_W_m_.size() < 2) return false;
+  fillPathSegment(scene, stamp_ns, stretches_++, points_W_m_);
+  points_W_m_.erase(points_W_m_.begin(), points_W_m_.end() - 1);  // keeps the capacity
+  start_ns_ = stamp_ns;
+  return true;
+}
+
+bool FlownPath::flush(foxglove::SceneUpdate& scene) {
+  if (points_W_m_.size() < 2) return false;
+  fillPathSegment(scene, last_ns_, stretches_++, points_W_m_);
+  points_W_m_.erase(points_W_m_.begin(), points_W_m_.end() - 1);
+  return true;
 }
 
 void fillDepthPoints(foxglove::PointCloud& m, const hal::DepthFrame& frame, int step) {

@@ -18,6 +18,7 @@
 
 #include <span>
 #include <string>
+#include <vector>
 
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/target_estimator.hpp"
@@ -64,9 +65,33 @@ void fillTrajectory(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, const traject
 /// ("planning/search") and the person's Bezier prediction ("person/prediction").
 void fillPlan(foxglove::SceneUpdate& m, const planning::PlanSnapshot& plan);
 
+/// A recorded trajectory as the points it was recorded with (export-mcap): the same entity and look
+/// as fillTrajectory.
+void fillTrajectoryPoints(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, std::span<const Eigen::Vector3d> points_W_m);
+
 /// A stretch of the flown path (entity "path/<index>", kept for the whole log).
 void fillPathSegment(foxglove::SceneUpdate& m, rt::TimeNs stamp_ns, int index,
                      std::span<const Eigen::Vector3d> points_W_m);
+
+/// The flown path cut into stretches of `stretch_s` seconds of odometry, each starting where the last
+/// ended, written as path/0, path/1, ... (so a viewer draws the whole flight without one ever-growing
+/// message). Shared by the live log and export-mcap. Allocation-free once its buffer has grown.
+class FlownPath {
+ public:
+  explicit FlownPath(double stretch_s) : stretch_s_(stretch_s) { points_W_m_.reserve(256); }
+  /// Adds an odometry position; true when a stretch is complete and in `scene` (stamped `stamp_ns`).
+  bool add(rt::TimeNs stamp_ns, const Eigen::Vector3d& p_WB_m, foxglove::SceneUpdate& scene);
+  /// The unfinished stretch, if it has a segment (at the end of a log); its stamp is the last position's.
+  bool flush(foxglove::SceneUpdate& scene);
+  rt::TimeNs lastStampNs() const { return last_ns_; }
+
+ private:
+  double stretch_s_;
+  std::vector<Eigen::Vector3d> points_W_m_;
+  int stretches_ = 0;
+  rt::TimeNs start_ns_ = -1;
+  rt::TimeNs last_ns_ = -1;
+};
 
 /// A depth image as points in depth_optical (x, y, z float32), one pixel in `step` along each axis;
 /// pixels without a return are left out. Reuses m's storage (no Clear(): its data keeps its capacity, so a

@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace aerotrack::app::foxglove_log {
 namespace {
@@ -195,6 +197,49 @@ TEST(FoxgloveMessages, APlanShowsItsBoxesSearchAndPrediction) {
   EXPECT_DOUBLE_EQ(m.entities(0).cubes(1).pose().position().x(), 1.75);
   EXPECT_EQ(m.entities(1).lines(0).points_size(), 10);
   EXPECT_EQ(m.entities(2).lines_size(), 0);  // no prediction this cycle: the old one is replaced by nothing
+}
+
+}  // namespace
+}  // namespace aerotrack::app::foxglove_log
+
+namespace aerotrack::app::foxglove_log {
+namespace {
+
+TEST(FoxgloveMessages, TheFlownPathIsWrittenInStretchesThatJoinAndCarryTheirOdometrysTime) {
+  FlownPath path(1.0);
+  foxglove::SceneUpdate scene;
+  std::vector<foxglove::SceneUpdate> written;
+  for (int i = 0; i <= 250; ++i) {  // 2.5 s of odometry at 100 Hz
+    const rt::TimeNs stamp_ns = rt::secondsToNs(0.01 * i);
+    if (path.add(stamp_ns, Eigen::Vector3d(0.01 * i, 0, 1), scene)) written.push_back(scene);
+  }
+  ASSERT_EQ(written.size(), 2U);   // at 1 s and 2 s
+  ASSERT_TRUE(path.flush(scene));  // 2 s .. 2.5 s
+  written.push_back(scene);
+  EXPECT_FALSE(path.flush(scene));  // nothing left but the joint
+  for (std::size_t k = 0; k < written.size(); ++k) {
+    const foxglove::SceneEntity& e = written[k].entities(0);
+    EXPECT_EQ(e.id(), "path/" + std::to_string(k));
+    const auto& points = e.lines(0).points();
+    EXPECT_EQ(e.timestamp().seconds() * 1000000000LL + e.timestamp().nanos(),
+              rt::secondsToNs(0.01 * std::round(100.0 * points[points.size() - 1].x())));
+    if (k > 0) {  // each stretch starts where the last ended
+      const auto& before = written[k - 1].entities(0).lines(0).points();
+      EXPECT_EQ(points[0].x(), before[before.size() - 1].x());
+    }
+  }
+  EXPECT_EQ(path.lastStampNs(), rt::secondsToNs(2.5));
+}
+
+TEST(FoxgloveMessages, ARecordedTrajectoryLooksLikeTheLiveOne) {
+  foxglove::SceneUpdate recorded, live;
+  const std::vector<Eigen::Vector3d> points{{0, 0, 1}, {1, 0, 1}};
+  fillTrajectoryPoints(recorded, 5, points);
+  fillTrajectory(live, 5, trajectory_server::TimedTrajectory{}, 4);  // no trajectory: the entity alone
+  EXPECT_EQ(recorded.entities(0).id(), live.entities(0).id());
+  ASSERT_EQ(recorded.entities(0).lines_size(), 1);
+  EXPECT_EQ(recorded.entities(0).lines(0).points_size(), 2);
+  EXPECT_FLOAT_EQ(static_cast<float>(recorded.entities(0).lines(0).color().b()), 0.9F);  // cyan, not the path's green
 }
 
 }  // namespace
