@@ -103,8 +103,8 @@ std::vector<CommandSpec> commandTable() {
         {"format", "jpg|png", false, "frame files (default jpg)"}},
        ""},
       {"bench",
-       "seeds 1..N of a scenario, or a suite's matrix, in parallel processes; bench.json and a table, or "
-       "suite.json, report.md and plots",
+       "seeds 1..N of a scenario, or a suite's matrix, swept over config keys (--set), as local processes or Slurm "
+       "job arrays; bench.json and a table, or suite.json, report.md and plots",
        "",
        {{"scenario", "NAME|FILE", false, "scenario name in config/scenarios/ or a YAML file (or --suite)"},
         {"trials", "N", false, "number of seeds (1..N; with --scenario)"},
