@@ -116,12 +116,17 @@ rt::Expected<std::vector<std::string>> submitToSlurm(const TrialPlan& plan, cons
     if (!previous.empty()) argv.push_back("--dependency=afterany:" + previous);
     argv.insert(argv.end(), s.options.begin(), s.options.end());  // after ours: sbatch takes the last
     argv.push_back(slurmDir(plan) + "/array.sh");
+    // An array after the first that cannot be submitted leaves the earlier ones running: say which.
+    std::string earlier;
+    for (const std::string& j : jobs) earlier += (earlier.empty() ? " (already submitted: job " : ", ") + j;
+    if (!earlier.empty()) earlier += "; scancel them, or merge what they finish)";
     const auto ran = runProcess(argv);
-    if (!ran) return rt::Error{ran.error().message + " (is Slurm's client installed? or use --executor local)"};
+    if (!ran)
+      return rt::Error{ran.error().message + " (is Slurm's client installed? or use --executor local)" + earlier};
     if (ran->exit_status != 0) {
       std::string said = firstLine(ran->err);
       if (said.empty()) said = firstLine(ran->out);
-      return rt::Error{"sbatch failed (exit status " + std::to_string(ran->exit_status) + "): " + said};
+      return rt::Error{"sbatch failed (exit status " + std::to_string(ran->exit_status) + "): " + said + earlier};
     }
     std::string id = firstLine(ran->out);
     id = id.substr(0, id.find(';'));  // "JOBID;CLUSTER" on a federation

@@ -4,7 +4,7 @@
 # key: 2 values x 2 seeds = 4 trials, so two job arrays, the second after the first. Then a trial
 # killed by its time limit (its result removed, Slurm's line in its log): the merge names it and exits
 # 1; --resubmit-missing runs only that one and the merge is whole again. Then the bad inputs: a
-# partition that does not exist, no sbatch on PATH.
+# partition that does not exist, a second array refused after the first went in, no sbatch on PATH.
 # usage: bench_slurm.sh AEROTRACK SCENARIO.yaml OUT_DIR
 # Prints "slurm executor: 2 arrays, 1 resubmitted, errors named" when all holds.
 set -u
@@ -52,6 +52,10 @@ err=$(PATH=$here/fake_slurm:$PATH "$bin" bench --scenario "$scenario" --trials 1
   --slurm-partition nosuch 2>&1 >/dev/null)
 [[ $err == "aerotrack bench: sbatch failed (exit status 1): sbatch: error: invalid partition specified: nosuch" ]] ||
   fail "bad partition: $err"
+err=$(FAKE_SLURM_REFUSE_BASE=3 PATH=$here/fake_slurm:$PATH "$bin" bench --scenario "$scenario" --trials 2 \
+  --out "$out-bad" --executor slurm --set planning.goal.tracking_distance_m=2,3 2>&1 >/dev/null)
+[[ $err =~ ^"aerotrack bench: sbatch failed (exit status 1): sbatch: error: Batch job submission failed: Job violates accounting/QOS policy (already submitted: job "[0-9]+"; scancel them, or merge what they finish)"$ ]] ||
+  fail "a refused second array: $err"
 mkdir -p "$out.state/empty"
 err=$(PATH=$out.state/empty "$bin" bench --scenario "$scenario" --trials 1 --out "$out-bad" --executor slurm 2>&1 >/dev/null)
 [[ $err == "aerotrack bench: sbatch: not found on PATH (is Slurm's client installed? or use --executor local)" ]] ||
