@@ -126,7 +126,10 @@ rt::Expected<std::vector<std::string>> submitToSlurm(const TrialPlan& plan, cons
     if (ran->exit_status != 0) {
       std::string said = firstLine(ran->err);
       if (said.empty()) said = firstLine(ran->out);
-      return rt::Error{"sbatch failed (exit status " + std::to_string(ran->exit_status) + "): " + said + earlier};
+      std::string message = "sbatch failed (exit status " + std::to_string(ran->exit_status) + "): ";
+      message += said;
+      message += earlier;
+      return rt::Error{message};
     }
     std::string id = firstLine(ran->out);
     id = id.substr(0, id.find(';'));  // "JOBID;CLUSTER" on a federation
