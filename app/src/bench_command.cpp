@@ -210,7 +210,8 @@ int runOnSlurm(const TrialPlan& plan, const std::vector<std::size_t>& indices, b
   std::fflush(stdout);
   std::atomic<bool> stop{false};
   SignalWatcher signals(stop);
-  if (auto waited = waitForSlurm(plan, *jobs, stop); !waited) return failCommand(command, waited.error().message);
+  if (auto waited = waitForSlurm(plan, *jobs, indices, stop); !waited)
+    return failCommand(command, waited.error().message);
   if (stop.load()) {
     std::printf(
         "slurm: stopped waiting; job%s %s run%s on (`scancel %s` stops %s); `aerotrack bench merge %s` merges\n",

@@ -4,6 +4,7 @@
 #include <pwd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -146,11 +147,16 @@ rt::Expected<std::vector<std::string>> submitToSlurm(const TrialPlan& plan, cons
   return jobs;
 }
 
-rt::Status waitForSlurm(const TrialPlan& plan, const std::vector<std::string>& jobs, const std::atomic<bool>& stop) {
+rt::Status waitForSlurm(const TrialPlan& plan, const std::vector<std::string>& jobs,
+                        const std::vector<std::size_t>& indices, const std::atomic<bool>& stop) {
   const std::set<std::string> ours(jobs.begin(), jobs.end());
   const std::string user = currentUser();
   int failures = 0;
   std::size_t reported = SIZE_MAX;
+  // Each poll looks only at the submitted trials not yet seen finished: a finished summary is parsed once,
+  // not once every two seconds for every trial of a large plan.
+  std::vector<std::size_t> pending = indices;
+  std::size_t finished = 0;
   while (!stop.load()) {
     const auto listed = runProcess({"squeue", "-h", "-u", user, "-o", "%F"});
     if (!listed || listed->exit_status != 0) {
@@ -165,10 +171,12 @@ rt::Status waitForSlurm(const TrialPlan& plan, const std::vector<std::string>& j
       std::istringstream lines(listed->out);
       std::string line;
       while (std::getline(lines, line) && !queued) queued = ours.count(line.substr(0, line.find_first_of(" \t"))) != 0;
-      std::size_t finished = 0;
-      for (const PlannedTrial& t : plan.trials) finished += trialComplete(t.dir) ? 1 : 0;
+      const auto done = std::remove_if(pending.begin(), pending.end(),
+                                       [&](std::size_t i) { return trialComplete(plan.trials.at(i).dir); });
+      finished += static_cast<std::size_t>(pending.end() - done);
+      pending.erase(done, pending.end());
       if (finished != reported) {
-        std::printf("slurm: %zu/%zu trials finished\n", finished, plan.trials.size());
+        std::printf("slurm: %zu/%zu submitted trials finished\n", finished, indices.size());
         std::fflush(stdout);
         reported = finished;
       }

@@ -31,9 +31,11 @@ std::vector<std::pair<std::size_t, std::vector<std::size_t>>> splitIntoArrays(co
 /// does not exist, a limit refused), an unreadable answer.
 rt::Expected<std::vector<std::string>> submitToSlurm(const TrialPlan& plan, const std::vector<std::size_t>& indices);
 
-/// Waits until none of the jobs is in squeue, printing the trials finished as they change. Returns
-/// early when `stop` is set (the jobs run on). Error if squeue keeps failing (the controller is gone).
-rt::Status waitForSlurm(const TrialPlan& plan, const std::vector<std::string>& jobs, const std::atomic<bool>& stop);
+/// Waits until none of the jobs is in squeue, printing how many of the submitted trials (`indices`)
+/// have finished as it changes. Returns early when `stop` is set (the jobs run on). Error if squeue keeps
+/// failing (the controller is gone).
+rt::Status waitForSlurm(const TrialPlan& plan, const std::vector<std::string>& jobs,
+                        const std::vector<std::size_t>& indices, const std::atomic<bool>& stop);
 
 /// The Slurm log of each trial's latest array task, by trial index (from DIR/slurm/jobs.txt).
 std::map<std::size_t, std::string> slurmLogs(const TrialPlan& plan);
