@@ -19,6 +19,8 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
                         {"frames_skipped_bad", s.frames_skipped_bad},
                         {"frames_dropped_waiting_for_odometry", task->framesDroppedWaiting()},
                         {"occupied_voxels", s.occupied_voxels},
+                        {"returns_excluded", s.returns_excluded},
+                        {"voxels_cleared", s.voxels_cleared},
                         {"grid_snapshots_allocated", s.grid_snapshots_allocated}};
   (void)timings;
   const rt::TimingSnapshot insert = task->insertStats().snapshot();
@@ -35,9 +37,11 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
 nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check) {
   if (task == nullptr) return nullptr;
   const estimation::TargetTaskStats& s = task->stats();
-  nlohmann::json out = {{"detections", s.detections}, {"unreliable", s.unreliable}, {"bearings", s.bearings},
-                        {"reassigned", s.reassigned}, {"no_pose", s.no_pose},       {"accepted", s.accepted},
-                        {"rejected", s.rejected}};
+  nlohmann::json out = {
+      {"detections", s.detections},    {"unreliable", s.unreliable},     {"bearings", s.bearings},
+      {"reassigned", s.reassigned},    {"no_pose", s.no_pose},           {"accepted", s.accepted},
+      {"rejected", s.rejected},        {"depth_ranged", s.depth_ranged}, {"depth_disagreed", s.depth_disagreed},
+      {"depth_unseen", s.depth_unseen}};
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

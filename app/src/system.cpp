@@ -205,6 +205,18 @@ System::TaskResult System::makeMappingTask(System& s, const std::string& where) 
   Channels& c = s.channels_;
   auto task = std::make_unique<mapping::MappingTask>(std::move(mapper.value()), c.odometry_stream, c.depth,
                                                      c.local_grid, c.octree, s.stats_clock_);
+  // The followed person, where the newest estimate puts them at the frame's capture time, is not an obstacle.
+  const mapping::TargetExclusionParams exclusion = s.config_.mapping->exclude_target;
+  if (exclusion.enabled) {
+    task->excludeBodyFrom([&target = c.target, exclusion](rt::TimeNs stamp_ns) -> std::optional<mapping::ExcludedBody> {
+      const std::optional<estimation::TargetEstimate> estimate = target.read();
+      if (!estimate || !estimate->initialised) return std::nullopt;
+      // Carried to the capture time along its velocity, at most a second either way (the estimate may be older).
+      const double dt_s = std::clamp(rt::nsToSeconds(stamp_ns - estimate->stamp_ns), -1.0, 1.0);
+      return mapping::bodyAround(estimate->p_WT_m + dt_s * estimate->v_WT_mps,
+                                 estimate->covariance.topLeftCorner<2, 2>(), exclusion);
+    });
+  }
   s.mapping_task_ = task.get();
   return made(std::move(task));
 }
@@ -230,6 +242,7 @@ System::TaskResult System::makeTargetTask(System& s, const std::string& where) {
   if (!target) return rt::Error{s.config_.source + ": estimation: " + target.error().message};
   auto task = std::make_unique<estimation::TargetTask>(std::move(target.value()));
   task->publishFollowedTo(c.followed_detection);
+  task->rangeFrom(c.depth);
   s.target_task_ = task.get();
   return made(std::move(task));
 }

@@ -148,7 +148,7 @@ const AppearanceSignature& Simulation::personAppearance(std::size_t id) const {
 }
 
 void Simulation::refreshBodies(TimeNs t_ns) {
-  if (bystanders_.empty() || t_ns == bodies_ns_) return;
+  if (t_ns == bodies_ns_) return;
   bodies_ns_ = t_ns;
   for (std::size_t id = 0; id < bodies_.size(); ++id) {
     const PersonState p = personStateAt(id, t_ns);
@@ -231,8 +231,9 @@ void Simulation::sampleDueSensors() {
     sampleOdometry();
     next_odometry_ns_ += odometry_period_ns_;
   }
-  if (!bystanders_.empty() && (now_ns_ >= next_camera_ns_ || now_ns_ >= next_metrics_ns_ ||
-                               (options_.render_depth && now_ns_ >= next_depth_ns_))) {
+  // The bodies: bystanders' for sight lines and images; everyone's, the followed person's too, for depth.
+  if ((!bystanders_.empty() && (now_ns_ >= next_camera_ns_ || now_ns_ >= next_metrics_ns_)) ||
+      (options_.render_depth && now_ns_ >= next_depth_ns_)) {
     refreshBodies(now_ns_);
   }
   if (now_ns_ >= next_camera_ns_) {
@@ -426,10 +427,9 @@ void Simulation::captureDepth() {
   frame->intrinsics = depthIntrinsics(spec.camera);
   frame->T_BC.linear() = opticalAxesInFlu();
   frame->T_BC.translation() = spec.mount_B_m;
-  // The bystanders' bodies (not the target's, which was never an obstacle).
-  const std::span<const Cylinder> bystander_bodies =
-      bodies_.size() > 1 ? std::span<const Cylinder>(bodies_).subspan(1) : std::span<const Cylinder>();
-  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m, bystander_bodies);
+  // Everyone's body, the followed person's too, as a real depth camera sees them (issue 22: their range is a
+  // measurement; the mapper leaves them out of the map).
+  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m, std::span<const Cylinder>(bodies_));
   depth_out_.write(std::move(frame));
 }
 

@@ -15,18 +15,20 @@ namespace {
 using Matrix3d = Eigen::Matrix3d;
 
 bool valid(const TargetMeasurement& m) {
-  const bool bad_bearing = m.bearingOnly() && (!m.bearing_W.allFinite() || std::abs(m.bearing_W.norm() - 1.0) > 1e-6 ||
-                                               !std::isfinite(m.range_std_m) || !(m.range_std_m > 0.0));
+  const bool bad_bearing =
+      m.hasLineOfSight() && (!m.bearing_W.allFinite() || std::abs(m.bearing_W.norm() - 1.0) > 1e-6 ||
+                             !std::isfinite(m.range_std_m) || !(m.range_std_m > 0.0));
   return m.p_WT_m.allFinite() && std::isfinite(m.std_xy_m) && std::isfinite(m.std_z_m) && m.std_xy_m >= 0.0 &&
          m.std_z_m >= 0.0 && !bad_bearing;
 }
 
-/// R: std_xy across the line of sight and, for a bearing, range_std_m along it (R = s^2 I + (r^2 - s^2) b b^T).
+/// R: std_xy across the line of sight and, for a bearing or a ranged measurement, range_std_m along it
+/// (R = s^2 I + (r^2 - s^2) b b^T).
 Matrix3d measurementNoise(const TargetEstimatorParams& params, const TargetMeasurement& m) {
   const double std_xy = m.std_xy_m > 0.0 ? m.std_xy_m : params.measurement_std_xy_m;
   const double std_z = m.std_z_m > 0.0 ? m.std_z_m : params.measurement_std_z_m;
   Matrix3d R = Eigen::Vector3d(std_xy * std_xy, std_xy * std_xy, std_z * std_z).asDiagonal();
-  if (m.bearingOnly()) {
+  if (m.hasLineOfSight()) {
     const Eigen::Vector2d& b = m.bearing_W;
     R.topLeftCorner<2, 2>() += (m.range_std_m * m.range_std_m - std_xy * std_xy) * b * b.transpose();
   }

@@ -17,6 +17,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
+  if (node.has("depth_range")) params.depth_range = parseDepthRangeParams(node.child("depth_range"));
 }
 
 rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
@@ -25,6 +26,7 @@ rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
                                             rt::SpscQueue<hal::GimbalState>& gimbal,
                                             rt::LatestSlot<TargetEstimate>& out) {
   if (auto s = localization::validate(params.localization); !s) return rt::Error{"localization: " + s.error().message};
+  if (auto s = validate(params.depth_range); !s) return s.error();
   auto poses = hal::OdometryHistory::create({});
   if (!poses) return poses.error();
   auto gimbal_history = GimbalAngleHistory::create({});
@@ -87,6 +89,7 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
     kp.u_px = h.x() / h.z();
     kp.v_px = h.y() / h.z();
   }
+  const perception::TorsoFeatures seen = c.torso;  // the image's pixels, for the depth camera's line of sight
   c.torso = perception::remeasured(c.torso, level);
   if (c.torso.reliable) {
     Eigen::Vector3d p_C_m;
@@ -100,7 +103,67 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
   } else if (params_.bearing_fallback) {
     c.measurement = bearingMeasurement(frame, c.torso, *T_WC);
   }
+  if (c.measurement && params_.depth_range.enabled && depth_count_ > 0) {
+    // The line of sight through the torso's centre; a cut-off torso's through its whole pair's midpoint.
+    Eigen::Vector2d pixel(seen.u_px, seen.v_px);
+    if (!seen.reliable) {
+      const auto kp = [&](hal::CocoKeypoint k) { return person.keypoints[hal::index(k)]; };
+      const hal::Keypoint2D a =
+          seen.bearing_from_shoulders ? kp(hal::CocoKeypoint::kLeftShoulder) : kp(hal::CocoKeypoint::kLeftHip);
+      const hal::Keypoint2D b =
+          seen.bearing_from_shoulders ? kp(hal::CocoKeypoint::kRightShoulder) : kp(hal::CocoKeypoint::kRightHip);
+      pixel = Eigen::Vector2d(0.5 * (a.u_px + b.u_px), 0.5 * (a.v_px + b.v_px));
+    }
+    rangeByDepth(frame, pixel, *T_WC, c);
+  }
   return c;
+}
+
+void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel,
+                              const Eigen::Isometry3d& T_WC, Candidate& c) const {
+  const DepthRangeParams& p = params_.depth_range;
+  // The depth image nearest in time, and where its camera was.
+  const hal::DepthFrame* depth = nullptr;
+  rt::DurationNs best_ns = rt::secondsToNs(p.max_offset_s);
+  for (std::size_t i = 0; i < depth_count_; ++i) {
+    const rt::DurationNs offset_ns = std::abs(depth_frames_[i]->stamp_ns - frame.stamp_ns);
+    if (offset_ns <= best_ns) {
+      best_ns = offset_ns;
+      depth = depth_frames_[i].get();
+    }
+  }
+  c.depth = DepthRangeStatus::kOutOfView;
+  if (depth == nullptr) return;
+  const hal::OdometryHistory::Lookup pose = poses_.lookup(depth->stamp_ns);
+  if (pose.status != rt::HistoryStatus::kOk) return;
+  const Eigen::Isometry3d T_WD = pose.value * depth->T_BC;
+  // The pixel's line of sight in W (the optical ray turned into C, then W; lens distortion not modelled).
+  const hal::CameraIntrinsics& k = frame.intrinsics;
+  const Eigen::Vector3d ray_optical((pixel.x() - k.cx_px) / k.fx_px, (pixel.y() - k.cy_px) / k.fy_px, 1.0);
+  const Eigen::Vector3d dir_W = (T_WC.linear() * opticalAxesInCamera() * ray_optical).normalized();
+  const Eigen::Vector3d origin_W = T_WC.translation();
+  const DepthSurface surface = surfaceAlongLine(*depth, T_WD, origin_W, dir_W, p);
+  c.depth = surface.status;
+  if (surface.status != DepthRangeStatus::kFound) return;
+  Eigen::Vector2d p_xy = bodyCentreBehind(origin_W, dir_W, surface.range_m, p);
+  // The depth image shows the person at its own time: carried to the photo's along the estimate's velocity.
+  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
+  if (prior.initialised && !prior.lost)
+    p_xy += prior.v_WT_mps.head<2>() * rt::nsToSeconds(frame.stamp_ns - depth->stamp_ns);
+  // The same person as the regression (or the prior's range, for a bearing) places, within a factor.
+  TargetMeasurement& m = *c.measurement;
+  const double depth_range_m = (p_xy - origin_W.head<2>()).norm();
+  const double regression_range_m = (m.p_WT_m.head<2>() - origin_W.head<2>()).norm();
+  if (!(depth_range_m * p.max_ratio >= regression_range_m && depth_range_m <= p.max_ratio * regression_range_m)) {
+    c.depth_disagreed = true;
+    return;
+  }
+  const Eigen::Vector2d line_W = (p_xy - origin_W.head<2>()) / depth_range_m;
+  m.p_WT_m.head<2>() = p_xy;  // the height stays the regression's (the estimator's z is its ground level)
+  m.bearing_W = line_W;
+  m.ranged = true;
+  m.range_std_m = depthRangeStdM(surface.range_m, p);
+  m.std_xy_m = std::max(params_.min_measurement_std_m, p.cross_std_per_m * depth_range_m);
 }
 
 TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
@@ -238,7 +301,16 @@ int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
 }
 
 bool TargetTask::process(const Candidate& c) {
-  if (!c.torso.reliable) {
+  if (c.depth) {
+    if (c.measurement && c.measurement->ranged)
+      ++stats_.depth_ranged;
+    else if (c.depth_disagreed)
+      ++stats_.depth_disagreed;
+    else
+      ++stats_.depth_unseen;
+  }
+  const bool ranged = c.measurement && c.measurement->ranged;
+  if (!c.torso.reliable && !ranged) {
     ++stats_.unreliable;
     if (!c.measurement) return false;
     const MeasurementVerdict verdict = estimator_.add(*c.measurement);
@@ -249,9 +321,11 @@ bool TargetTask::process(const Candidate& c) {
     ++stats_.no_pose;
     return false;
   }
+  if (!c.torso.reliable) ++stats_.unreliable;  // ... but the depth camera gave their distance
   const MeasurementVerdict verdict = estimator_.add(*c.measurement);
   if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted) {
     ++stats_.accepted;
+    if (!c.torso.reliable) return true;  // a cut-off person's colour is not their whole torso's: not learnt
     // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
     // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).
     if (c.look.valid && reference_.valid) {
@@ -323,6 +397,16 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (poses_.push(*sample) == rt::HistoryPush::kAccepted) newest_pose_ns_ = sample->stamp_ns;
   while (const auto state = gimbal_.try_pop())
     if (gimbal_history_.push(*state) == rt::HistoryPush::kAccepted) newest_gimbal_ns_ = state->stamp_ns;
+  if (depth_in_ != nullptr && depth_in_->version() != depth_version_) {
+    depth_version_ = depth_in_->version();
+    if (auto depth = depth_in_->read()) {
+      if (depth_count_ == depth_frames_.size()) {
+        std::move(depth_frames_.begin() + 1, depth_frames_.end(), depth_frames_.begin());
+        --depth_count_;
+      }
+      depth_frames_[depth_count_++] = std::move(depth);
+    }
+  }
   while (const auto frame = detections_.try_pop()) {
     // A frame without the lock-on's choice still counts when the track's prediction may find the person in it.
     const bool chosen = frame->target_index >= 0 && frame->target_index < static_cast<int>(frame->person_count);

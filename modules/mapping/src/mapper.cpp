@@ -1,6 +1,7 @@
 // The mapper: see mapper.hpp.
 #include "aerotrack/mapping/mapper.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace aerotrack::mapping {
@@ -40,8 +41,24 @@ std::shared_ptr<const LocalGrid> Mapper::publishGrid() {
   return g;
 }
 
-rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame) {
-  const auto report = inserter_->insert(frame, *poses_, *map_);
+std::optional<ExcludedBody> bodyAround(const Eigen::Vector3d& p_W_m, const Eigen::Matrix2d& cov_xy_m2,
+                                       const TargetExclusionParams& params) {
+  if (!params.enabled || !p_W_m.allFinite() || !cov_xy_m2.allFinite()) return std::nullopt;
+  // The larger eigenvalue of the symmetric 2 x 2 covariance: its major axis's variance.
+  const double mean = 0.5 * (cov_xy_m2(0, 0) + cov_xy_m2(1, 1));
+  const double half_diff = 0.5 * (cov_xy_m2(0, 0) - cov_xy_m2(1, 1));
+  const double major_var = mean + std::sqrt(half_diff * half_diff + cov_xy_m2(0, 1) * cov_xy_m2(1, 0));
+  ExcludedBody body;
+  body.center_W_m = p_W_m.head<2>();
+  body.radius_m =
+      std::min(params.max_radius_m, params.body_radius_m + params.sigmas * std::sqrt(std::max(0.0, major_var)));
+  body.min_z_m = p_W_m.z() + params.floor_above_estimate_m;
+  body.max_z_m = p_W_m.z() + params.height_above_estimate_m;
+  return body;
+}
+
+rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame, std::span<const ExcludedBody> excluded) {
+  const auto report = inserter_->insert(frame, *poses_, *map_, excluded);
   if (!report) {
     ++stats_.frames_skipped_bad;
     return report.error();
@@ -51,6 +68,9 @@ rt::Expected<MapUpdate> Mapper::insert(const hal::DepthFrame& frame) {
     return rt::Error{toString(report->status)};
   }
   ++stats_.frames_inserted;
+  stats_.returns_excluded += report->points.excluded;
+  for (const ExcludedBody& body : excluded)
+    stats_.voxels_cleared += map_->clearColumn(body.center_W_m, body.radius_m, body.min_z_m, body.max_z_m);
   const octomap::OcTree& tree = map_->tree();
   // Keep the window on the drone: the pose at the frame's time is known (the insert used it).
   const Eigen::Vector3d drone_W_m = poses_->valueAt(frame.stamp_ns)->translation();

@@ -19,6 +19,20 @@ MapperParams parseMapperParams(const rt::ConfigNode& node) {
   p.grid.unknown_is_occupied = node.getBool("unknown_is_occupied");
   p.grid.recenter_distance_m = node.getDouble("recenter_distance_m", 0.1, 50.0);
   p.octree_snapshot_every_n_frames = node.getInt("octree_snapshot_every_n_frames", 1, 1000);
+  if (node.has("exclude_target")) {
+    const rt::ConfigNode e = node.child("exclude_target");
+    TargetExclusionParams& x = p.exclude_target;
+    x.enabled = e.getBool("enabled");
+    x.body_radius_m = e.getDouble("body_radius_m", 0.0, 5.0);
+    x.sigmas = e.getDouble("sigmas", 0.0, 10.0);
+    x.max_radius_m = e.getDouble("max_radius_m", 0.0, 10.0);
+    if (x.max_radius_m < x.body_radius_m) e.fail("max_radius_m", "must be at least body_radius_m");
+    x.floor_above_estimate_m = e.getDouble("floor_above_estimate_m", -5.0, 20.0);
+    x.height_above_estimate_m = e.getDouble("height_above_estimate_m", -5.0, 20.0);
+    if (x.height_above_estimate_m <= x.floor_above_estimate_m)
+      e.fail("height_above_estimate_m", "must exceed floor_above_estimate_m");
+    e.finish();
+  }
   node.finish();
   return p;
 }
@@ -45,7 +59,10 @@ bool MappingTask::gather(rt::TimeNs now_ns) {
     const bool covered = mapper_.poses().size() > 0 && mapper_.poses().newest().stamp_ns >= frame.stamp_ns;
     if (!covered && now_ns - frame.stamp_ns < max_wait_ns_) break;  // odometry still on its way
   }
-  for (std::size_t i = 0; i < ready; ++i) ready_[i] = std::move(pending_[i]);
+  for (std::size_t i = 0; i < ready; ++i) {
+    ready_[i] = std::move(pending_[i]);
+    ready_excluded_[i] = body_source_ ? body_source_(ready_[i]->stamp_ns) : std::nullopt;
+  }
   ready_count_ = ready;
   for (std::size_t i = ready; i < pending_count_; ++i) pending_[i - ready] = std::move(pending_[i]);
   for (std::size_t i = pending_count_ - ready; i < pending_count_; ++i) pending_[i].reset();
@@ -57,7 +74,9 @@ void MappingTask::work() {
   outbox_count_ = 0;
   for (std::size_t i = 0; i < ready_count_; ++i) {
     const rt::TimeNs begin_ns = stats_clock_.now();
-    const auto update = mapper_.insert(*ready_[i]);  // a frame that cannot be placed is counted there
+    std::span<const ExcludedBody> excluded;
+    if (ready_excluded_[i]) excluded = std::span<const ExcludedBody>(&*ready_excluded_[i], 1);
+    const auto update = mapper_.insert(*ready_[i], excluded);  // a frame that cannot be placed is counted there
     ready_[i].reset();
     if (!update) continue;
     const rt::TimeNs inserted_ns = stats_clock_.now();

@@ -181,5 +181,29 @@ TEST(Mapper, OctreeSnapshotHoldsTheWindowsOccupiedVoxelsOnly) {
   EXPECT_EQ(outside->getNumLeafNodes(), 0U);
 }
 
+TEST(BodyAround, GivenAnEstimateThenTheColumnGrowsWithTheMajorAxisOfItsUncertaintyUpToTheCap) {
+  TargetExclusionParams params;
+  params.body_radius_m = 0.4;
+  params.sigmas = 2.0;
+  params.max_radius_m = 1.2;
+  params.floor_above_estimate_m = 0.5;
+  params.height_above_estimate_m = 2.5;
+  // A covariance of std 0.1 m along (1, 1) / sqrt 2 and 0.3 m across it: the major axis is 0.3 m.
+  const Eigen::Matrix2d R = Eigen::Rotation2Dd(M_PI / 4).toRotationMatrix();
+  const Eigen::Matrix2d cov = R * Eigen::Vector2d(0.01, 0.09).asDiagonal() * R.transpose();
+  const std::optional<ExcludedBody> body = bodyAround(Eigen::Vector3d(1.0, 2.0, -0.3), cov, params);
+  ASSERT_TRUE(body.has_value());
+  EXPECT_TRUE(body->center_W_m.isApprox(Eigen::Vector2d(1.0, 2.0)));
+  EXPECT_NEAR(body->radius_m, 0.4 + 2.0 * 0.3, 1e-12);
+  EXPECT_NEAR(body->min_z_m, 0.2, 1e-12);
+  EXPECT_NEAR(body->max_z_m, 2.2, 1e-12);
+  // A long-lost estimate: capped.
+  EXPECT_NEAR(bodyAround(Eigen::Vector3d::Zero(), 25.0 * Eigen::Matrix2d::Identity(), params)->radius_m, 1.2, 1e-12);
+  // Off, or an estimate that is not finite: nothing.
+  EXPECT_FALSE(bodyAround(Eigen::Vector3d(NAN, 0.0, 0.0), cov, params).has_value());
+  params.enabled = false;
+  EXPECT_FALSE(bodyAround(Eigen::Vector3d::Zero(), cov, params).has_value());
+}
+
 }  // namespace
 }  // namespace aerotrack::mapping

@@ -45,7 +45,7 @@ rt::Status validateFrame(const hal::DepthFrame& frame, const Eigen::Isometry3d& 
 
 rt::Expected<DepthPointsStats> depthToPoints(const hal::DepthFrame& frame, const Eigen::Isometry3d& T_WC,
                                              const DepthPointsParams& params, octomap::Pointcloud& hits_W,
-                                             octomap::Pointcloud& misses_W) {
+                                             octomap::Pointcloud& misses_W, std::span<const ExcludedBody> excluded) {
   hits_W.clear();
   misses_W.clear();
   if (rt::Status status = validate(params); !status) return status.error();
@@ -73,6 +73,16 @@ rt::Expected<DepthPointsStats> depthToPoints(const hal::DepthFrame& frame, const
     const Eigen::Vector3d p_W_m = R_WC * p_C_m + p_WC_m;
     cloud.push_back(static_cast<float>(p_W_m.x()), static_cast<float>(p_W_m.y()), static_cast<float>(p_W_m.z()));
   };
+  const auto is_excluded = [&R_WC, &p_WC_m, excluded](const Eigen::Vector3d& p_C_m) {
+    if (excluded.empty()) return false;
+    const Eigen::Vector3d p_W_m = R_WC * p_C_m + p_WC_m;
+    for (const ExcludedBody& body : excluded) {
+      if (p_W_m.z() >= body.min_z_m && p_W_m.z() <= body.max_z_m &&
+          (p_W_m.head<2>() - body.center_W_m).squaredNorm() < body.radius_m * body.radius_m)
+        return true;
+    }
+    return false;
+  };
   for (int v = 0; v < depth.rows; v += step) {
     const float* row = depth.ptr<float>(v);
     const double y_n = (v + 0.5 - k.cy_px) * inv_fy;  // Normalised image coordinate y / z.
@@ -88,8 +98,14 @@ rt::Expected<DepthPointsStats> depthToPoints(const hal::DepthFrame& frame, const
       if (range_m < min_range_m) {
         ++stats.too_near;
       } else if (range_m <= max_range_m) {
-        append(hits_W, Eigen::Vector3d(x_n * z_m, y_n * z_m, z_m));
-        ++stats.hits;
+        const Eigen::Vector3d p_C_m(x_n * z_m, y_n * z_m, z_m);
+        if (is_excluded(p_C_m)) {
+          append(misses_W, p_C_m);
+          ++stats.excluded;
+        } else {
+          append(hits_W, p_C_m);
+          ++stats.hits;
+        }
       } else {
         const double z_at_max_m = max_range_m / ray_norm;
         append(misses_W, Eigen::Vector3d(x_n * z_at_max_m, y_n * z_at_max_m, z_at_max_m));

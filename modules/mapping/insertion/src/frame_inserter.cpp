@@ -20,7 +20,7 @@ rt::Expected<FrameInserter> FrameInserter::create(const DepthPointsParams& param
 }
 
 rt::Expected<FrameInsertReport> FrameInserter::insert(const hal::DepthFrame& frame, const PoseHistory& poses,
-                                                      OctomapMap& map) {
+                                                      OctomapMap& map, std::span<const ExcludedBody> excluded) {
   FrameInsertReport report;
   const PoseLookup pose = poses.lookup(frame.stamp_ns);
   if (pose.status != PoseLookupStatus::kOk) {
@@ -31,7 +31,7 @@ rt::Expected<FrameInsertReport> FrameInserter::insert(const hal::DepthFrame& fra
   }
   const Eigen::Isometry3d& T_WB = pose.value;
   const Eigen::Isometry3d T_WC = T_WB * frame.T_BC;
-  rt::Expected<DepthPointsStats> points = depthToPoints(frame, T_WC, params_, hits_W_, misses_W_);
+  rt::Expected<DepthPointsStats> points = depthToPoints(frame, T_WC, params_, hits_W_, misses_W_, excluded);
   if (!points) {
     ++frames_invalid_;
     return points.error();

@@ -273,8 +273,9 @@ class InsertionOcTree final : public octomap::OcTree {
 struct OctomapMap::Workspace {
   Workspace() { changes.reserve(std::size_t{1} << (kInitialLog2Slots - 1)); }
   KeyBatch batch{kInitialLog2Slots};
-  std::vector<VoxelChange> changes;  ///< The latest insert's, at most one per distinct voxel.
-  octomap::KeyRay ray;               ///< Preallocated by OctoMap (100 000 keys).
+  std::vector<VoxelChange> changes;         ///< The latest insert's, at most one per distinct voxel.
+  octomap::KeyRay ray;                      ///< Preallocated by OctoMap (100 000 keys).
+  std::vector<octomap::OcTreeKey> cleared;  ///< clearColumn's voxels, gathered before the tree changes.
 };
 
 rt::Status validate(const OctomapMapParams& params) {
@@ -380,6 +381,51 @@ rt::Expected<InsertStats> OctomapMap::insert(const octomap::Pointcloud& hits_W, 
   ++frames_inserted_;
   last_insert_ = stats;
   return stats;
+}
+
+std::size_t OctomapMap::clearColumn(const Eigen::Vector2d& center_W_m, double radius_m, double min_z_m,
+                                    double max_z_m) {
+  octomap::OcTree& tree = *tree_;
+  if (!center_W_m.allFinite() || !(radius_m > 0.0) || !std::isfinite(radius_m) || !std::isfinite(min_z_m) ||
+      !std::isfinite(max_z_m) || !(min_z_m < max_z_m))
+    return 0;
+  const auto extent_m = static_cast<float>(tree.getResolution() * 32768.0);
+  const octomap::point3d lo(static_cast<float>(center_W_m.x() - radius_m),
+                            static_cast<float>(center_W_m.y() - radius_m), static_cast<float>(min_z_m));
+  const octomap::point3d hi(static_cast<float>(center_W_m.x() + radius_m),
+                            static_cast<float>(center_W_m.y() + radius_m), static_cast<float>(max_z_m));
+  if (!withinExtent(lo, extent_m) || !withinExtent(hi, extent_m)) return 0;
+  // Gathered first: setNodeValue may expand the pruned node an iterator stands on.
+  std::vector<octomap::OcTreeKey>& keys = workspace_->cleared;
+  keys.clear();
+  const double radius_sq = radius_m * radius_m;
+  const auto inside = [&](const octomap::OcTreeKey& key) {
+    const double dx = tree.keyToCoord(key[0]) - center_W_m.x();
+    const double dy = tree.keyToCoord(key[1]) - center_W_m.y();
+    const double z = tree.keyToCoord(key[2]);
+    return dx * dx + dy * dy < radius_sq && z >= min_z_m && z <= max_z_m;
+  };
+  const unsigned depth = tree.getTreeDepth();
+  for (auto it = tree.begin_leafs_bbx(lo, hi), end = tree.end_leafs_bbx(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    // A pruned (coarse) leaf stands for 2^(depth - its depth) leaf voxels per axis: each is judged.
+    const auto size = static_cast<std::uint16_t>(1U << (depth - it.getDepth()));
+    const octomap::OcTreeKey base = it.getIndexKey();
+    for (std::uint16_t dx = 0; dx < size; ++dx)
+      for (std::uint16_t dy = 0; dy < size; ++dy)
+        for (std::uint16_t dz = 0; dz < size; ++dz) {
+          const octomap::OcTreeKey key(static_cast<octomap::key_type>(base[0] + dx),
+                                       static_cast<octomap::key_type>(base[1] + dy),
+                                       static_cast<octomap::key_type>(base[2] + dz));
+          if (inside(key)) keys.push_back(key);
+        }
+  }
+  for (const octomap::OcTreeKey& key : keys) {
+    tree.setNodeValue(key, tree.getClampingThresMinLog(), /*lazy_eval=*/false);
+    workspace_->changes.push_back({key, false});
+  }
+  occupied_voxels_ -= static_cast<std::int64_t>(keys.size());
+  return keys.size();
 }
 
 const std::vector<VoxelChange>& OctomapMap::changes() const {

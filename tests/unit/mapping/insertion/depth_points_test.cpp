@@ -218,5 +218,38 @@ TEST(DepthPoints, GivenMalformedFrameOrPose_WhenConvert_ThenErrorAndNoPoints) {
   EXPECT_EQ(misses.size(), 0U);
 }
 
+TEST(DepthPoints, GivenAReturnInsideAnExcludedBody_WhenConvert_ThenItIsAMissAtTheReturn) {
+  // Two pixels 2 m ahead of a camera at (1, 2, 3) looking along world +x: (104, 30) lands at
+  // (3, 1.52, 3.5) as in GivenCameraPose, and (56, 30) at (3, 2.48, 3.5).
+  hal::DepthFrame frame = makeFrame();
+  frame.depth_m.at<float>(30, 104) = 2.0F;
+  frame.depth_m.at<float>(30, 56) = 2.0F;
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  T_WC.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  T_WC.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  // A person's column around (3, 1.5), 0.1 m wide: takes the first; the second is 0.98 m from its axis.
+  const std::vector<ExcludedBody> person{{Eigen::Vector2d(3.0, 1.5), 0.1, 0.0, 4.0}};
+  octomap::Pointcloud hits;
+  octomap::Pointcloud misses;
+  const DepthPointsStats stats = depthToPoints(frame, T_WC, everyPixel(), hits, misses, person).value();
+  EXPECT_EQ(stats.excluded, 1U);
+  EXPECT_EQ(stats.hits, 1U);
+  ASSERT_EQ(misses.size(), 1U);
+  EXPECT_TRUE(at(misses, 0).isApprox(Eigen::Vector3d(3.0, 1.52, 3.5), kTolM));  // the ray ends at the return
+  ASSERT_EQ(hits.size(), 1U);
+  EXPECT_TRUE(at(hits, 0).isApprox(Eigen::Vector3d(3.0, 2.48, 3.5), kTolM));
+  // Above the column's top, the same return is an obstacle again (a ceiling over the person).
+  const std::vector<ExcludedBody> short_person{{Eigen::Vector2d(3.0, 1.5), 0.1, 0.0, 3.4}};
+  const DepthPointsStats above = depthToPoints(frame, T_WC, everyPixel(), hits, misses, short_person).value();
+  EXPECT_EQ(above.excluded, 0U);
+  EXPECT_EQ(above.hits, 2U);
+  // Below the column's foot, too (the ground under the person).
+  const std::vector<ExcludedBody> raised{{Eigen::Vector2d(3.0, 1.5), 0.1, 3.6, 5.0}};
+  EXPECT_EQ(depthToPoints(frame, T_WC, everyPixel(), hits, misses, raised).value().excluded, 0U);
+  // A body of no width excludes nothing.
+  const std::vector<ExcludedBody> nobody{{Eigen::Vector2d(3.0, 1.52), 0.0, 0.0, 4.0}};
+  EXPECT_EQ(depthToPoints(frame, T_WC, everyPixel(), hits, misses, nobody).value().excluded, 0U);
+}
+
 }  // namespace
 }  // namespace aerotrack::mapping

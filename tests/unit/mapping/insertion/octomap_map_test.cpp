@@ -375,5 +375,51 @@ TEST(OctomapMap, GivenHitsOnly_WhenInserted_ThenSameTreeAsOctomapInsertPointClou
   }
 }
 
+TEST(OctomapMap, GivenAColumnThroughAWall_WhenCleared_ThenExactlyTheVoxelsInsideAreFreeAndReported) {
+  OctomapMap map = makeMap();
+  for (int n = 0; n < 3; ++n) (void)map.insert(wallAt4m(), {}, kOrigin).value();
+  const std::size_t before = map.occupiedVoxelCount();
+  ASSERT_EQ(before, 21U * 21U);
+  // Centre on the wall's column j = 0, 0.25 m wide: j = -2..2; heights 0.05 + 0.1 k in [-0.3, 0.5]: k = -3..4.
+  const std::size_t cleared = map.clearColumn(Eigen::Vector2d(4.05, 0.05), 0.25, -0.3, 0.5);
+  EXPECT_EQ(cleared, 5U * 8U);
+  EXPECT_EQ(map.occupiedVoxelCount(), before - cleared);
+  EXPECT_EQ(map.recountOccupiedVoxels(), before - cleared);
+  EXPECT_EQ(map.changes().size(), cleared);
+  for (const VoxelChange& change : map.changes()) EXPECT_FALSE(change.occupied);
+  for (int j = -10; j <= 10; ++j) {
+    for (int k = -10; k <= 10; ++k) {
+      const bool inside = std::abs(j) <= 2 && k >= -3 && k <= 4;
+      const double p = probabilityAt(map.tree(), centre(40, j, k));
+      if (inside) {
+        EXPECT_NEAR(p, probability(map.tree().getClampingThresMinLog()), kProbTol) << j << " " << k;
+      } else {
+        EXPECT_GT(p, 0.5) << j << " " << k;
+      }
+    }
+  }
+  // Nothing left to clear; a column that is not finite or has no width clears nothing.
+  EXPECT_EQ(map.clearColumn(Eigen::Vector2d(4.05, 0.05), 0.25, -0.3, 0.5), 0U);
+  EXPECT_EQ(map.clearColumn(Eigen::Vector2d(4.05, 0.05), 0.0, -5.0, 5.0), 0U);
+  EXPECT_EQ(map.clearColumn(Eigen::Vector2d(NAN, 0.05), 1.0, -5.0, 5.0), 0U);
+  EXPECT_EQ(map.clearColumn(Eigen::Vector2d(1e9, 0.05), 1.0, -5.0, 5.0), 0U);
+}
+
+TEST(OctomapMap, GivenAPrunedBlockHalfInAColumn_WhenCleared_ThenOnlyItsHalfInsideIsFree) {
+  OctomapMap map = makeMap();
+  octomap::Pointcloud block;  // one pruned depth-15 node (GivenBlockOccupiedUntilClamped)
+  for (int i = 20; i <= 21; ++i) {
+    for (int j = 0; j <= 1; ++j) {
+      for (int k = 0; k <= 1; ++k) block.push_back(centre(i, j, k));
+    }
+  }
+  for (int n = 0; n < 5; ++n) (void)map.insert(block, {}, kOrigin).value();
+  // Around x = 2.05 (i = 20), y = 0.1: the i = 20 voxels are 0.05 m away, the i = 21 ones over 0.1 m.
+  EXPECT_EQ(map.clearColumn(Eigen::Vector2d(2.05, 0.1), 0.08, -1.0, 1.0), 4U);
+  EXPECT_EQ(map.recountOccupiedVoxels(), 4U);
+  EXPECT_LT(probabilityAt(map.tree(), centre(20, 1, 1)), 0.5);
+  EXPECT_GT(probabilityAt(map.tree(), centre(21, 1, 1)), 0.5);
+}
+
 }  // namespace
 }  // namespace aerotrack::mapping

@@ -95,7 +95,11 @@ struct TargetMeasurement {
   /// the filter nor keeps it from being lost (it carries no distance).
   Eigen::Vector2d bearing_W = Eigen::Vector2d::Zero();
   double range_std_m = 0.0;
-  bool bearingOnly() const { return !(bearing_W.x() == 0.0 && bearing_W.y() == 0.0); }  // NaN: a (bad) bearing
+  /// With bearing_W: the distance along the line of sight was measured (the depth camera, depth_range.hpp), to
+  /// range_std_m; an ordinary measurement whose noise differs along and across the line of sight.
+  bool ranged = false;
+  bool hasLineOfSight() const { return !(bearing_W.x() == 0.0 && bearing_W.y() == 0.0); }  // NaN: a (bad) one
+  bool bearingOnly() const { return hasLineOfSight() && !ranged; }
 };
 
 enum class MeasurementVerdict : std::uint8_t {

@@ -10,6 +10,10 @@
 // The estimate is written at every step; the write wakes a task triggered by it (the planner) only when
 // there is news: a newly accepted measurement, or the person found or lost. A step that only carries
 // the estimate forward in time does not.
+//
+// Where a depth camera's frames are given (rangeFrom) and it sees the person, the distance comes from it
+// instead of the regression (depth_range.hpp, issue 22 item 3): the measurement keeps the line of sight and the
+// regression's height, takes the depth camera's range, and is ranged (its noise small along the line).
 #pragma once
 
 #include <array>
@@ -19,6 +23,7 @@
 
 #include "aerotrack/estimation/bystander_tracks.hpp"
 #include "aerotrack/estimation/camera_to_world.hpp"
+#include "aerotrack/estimation/depth_range.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
 #include "aerotrack/estimation/target_estimator.hpp"
 #include "aerotrack/hal/odometry_history.hpp"
@@ -27,6 +32,7 @@
 #include "aerotrack/perception/person_tracker.hpp"
 #include "aerotrack/perception/torso_features.hpp"
 #include "aerotrack/rt/latest_slot.hpp"
+#include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
 #include "aerotrack/rt/task.hpp"
 
@@ -68,6 +74,8 @@ struct TargetTaskParams {
   /// lock-on's choice. false (`association: lock_on`): always the lock-on's choice. Why: the lock-on judges in
   /// the image, where a bystander beside the target matches as well; in the world they stand apart.
   bool choose_by_estimate = true;
+  /// The distance from the depth camera where it sees the person (`depth_range:`; absent: off).
+  DepthRangeParams depth_range;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
 };
 
@@ -79,13 +87,16 @@ inline constexpr std::size_t kMaxBystanderTracks = kMaxOtherPeople;
 void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params);
 
 struct TargetTaskStats {
-  std::uint64_t detections = 0;  ///< Frames with the followed person.
-  std::uint64_t unreliable = 0;  ///< ... whose torso was not reliable.
-  std::uint64_t bearings = 0;    ///< ... of which the estimator used a bearing (bearing_fallback).
-  std::uint64_t no_pose = 0;     ///< ... whose capture time the histories did not cover.
-  std::uint64_t accepted = 0;    ///< Measurements the estimator used (or started from).
-  std::uint64_t rejected = 0;    ///< Measurements the estimator refused.
-  std::uint64_t reassigned = 0;  ///< Frames whose person the track's prediction chose over the lock-on's.
+  std::uint64_t detections = 0;       ///< Frames with the followed person.
+  std::uint64_t unreliable = 0;       ///< ... whose torso was not reliable.
+  std::uint64_t bearings = 0;         ///< ... of which the estimator used a bearing (bearing_fallback).
+  std::uint64_t no_pose = 0;          ///< ... whose capture time the histories did not cover.
+  std::uint64_t accepted = 0;         ///< Measurements the estimator used (or started from).
+  std::uint64_t rejected = 0;         ///< Measurements the estimator refused.
+  std::uint64_t reassigned = 0;       ///< Frames whose person the track's prediction chose over the lock-on's.
+  std::uint64_t depth_ranged = 0;     ///< ... of the followed person's frames, ranged by the depth camera.
+  std::uint64_t depth_disagreed = 0;  ///< ... whose depth range the regression's disagreed with (not used).
+  std::uint64_t depth_unseen = 0;     ///< ... for which no depth image near in time saw them (occluded, out of view).
 };
 
 class TargetTask final : public rt::Task {
@@ -100,6 +111,9 @@ class TargetTask final : public rt::Task {
   /// Each frame the estimator was given, its target_index set to the person it was given (-1: none): whom
   /// the pipeline follows (the simulator's identity metrics). Optional; the slot outlives the task.
   void publishFollowedTo(rt::LatestSlot<hal::DetectionFrame>& slot) { followed_out_ = &slot; }
+  /// Depth frames (the mapper's channel) for the person's distance (TargetTaskParams::depth_range). Optional;
+  /// the slot outlives the task.
+  void rangeFrom(const rt::SharedSlot<hal::DepthFrame>& depth) { depth_in_ = &depth; }
   /// The person of the frame the estimator is given (see TargetTaskParams::choose_by_estimate), or -1.
   int choosePerson(const hal::DetectionFrame& frame) const;
 
@@ -112,9 +126,12 @@ class TargetTask final : public rt::Task {
   struct Candidate {
     perception::TorsoFeatures torso;
     perception::Appearance look;
-    /// A distance (a reliable torso whose capture pose is known) or a bearing (bearing_fallback, a live
-    /// track); nothing otherwise.
+    /// A distance (a reliable torso whose capture pose is known, or any torso the depth camera ranged) or a
+    /// bearing (bearing_fallback, a live track); nothing otherwise.
     std::optional<TargetMeasurement> measurement;
+    /// What the depth camera said of them (kFound and not used: the regression disagreed), when it was asked.
+    std::optional<DepthRangeStatus> depth;
+    bool depth_disagreed = false;
   };
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
   /// (the capture time's pose; unknown: no measurement).
@@ -138,6 +155,11 @@ class TargetTask final : public rt::Task {
   Eigen::Vector3d localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
                            Eigen::Vector3d& p_C_m) const;
   double measurementStdM(const Eigen::Vector3d& p_C_m) const;
+  /// c's measurement ranged along the line of sight through `pixel` (the photo's) by the depth image nearest the
+  /// frame's time, if one sees the person where the regression (or the prior, for a bearing) roughly does; c learns
+  /// what the depth camera said.
+  void rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel, const Eigen::Isometry3d& T_WC,
+                    Candidate& c) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
   /// behind or beside the camera).
   std::optional<TargetMeasurement> bearingMeasurement(const hal::DetectionFrame& frame,
@@ -170,6 +192,11 @@ class TargetTask final : public rt::Task {
   double look_refused_d2_sum_ = 0.0;       ///< Over the run's frames with a refused distance...
   int look_refused_d2_count_ = 0;          ///< ... and their number.
   BystanderTracks bystanders_;             ///< The torso colour of the people given to the estimator and taken.
+  const rt::SharedSlot<hal::DepthFrame>* depth_in_ = nullptr;
+  std::uint64_t depth_version_ = 0;
+  /// The newest depth frames, oldest first (a detection arrives ~50 ms after its photo: older frames are needed).
+  std::array<hal::DepthFrameHandle, 8> depth_frames_{};
+  std::size_t depth_count_ = 0;
 };
 
 }  // namespace aerotrack::estimation

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/mapping/depth_points.hpp"
@@ -23,6 +24,23 @@
 
 namespace aerotrack::mapping {
 
+/// How wide a column the followed person's returns are left out of (`mapping.exclude_target`).
+struct TargetExclusionParams {
+  bool enabled = true;
+  double body_radius_m = 0.4;            ///< The body's half width with swinging arms (a person is ~0.5 m wide).
+  double sigmas = 2.0;                   ///< ... plus this many standard deviations of the estimate's position...
+  double max_radius_m = 1.2;             ///< ... up to this (a long-lost estimate would otherwise blank the map).
+  double floor_above_estimate_m = 0.5;   ///< The column's foot above the estimate's z (below: the ground, kept)...
+  double height_above_estimate_m = 2.5;  ///< ... and its top.
+};
+
+/// The column of `params` around a person estimated at p_W_m (xy covariance cov_xy_m2): radius body_radius_m
+/// plus `sigmas` standard deviations along the covariance's major axis, at most max_radius_m; from
+/// floor_above_estimate_m to height_above_estimate_m above p_W_m's z. Nothing if disabled or the estimate is
+/// not finite. Pure.
+std::optional<ExcludedBody> bodyAround(const Eigen::Vector3d& p_W_m, const Eigen::Matrix2d& cov_xy_m2,
+                                       const TargetExclusionParams& params);
+
 struct MapperParams {
   OctomapMapParams octomap;
   DepthPointsParams points;
@@ -30,12 +48,15 @@ struct MapperParams {
   PoseHistoryParams poses;
   std::size_t grid_pool_size = 3;           ///< Grid snapshots in flight before one is allocated.
   int octree_snapshot_every_n_frames = 15;  ///< Publish an octree snapshot every n-th frame.
+  TargetExclusionParams exclude_target;     ///< Used by the app's wiring of the mapping task.
 };
 
 struct MapperStats {
   std::uint64_t frames_inserted = 0;
   std::uint64_t frames_skipped_no_pose = 0;
   std::uint64_t frames_skipped_bad = 0;  ///< Malformed depth images, or a camera outside the map.
+  std::uint64_t returns_excluded = 0;    ///< Depth returns on an excluded body (the followed person).
+  std::uint64_t voxels_cleared = 0;      ///< Occupied voxels found inside an excluded body's column, set free.
   std::uint64_t odometry_rejected = 0;   ///< Out of order or not finite.
   std::uint64_t grid_snapshots_allocated = 0;
   std::size_t occupied_voxels = 0;
@@ -66,8 +87,10 @@ class Mapper {
 
   /// Inserts one depth frame. Error (and nothing changes) if the pose at its capture time is
   /// unknown or the image is unusable; the stats count why. The update carries the new grid
-  /// snapshot; octreeDue() says whether an octree snapshot should follow.
-  rt::Expected<MapUpdate> insert(const hal::DepthFrame& frame);
+  /// snapshot; octreeDue() says whether an octree snapshot should follow. Returns inside `excluded` (the
+  /// followed person) are not obstacles (depthToPoints), and what the map holds inside them is cleared
+  /// (OctomapMap::clearColumn).
+  rt::Expected<MapUpdate> insert(const hal::DepthFrame& frame, std::span<const ExcludedBody> excluded = {});
   bool octreeDue() const;
   /// The occupied voxels of the local window as a new octree (occupiedSnapshot()).
   std::shared_ptr<const octomap::OcTree> octreeSnapshot() const;

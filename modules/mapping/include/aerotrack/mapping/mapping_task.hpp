@@ -8,10 +8,15 @@
 // An rt::OverlappedTask: gather() drains the odometry and takes the frames that are ready, work()
 // inserts them (the lockstep executor runs it on a second thread when the task has a latency),
 // publish() writes the grid and octree snapshots.
+//
+// The followed person is not an obstacle (ExcludedBody, depth_points.hpp): gather() asks, for each frame it
+// takes, where the person was at the frame's capture time (excludeBodyFrom), and their returns clear space.
 #pragma once
 
 #include <array>
 #include <cstddef>
+#include <functional>
+#include <optional>
 
 #include "aerotrack/mapping/mapper.hpp"
 #include "aerotrack/rt/clock.hpp"
@@ -39,6 +44,11 @@ class MappingTask final : public rt::OverlappedTask {
         octree_out_(octree_out),
         max_wait_ns_(max_wait_ns) {}
 
+  /// Where the followed person's body is at a capture time (nothing: no one to exclude), called from gather()
+  /// (the task's thread); the app reads the target estimate (estimation must not be a dependency of mapping).
+  using BodySource = std::function<std::optional<ExcludedBody>(rt::TimeNs stamp_ns)>;
+  void excludeBodyFrom(BodySource source) { body_source_ = std::move(source); }
+
   bool gather(rt::TimeNs now_ns) override;
   void work() override;
   void publish(rt::TimeNs publish_ns) override;
@@ -65,7 +75,9 @@ class MappingTask final : public rt::OverlappedTask {
   std::uint64_t dropped_waiting_ = 0;
   // Between gather() and work(): the frames to insert, in order.
   std::array<rt::SharedSlot<hal::DepthFrame>::Handle, 8> ready_{};
+  std::array<std::optional<ExcludedBody>, 8> ready_excluded_{};
   std::size_t ready_count_ = 0;
+  BodySource body_source_;
   // Between work() and publish(): per inserted frame, its grid and (when due) the octree snapshot.
   struct Output {
     std::shared_ptr<const LocalGrid> grid;

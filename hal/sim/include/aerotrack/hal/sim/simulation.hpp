@@ -214,7 +214,7 @@ class Simulation {
   void sampleOdometry();
   void releaseDetections();
   void publishTruth();
-  /// bystander_bodies_ at t_ns (no work if already there).
+  /// bodies_ (every person, the followed one first) at t_ns (no work if already there).
   void refreshBodies(TimeNs t_ns);
   /// The static obstacles and the people's bodies except person skip_id's leave the segment clear.
   bool sightClear(const Eigen::Vector3d& a_W_m, const Eigen::Vector3d& b_W_m, std::size_t skip_id) const;

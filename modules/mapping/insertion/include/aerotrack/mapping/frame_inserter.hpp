@@ -40,8 +40,10 @@ class FrameInserter {
 
   /// Inserts frame into map if poses has T_WB at frame.stamp_ns; otherwise skips it (map
   /// unchanged, counted) and reports why. Error (map unchanged, counted as invalid): a malformed
-  /// frame (see depthToPoints) or a camera origin outside the map's extent.
-  rt::Expected<FrameInsertReport> insert(const hal::DepthFrame& frame, const PoseHistory& poses, OctomapMap& map);
+  /// frame (see depthToPoints) or a camera origin outside the map's extent. Returns inside `excluded` clear
+  /// space and mark nothing (depthToPoints).
+  rt::Expected<FrameInsertReport> insert(const hal::DepthFrame& frame, const PoseHistory& poses, OctomapMap& map,
+                                         std::span<const ExcludedBody> excluded = {});
 
   std::uint64_t framesInserted() const { return frames_inserted_; }
   std::uint64_t framesSkippedNoPose() const { return frames_skipped_no_pose_; }

@@ -82,13 +82,21 @@ class OctomapMap {
   rt::Expected<InsertStats> insert(const octomap::Pointcloud& hits_W, const octomap::Pointcloud& misses_W,
                                    const Eigen::Vector3d& origin_W);
 
+  /// Sets free (OctoMap's clamping minimum, as if seen empty many times) every occupied leaf voxel whose centre
+  /// lies within radius_m of center_W_m horizontally and between min_z_m and max_z_m, and appends each to
+  /// changes(). For the followed person's column (ExcludedBody): what was mapped there before anyone knew
+  /// it was the person (before the lock-on, or while lost) is the person, not an obstacle. Returns how many it
+  /// cleared; nothing for a column that is not finite or leaves the map's extent. Cost: the existing leaves in
+  /// the column's box (free space is pruned, so few) plus one tree update per cleared voxel.
+  std::size_t clearColumn(const Eigen::Vector2d& center_W_m, double radius_m, double min_z_m, double max_z_m);
+
   /// The tree, for queries. Editing it directly makes occupiedVoxelCount() stale until
   /// recountOccupiedVoxels(), and is not reported by changes().
   octomap::OcTree& tree() { return *tree_; }
   const octomap::OcTree& tree() const { return *tree_; }
 
-  /// The voxels the latest insert created or flipped, each once, in the order it applied them
-  /// (empty before the first insert and after a failed one). Valid until the next insert.
+  /// The voxels the latest insert created or flipped, each once, in the order it applied them, then those
+  /// clearColumn cleared since (empty before the first insert and after a failed one). Valid until the next insert.
   const std::vector<VoxelChange>& changes() const;
 
   /// Occupied voxels at leaf resolution (a pruned inner node counts for every leaf voxel it
