@@ -189,6 +189,15 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "unknown_is_occupied" << YAML::Value << m.grid.unknown_is_occupied;
     out << YAML::Key << "recenter_distance_m" << YAML::Value << m.grid.recenter_distance_m;
     out << YAML::Key << "octree_snapshot_every_n_frames" << YAML::Value << m.octree_snapshot_every_n_frames;
+    const mapping::TargetExclusionParams& x = m.exclude_target;
+    out << YAML::Key << "exclude_target" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "enabled" << YAML::Value << x.enabled;
+    out << YAML::Key << "body_radius_m" << YAML::Value << x.body_radius_m;
+    out << YAML::Key << "sigmas" << YAML::Value << x.sigmas;
+    out << YAML::Key << "max_radius_m" << YAML::Value << x.max_radius_m;
+    out << YAML::Key << "floor_above_estimate_m" << YAML::Value << x.floor_above_estimate_m;
+    out << YAML::Key << "height_above_estimate_m" << YAML::Value << x.height_above_estimate_m;
+    out << YAML::EndMap;
     out << YAML::EndMap;
   }
   if (c.perception) {
@@ -235,6 +244,20 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "look_gate_sigmas" << YAML::Value << e.task.look_gate_sigmas;
     out << YAML::Key << "look_gate_confirm_s" << YAML::Value << e.task.look_gate_confirm_s;
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
+    const estimation::DepthRangeParams& r = e.task.depth_range;
+    out << YAML::Key << "depth_range" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "enabled" << YAML::Value << r.enabled;
+    out << YAML::Key << "body_offset_m" << YAML::Value << r.body_offset_m;
+    out << YAML::Key << "step_m" << YAML::Value << r.step_m;
+    out << YAML::Key << "surface_tolerance_m" << YAML::Value << r.surface_tolerance_m;
+    out << YAML::Key << "min_range_m" << YAML::Value << r.min_range_m;
+    out << YAML::Key << "max_range_m" << YAML::Value << r.max_range_m;
+    out << YAML::Key << "max_ratio" << YAML::Value << r.max_ratio;
+    out << YAML::Key << "max_offset_s" << YAML::Value << r.max_offset_s;
+    out << YAML::Key << "range_std_m" << YAML::Value << r.range_std_m;
+    out << YAML::Key << "range_std_per_m2" << YAML::Value << r.range_std_per_m2;
+    out << YAML::Key << "cross_std_per_m" << YAML::Value << r.cross_std_per_m;
+    out << YAML::EndMap;
     out << YAML::Key << "estimator" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "accel_psd_xy_m2ps3" << YAML::Value << k.accel_psd_xy_m2ps3;
     out << YAML::Key << "accel_psd_z_m2ps3" << YAML::Value << k.accel_psd_z_m2ps3;

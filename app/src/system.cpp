@@ -210,7 +210,7 @@ System::TaskResult System::makeMappingTask(System& s, const std::string& where) 
   if (exclusion.enabled) {
     task->excludeBodyFrom([&target = c.target, exclusion](rt::TimeNs stamp_ns) -> std::optional<mapping::ExcludedBody> {
       const std::optional<estimation::TargetEstimate> estimate = target.read();
-      if (!estimate || !estimate->initialised) return std::nullopt;
+      if (!estimate || !estimate->initialised || estimate->lost) return std::nullopt;  // lost: where is unknown
       // Carried to the capture time along its velocity, at most a second either way (the estimate may be older).
       const double dt_s = std::clamp(rt::nsToSeconds(stamp_ns - estimate->stamp_ns), -1.0, 1.0);
       return mapping::bodyAround(estimate->p_WT_m + dt_s * estimate->v_WT_mps,

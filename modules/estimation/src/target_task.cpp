@@ -122,18 +122,25 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
 void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel,
                               const Eigen::Isometry3d& T_WC, Candidate& c) const {
   const DepthRangeParams& p = params_.depth_range;
-  // The depth image nearest in time, and where its camera was.
+  // The newest depth image taken at or before the photo (within max_offset_s), and where its camera was. Not a
+  // later one: whether it has arrived when the detection does depends on the two devices' latencies, and a
+  // replay of the run must range the person as the run did.
   const hal::DepthFrame* depth = nullptr;
-  rt::DurationNs best_ns = rt::secondsToNs(p.max_offset_s);
   for (std::size_t i = 0; i < depth_count_; ++i) {
-    const rt::DurationNs offset_ns = std::abs(depth_frames_[i]->stamp_ns - frame.stamp_ns);
-    if (offset_ns <= best_ns) {
-      best_ns = offset_ns;
-      depth = depth_frames_[i].get();
-    }
+    const rt::DurationNs before_ns = frame.stamp_ns - depth_frames_[i]->stamp_ns;
+    if (before_ns >= 0 && before_ns <= rt::secondsToNs(p.max_offset_s)) depth = depth_frames_[i].get();
   }
   c.depth = DepthRangeStatus::kOutOfView;
   if (depth == nullptr) return;
+  // Only a live track's own measurement -- one its gate takes as it is -- is ranged: the depth camera sharpens
+  // the followed person's distance, it does not vouch for a detection. Random keypoints (issue 23's
+  // detector_garbage) put the line of sight on a wall, which the depth camera ranges as sharply as a person,
+  // and the same wall every frame: a lost track restarted there (measured: the drone flew 15 m off). A start
+  // or a restart is the regression's; bystanders' tracks keep theirs.
+  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
+  if (!prior.initialised || prior.lost) return;
+  const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
+  if (!d2 || !(*d2 <= params_.estimator.gate_chi2)) return;
   const hal::OdometryHistory::Lookup pose = poses_.lookup(depth->stamp_ns);
   if (pose.status != rt::HistoryStatus::kOk) return;
   const Eigen::Isometry3d T_WD = pose.value * depth->T_BC;
@@ -147,7 +154,6 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
   if (surface.status != DepthRangeStatus::kFound) return;
   Eigen::Vector2d p_xy = bodyCentreBehind(origin_W, dir_W, surface.range_m, p);
   // The depth image shows the person at its own time: carried to the photo's along the estimate's velocity.
-  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
   if (prior.initialised && !prior.lost)
     p_xy += prior.v_WT_mps.head<2>() * rt::nsToSeconds(frame.stamp_ns - depth->stamp_ns);
   // The same person as the regression (or the prior's range, for a bearing) places, within a factor.

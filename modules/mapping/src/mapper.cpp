@@ -50,8 +50,8 @@ std::optional<ExcludedBody> bodyAround(const Eigen::Vector3d& p_W_m, const Eigen
   const double major_var = mean + std::sqrt(half_diff * half_diff + cov_xy_m2(0, 1) * cov_xy_m2(1, 0));
   ExcludedBody body;
   body.center_W_m = p_W_m.head<2>();
-  body.radius_m =
-      std::min(params.max_radius_m, params.body_radius_m + params.sigmas * std::sqrt(std::max(0.0, major_var)));
+  body.radius_m = params.body_radius_m + params.sigmas * std::sqrt(std::max(0.0, major_var));
+  if (!(body.radius_m <= params.max_radius_m)) return std::nullopt;
   body.min_z_m = p_W_m.z() + params.floor_above_estimate_m;
   body.max_z_m = p_W_m.z() + params.height_above_estimate_m;
   return body;

@@ -9,8 +9,8 @@
 // The cameras differ in place and time, so the march checks what it finds: a surface the depth camera sees in
 // front of the line (something between it and the person) ends it with nothing, as does a range that disagrees
 // with the regression's by more than a factor (the line missed the person and met the wall behind them). The
-// depth image nearest in time to the photo is used, at most max_offset_s from it, and the range is carried
-// over the difference along the estimate's velocity. The noise grows as a stereo camera's does (k z^2, Intel's
+// newest depth image taken at or before the photo is used, at most max_offset_s before it, and the range is
+// carried over the difference along the estimate's velocity. The noise grows as a stereo camera's does (k z^2, Intel's
 // D400 tuning guide), from a floor that is the person's own depth.
 #pragma once
 

@@ -27,17 +27,18 @@ namespace aerotrack::mapping {
 /// How wide a column the followed person's returns are left out of (`mapping.exclude_target`).
 struct TargetExclusionParams {
   bool enabled = true;
-  double body_radius_m = 0.4;            ///< The body's half width with swinging arms (a person is ~0.5 m wide).
-  double sigmas = 2.0;                   ///< ... plus this many standard deviations of the estimate's position...
-  double max_radius_m = 1.2;             ///< ... up to this (a long-lost estimate would otherwise blank the map).
+  double body_radius_m = 0.35;           ///< The body's half width with swinging arms (a person is ~0.5 m wide)...
+  double sigmas = 2.0;                   ///< ... plus this many standard deviations of the estimate's position;
+  double max_radius_m = 0.7;             ///< wider than this: too uncertain, nothing is excluded.
   double floor_above_estimate_m = 0.5;   ///< The column's foot above the estimate's z (below: the ground, kept)...
   double height_above_estimate_m = 2.5;  ///< ... and its top.
 };
 
 /// The column of `params` around a person estimated at p_W_m (xy covariance cov_xy_m2): radius body_radius_m
-/// plus `sigmas` standard deviations along the covariance's major axis, at most max_radius_m; from
-/// floor_above_estimate_m to height_above_estimate_m above p_W_m's z. Nothing if disabled or the estimate is
-/// not finite. Pure.
+/// plus `sigmas` standard deviations along the covariance's major axis; from floor_above_estimate_m to
+/// height_above_estimate_m above p_W_m's z. Nothing if disabled, the estimate is not finite, or the radius
+/// would exceed max_radius_m: an uncertain estimate (the person hidden round a corner) must not erase the wall
+/// beside them -- better the person mapped for a moment than a wall unmapped. Pure.
 std::optional<ExcludedBody> bodyAround(const Eigen::Vector3d& p_W_m, const Eigen::Matrix2d& cov_xy_m2,
                                        const TargetExclusionParams& params);
 
