@@ -85,13 +85,16 @@ SearchFlight flyCornerHide(std::optional<double> scenario_search_timeout_s) {
 
 TEST(ClosedLoopSearch, TheSearchFindsAPersonHiddenRoundACornerWhereTheHoverDoesNot) {
   const SearchFlight hover = flyCornerHide(0.0);  // the scenario says: no search, hold "person not found" at once
-  // Every relocation ends in a hold, "not found". (Where the drone ends depends on how well it kept up: since
-  // issue 21's goal lead it holds close enough to see the person come out of the forced occlusion, and tracks
-  // again; the relocation itself found nobody.)
+  // The forced occlusion's relocation ends in a hold, "not found", and no relocation searches. (Where the drone
+  // ends depends on how well it kept up: since issue 21's goal lead it holds close enough to see the person
+  // come out of the forced occlusion, and tracks again; the relocation itself found nobody. A later loss at the
+  // corner may be found again on the relocation path itself -- since the depth camera ranges the person, issue
+  // 22 -- but never by a search.)
   const nlohmann::json& hovered = hover.summary["supervisor"]["relocations"];
   ASSERT_FALSE(hovered.empty()) << hover.summary["supervisor"].dump(2);
+  EXPECT_EQ(hovered[0]["outcome"], "not found") << hover.summary["supervisor"].dump(2);
   for (const nlohmann::json& r : hovered) {
-    EXPECT_EQ(r["outcome"], "not found") << hover.summary["supervisor"].dump(2);
+    EXPECT_NE(r["outcome"], "found while searching") << hover.summary["supervisor"].dump(2);
     EXPECT_TRUE(r["search_s"].is_null());
   }
   EXPECT_GT(hover.summary["supervisor"]["seconds_in"]["hold"].get<double>(), 0.0);

@@ -13,7 +13,7 @@ rt::Status validate(const DepthRangeParams& p) {
                       std::isfinite(p.surface_tolerance_m) && std::isfinite(p.min_range_m) &&
                       std::isfinite(p.max_range_m) && std::isfinite(p.max_ratio) && std::isfinite(p.max_offset_s) &&
                       std::isfinite(p.range_std_m) && std::isfinite(p.range_std_per_m2) &&
-                      std::isfinite(p.cross_std_per_m);
+                      std::isfinite(p.cross_std_per_m) && std::isfinite(p.person_speed_mps);
   if (!finite) return rt::Error{"depth range: every parameter must be finite"};
   if (!(p.step_m > 0.0) || !(p.step_m <= p.surface_tolerance_m))
     return rt::Error{"depth range: need 0 < step_m <= surface_tolerance_m (a step must not jump over a surface)"};
@@ -21,7 +21,7 @@ rt::Status validate(const DepthRangeParams& p) {
     return rt::Error{"depth range: need 0 <= min_range_m < max_range_m"};
   if (!(p.max_ratio >= 1.0)) return rt::Error{"depth range: max_ratio must be >= 1"};
   if (p.body_offset_m < 0.0 || p.max_offset_s < 0.0 || p.range_std_m < 0.0 || p.range_std_per_m2 < 0.0 ||
-      p.cross_std_per_m < 0.0)
+      p.cross_std_per_m < 0.0 || p.person_speed_mps < 0.0)
     return rt::Error{"depth range: offsets and noises must be >= 0"};
   return rt::ok();
 }
@@ -41,6 +41,7 @@ DepthRangeParams parseDepthRangeParams(const rt::ConfigNode& node) {
   p.range_std_m = node.getDouble("range_std_m", 0.0, 5.0);
   p.range_std_per_m2 = node.getDouble("range_std_per_m2", 0.0, 1.0);
   p.cross_std_per_m = node.getDouble("cross_std_per_m", 0.0, 1.0);
+  p.person_speed_mps = node.getDouble("person_speed_mps", 0.0, 20.0);
   node.finish();
   return p;
 }

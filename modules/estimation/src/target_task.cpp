@@ -152,10 +152,11 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
   const DepthSurface surface = surfaceAlongLine(*depth, T_WD, origin_W, dir_W, p);
   c.depth = surface.status;
   if (surface.status != DepthRangeStatus::kFound) return;
-  Eigen::Vector2d p_xy = bodyCentreBehind(origin_W, dir_W, surface.range_m, p);
-  // The depth image shows the person at its own time: carried to the photo's along the estimate's velocity.
-  if (prior.initialised && !prior.lost)
-    p_xy += prior.v_WT_mps.head<2>() * rt::nsToSeconds(frame.stamp_ns - depth->stamp_ns);
+  // Where the depth image saw them, at its own time. Not carried to the photo's along the estimate's velocity:
+  // a wrong velocity (a restart that jumped) would move every measurement with it and confirm itself
+  // (measured: 6 m/s held for a second after a detector fault); the offset's reach is noise instead.
+  const Eigen::Vector2d p_xy = bodyCentreBehind(origin_W, dir_W, surface.range_m, p);
+  const double moved_m = p.person_speed_mps * rt::nsToSeconds(frame.stamp_ns - depth->stamp_ns);
   // The same person as the regression (or the prior's range, for a bearing) places, within a factor.
   TargetMeasurement& m = *c.measurement;
   const double depth_range_m = (p_xy - origin_W.head<2>()).norm();
@@ -165,11 +166,12 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
     return;
   }
   const Eigen::Vector2d line_W = (p_xy - origin_W.head<2>()) / depth_range_m;
+  c.unranged = m;
   m.p_WT_m.head<2>() = p_xy;  // the height stays the regression's (the estimator's z is its ground level)
   m.bearing_W = line_W;
   m.ranged = true;
-  m.range_std_m = depthRangeStdM(surface.range_m, p);
-  m.std_xy_m = std::max(params_.min_measurement_std_m, p.cross_std_per_m * depth_range_m);
+  m.range_std_m = std::hypot(depthRangeStdM(surface.range_m, p), moved_m);
+  m.std_xy_m = std::hypot(std::max(params_.min_measurement_std_m, p.cross_std_per_m * depth_range_m), moved_m);
 }
 
 TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
@@ -237,10 +239,10 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     };
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
       if (!competes(j)) continue;
-      if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, *c.measurement), bystanders_.look(j)))
+      if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, c.judged()), bystanders_.look(j)))
         pairs[pair_count++] = {i, static_cast<int>(j), *cost};
     }
-    const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
+    const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
     const std::optional<double> followed_cost = cost_of(d2, reference_);
     if (!followed_cost) continue;
     const double cost = *followed_cost;
@@ -281,8 +283,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     bool explains_bystander = false;
     for (std::size_t j = 0; j < bystanders_.capacity() && !explains_bystander; ++j) {
       if (track_taken[j] || !competes(j)) continue;
-      const std::optional<double> d2 =
-          bystanders_.mahalanobisSq(j, *candidates[static_cast<std::size_t>(i)].measurement);
+      const std::optional<double> d2 = bystanders_.mahalanobisSq(j, candidates[static_cast<std::size_t>(i)].judged());
       explains_bystander = d2 && *d2 <= bearing_d2[static_cast<std::size_t>(i)];
     }
     if (explains_bystander) continue;
@@ -328,7 +329,16 @@ bool TargetTask::process(const Candidate& c) {
     return false;
   }
   if (!c.torso.reliable) ++stats_.unreliable;  // ... but the depth camera gave their distance
-  const MeasurementVerdict verdict = estimator_.add(*c.measurement);
+  // A ranged measurement too sharp for the gate of a track that the regression's still fits (the track
+  // restarted with a wrong velocity, a step ago the person was behind something): the regression's, whose
+  // looser noise pulls the track back, after which the ranges pass again. Refused, a sharp range would leave
+  // the track coasting away from the person it was given.
+  const TargetMeasurement* given = &*c.measurement;
+  if (ranged && c.unranged) {
+    const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
+    if (!(d2 && *d2 <= params_.estimator.gate_chi2)) given = &*c.unranged;
+  }
+  const MeasurementVerdict verdict = estimator_.add(*given);
   if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted) {
     ++stats_.accepted;
     if (!c.torso.reliable) return true;  // a cut-off person's colour is not their whole torso's: not learnt

@@ -9,9 +9,10 @@
 // The cameras differ in place and time, so the march checks what it finds: a surface the depth camera sees in
 // front of the line (something between it and the person) ends it with nothing, as does a range that disagrees
 // with the regression's by more than a factor (the line missed the person and met the wall behind them). The
-// newest depth image taken at or before the photo is used, at most max_offset_s before it, and the range is
-// carried over the difference along the estimate's velocity. The noise grows as a stereo camera's does (k z^2, Intel's
-// D400 tuning guide), from a floor that is the person's own depth.
+// newest depth image taken at or before the photo is used, at most max_offset_s before it; how far a person
+// walks in the difference is added to the noise (not carried along the estimate's velocity, which a wrong
+// velocity would then confirm). The noise grows as a stereo camera's does (k z^2, Intel's D400 tuning guide),
+// from a floor that is the person's own depth.
 #pragma once
 
 #include <cstdint>
@@ -37,6 +38,7 @@ struct DepthRangeParams {
   double range_std_m = 0.05;         ///< The noise's floor along the line of sight (the body's depth varies)...
   double range_std_per_m2 = 0.0015;  ///< ... and the stereo noise k z^2 added to it (in quadrature).
   double cross_std_per_m = 0.01;     ///< Across the line of sight: the keypoints' scatter, per metre of range.
+  double person_speed_mps = 1.5;     ///< How fast they may have moved between depth image and photo (noise).
 };
 
 /// Ok if every field is finite and in range (0 < step <= tolerance, 0 <= min < max, ratio >= 1, stds >= 0).

@@ -132,6 +132,10 @@ class TargetTask final : public rt::Task {
     /// What the depth camera said of them (kFound and not used: the regression disagreed), when it was asked.
     std::optional<DepthRangeStatus> depth;
     bool depth_disagreed = false;
+    /// A ranged measurement's regression-only form: who a person is (the association's gates) is judged
+    /// on it, so the depth camera changes how well the followed person is placed, never who is followed.
+    std::optional<TargetMeasurement> unranged;
+    const TargetMeasurement& judged() const { return unranged ? *unranged : *measurement; }
   };
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
   /// (the capture time's pose; unknown: no measurement).
