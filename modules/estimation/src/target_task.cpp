@@ -135,8 +135,8 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
   // Only a live track's own measurement -- one its gate takes as it is -- is ranged: the depth camera sharpens
   // the followed person's distance, it does not vouch for a detection. Random keypoints (issue 23's
   // detector_garbage) put the line of sight on a wall, which the depth camera ranges as sharply as a person,
-  // and the same wall every frame: a lost track restarted there (measured: the drone flew 15 m off). A start
-  // or a restart is the regression's; bystanders' tracks keep theirs.
+  // and the same wall every frame: sharp, consistent measurements a lost track would restart on. A start or a
+  // restart is the regression's; bystanders' tracks keep theirs.
   const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
   if (!prior.initialised || prior.lost) return;
   const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);

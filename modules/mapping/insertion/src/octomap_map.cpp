@@ -405,18 +405,25 @@ std::size_t OctomapMap::clearColumn(const Eigen::Vector2d& center_W_m, double ra
     const double z = tree.keyToCoord(key[2]);
     return dx * dx + dy * dy < radius_sq && z >= min_z_m && z <= max_z_m;
   };
+  const octomap::OcTreeKey lo_key = tree.coordToKey(lo);
+  const octomap::OcTreeKey hi_key = tree.coordToKey(hi);
   const unsigned depth = tree.getTreeDepth();
   for (auto it = tree.begin_leafs_bbx(lo, hi), end = tree.end_leafs_bbx(); it != end; ++it) {
     if (!tree.isNodeOccupied(*it)) continue;
-    // A pruned (coarse) leaf stands for 2^(depth - its depth) leaf voxels per axis: each is judged.
-    const auto size = static_cast<std::uint16_t>(1U << (depth - it.getDepth()));
+    // A pruned (coarse) leaf stands for 2^(depth - its depth) leaf voxels per axis: each in the column's box is
+    // judged (the box bounds the work, however large a pruned block the column touches).
+    const unsigned size = 1U << (depth - it.getDepth());
     const octomap::OcTreeKey base = it.getIndexKey();
-    for (std::uint16_t dx = 0; dx < size; ++dx)
-      for (std::uint16_t dy = 0; dy < size; ++dy)
-        for (std::uint16_t dz = 0; dz < size; ++dz) {
-          const octomap::OcTreeKey key(static_cast<octomap::key_type>(base[0] + dx),
-                                       static_cast<octomap::key_type>(base[1] + dy),
-                                       static_cast<octomap::key_type>(base[2] + dz));
+    std::array<unsigned, 3> first{}, last{};
+    for (std::size_t a = 0; a < 3; ++a) {
+      first[a] = std::max<unsigned>(base[a], lo_key[a]);
+      last[a] = std::min<unsigned>(base[a] + size - 1U, hi_key[a]);
+    }
+    for (unsigned x = first[0]; x <= last[0]; ++x)
+      for (unsigned y = first[1]; y <= last[1]; ++y)
+        for (unsigned z = first[2]; z <= last[2]; ++z) {
+          const octomap::OcTreeKey key(static_cast<octomap::key_type>(x), static_cast<octomap::key_type>(y),
+                                       static_cast<octomap::key_type>(z));
           if (inside(key)) keys.push_back(key);
         }
   }

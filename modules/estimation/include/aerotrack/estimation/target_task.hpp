@@ -11,9 +11,10 @@
 // there is news: a newly accepted measurement, or the person found or lost. A step that only carries
 // the estimate forward in time does not.
 //
-// Where a depth camera's frames are given (rangeFrom) and it sees the person, the distance comes from it
-// instead of the regression (depth_range.hpp, issue 22 item 3): the measurement keeps the line of sight and the
-// regression's height, takes the depth camera's range, and is ranged (its noise small along the line).
+// Where a depth camera's frames are given (rangeFrom) and it sees the followed person, the distance of the live
+// track's measurements comes from it instead of the regression (depth_range.hpp, issue 22 item 3): the
+// measurement keeps the line of sight and the regression's height, takes the depth camera's range, and is
+// ranged (its noise small along the line). Who a person is stays judged on the regression's measurement.
 #pragma once
 
 #include <array>
