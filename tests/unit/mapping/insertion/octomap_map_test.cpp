@@ -392,7 +392,8 @@ TEST(OctomapMap, GivenAColumnThroughAWall_WhenCleared_ThenExactlyTheVoxelsInside
       const bool inside = std::abs(j) <= 2 && k >= -3 && k <= 4;
       const double p = probabilityAt(map.tree(), centre(40, j, k));
       if (inside) {
-        EXPECT_NEAR(p, probability(static_cast<double>(map.tree().getClampingThresMinLog())), kProbTol) << j << " " << k;
+        EXPECT_NEAR(p, probability(static_cast<double>(map.tree().getClampingThresMinLog())), kProbTol)
+            << j << " " << k;
       } else {
         EXPECT_GT(p, 0.5) << j << " " << k;
       }
