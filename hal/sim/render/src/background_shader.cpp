@@ -8,6 +8,7 @@
 #include <cstddef>
 
 #include "render_hash.hpp"
+#include "render_math.hpp"
 
 namespace aerotrack::hal::sim {
 namespace {
@@ -27,28 +28,6 @@ constexpr std::array<float, 3> kGrass = {52.0F, 112.0F, 70.0F};
 /// floor(log2(x)) for a finite x >= 1, from the exponent bits.
 int floorLog2(float x) {
   return static_cast<int>((std::bit_cast<std::uint32_t>(x) >> 23) & 0xFFU) - 127;
-}
-
-/// Value (not reference) forms of min for the vectorised pass: GCC 12 vectorises these.
-float minF(float a, float b) {
-  return b < a ? b : a;
-}
-float maxF(float a, float b) {
-  return a < b ? b : a;
-}
-int minI(int a, int b) {
-  return b < a ? b : a;
-}
-
-/// Rounds a colour channel; every colour drawn is a non-negative blend, so only the top needs a clamp.
-std::uint8_t toByte(float c) {
-  return static_cast<std::uint8_t>(minF(c, 255.0F) + 0.5F);  // NOLINT(bugprone-incorrect-roundings): c >= 0
-}
-
-/// floor(x) as an int (x within +-2^30).
-int floorToInt(float x) {
-  const int i = static_cast<int>(x);
-  return i - static_cast<int>(static_cast<float>(i) > x);
 }
 
 /// The mip level for a pixel's footprint: the finest with texels >= footprint (level-0 texels).

@@ -6,6 +6,7 @@
 #include "aerotrack/hal/sim/background_shader.hpp"
 #include "aerotrack/hal/sim/depth_camera.hpp"
 #include "render_hash.hpp"
+#include "render_math.hpp"
 
 #include <algorithm>
 #include <array>
@@ -31,11 +32,6 @@ std::int64_t fastFloor(float x) {
   return static_cast<float>(i) > x ? i - 1 : i;
 }
 
-/// Rounds a colour channel; every colour drawn is a non-negative blend, so only the top needs a clamp.
-std::uint8_t toByteF(float c) {
-  return static_cast<std::uint8_t>(std::min(c, 255.0F) + 0.5F);  // NOLINT(bugprone-incorrect-roundings): c >= 0
-}
-
 /// One row's rays from o, and the light.
 struct RowShading {
   RowRays rays;
@@ -43,89 +39,150 @@ struct RowShading {
   float haze_m = 0.0F;
 };
 
-/// An obstacle span's per-pass buffers: hit points and 1 - haze (reused across spans and rows).
+/// An obstacle span's per-pass buffers (reused across spans and rows): hit points, 1 - haze, the
+/// light, texture cells and their hashes, and the colour's channels.
 struct ObstacleSpanBuffers {
-  std::array<float, BackgroundShader::kChunk> px, py, pz, keep;
+  std::array<float, BackgroundShader::kChunk> px, py, pz, keep, light, cell_hash;
+  std::array<int, BackgroundShader::kChunk> cell1, cell2;
+  std::array<std::uint8_t, BackgroundShader::kChunk> b, g, r;
 };
 
-/// Pixels [u0, u1) of a row, all showing obstacle `id` at depths depth_row[u] along the rays
-/// d0 + u step from o: a face's panels or bark, lit by the sun, hazed with range. Single precision,
-/// in two passes as the background (background_shader.hpp): the hit points and haze branch-free
-/// (vectorised), then each pixel's face, texture cell and colour.
-void shadeObstacleSpan(const ObstacleWorld& world, int id, const RowShading& frame, const float* depth_row, int u0,
-                       int u1, cv::Vec3b* row, ObstacleSpanBuffers& buffers) {
-  const std::size_t box_count = world.boxes().size();
-  const bool is_box = static_cast<std::size_t>(id) < box_count;
-  const Box* box = is_box ? &world.boxes()[static_cast<std::size_t>(id)] : nullptr;
-  const Cylinder* cyl = is_box ? nullptr : &world.cylinders()[static_cast<std::size_t>(id) - box_count];
-  const Eigen::Vector3f base = (is_box ? kConcrete : kBark).cast<float>();
-  const Eigen::Vector3f horizon(kSkyHorizonBgr.data());
-  const Eigen::Vector3f& sun = frame.sun;
+/// The shared first pass of an obstacle span: hit points along the rays d0 + u step from o at depths
+/// depth_row[u], and 1 - haze. Branch-free (vectorised).
+void hitPoints(const RowShading& frame, const float* depth_row, int c0, int n, ObstacleSpanBuffers& buffers) {
   const Eigen::Vector3f &o = frame.o, &d0 = frame.rays.d0, &step = frame.rays.step;
   const float haze_m = frame.haze_m;
+  auto& [px, py, pz, keep, light, cell_hash, cell1, cell2, b, g, r] = buffers;
+  for (int k = 0; k < n; ++k) {
+    const auto u = static_cast<float>(c0 + k);
+    const float dx = d0.x() + u * step.x(), dy = d0.y() + u * step.y(), dz = d0.z() + u * step.z();
+    const float t = depth_row[c0 + k];
+    px[k] = o.x() + t * dx, py[k] = o.y() + t * dy, pz[k] = o.z() + t * dz;
+    const float range_m = t * std::sqrt(dx * dx + dy * dy + dz * dz);
+    keep[k] = haze_m / (range_m + haze_m);  // 1 - haze
+  }
+}
+
+/// The last passes of an obstacle span: the colour from albedo x light, hazed (vectorised), then the
+/// bytes written to the row.
+void writeColours(const Eigen::Vector3f& base, float albedo0, float hash_gain, float hash_offset, int c0, int n,
+                  cv::Vec3b* row, ObstacleSpanBuffers& buffers) {
+  const Eigen::Vector3f horizon(kSkyHorizonBgr.data());
+  auto& [px, py, pz, keep, light, cell_hash, cell1, cell2, b, g, r] = buffers;
+  for (int k = 0; k < n; ++k) {
+    const float shade = albedo0 * (hash_offset + hash_gain * cell_hash[k]) * light[k];
+    const float lit = keep[k] * shade, hazed = 1.0F - keep[k];
+    b[k] = toByte(lit * base.x() + hazed * horizon.x());
+    g[k] = toByte(lit * base.y() + hazed * horizon.y());
+    r[k] = toByte(lit * base.z() + hazed * horizon.z());
+  }
+  for (int k = 0; k < n; ++k) row[c0 + k] = cv::Vec3b(b[k], g[k], r[k]);
+}
+
+/// Pixels [u0, u1) of a row, all showing box `box`, at depths depth_row[u] along the rays d0 + u step from
+/// o: a face's panels, lit by the sun, hazed with range. Single precision, in passes as the background
+/// (background_shader.hpp): the hit points and haze branch-free (vectorised), then each pixel's face and
+/// hashed panel (kept while it does not change), then the colour (vectorised).
+void shadeBoxSpan(const Box& box, int id, const RowShading& frame, const float* depth_row, int u0, int u1,
+                  cv::Vec3b* row, ObstacleSpanBuffers& buffers) {
   const auto albedo0 = static_cast<float>(0.85 + 0.3 * hash01(id, 0, 3));
-  // The texture's hashed cell (a box's panel, a trunk's furrow and band) changes every few pixels at
-  // most: its last value is kept.
+  const Eigen::Vector3f lo = box.min_W_m.cast<float>(), hi = box.max_W_m.cast<float>();
+  const Eigen::Vector3f sun = frame.sun;
   std::int64_t last_i1 = std::numeric_limits<std::int64_t>::min(), last_i2 = 0;
-  std::uint64_t last_salt = 0;
+  int last_axis = -1;
   float last_hash = 0.0F;
-  const auto cellHash = [&](std::int64_t i1, std::int64_t i2, std::uint64_t salt) {
-    if (i1 != last_i1 || i2 != last_i2 || salt != last_salt) {
-      last_i1 = i1, last_i2 = i2, last_salt = salt;
-      last_hash = static_cast<float>(hash01(i1, i2, salt));
-    }
-    return last_hash;
-  };
-  auto& [px, py, pz, keep] = buffers;
+  auto& [px, py, pz, keep, light, cell_hash, cell1, cell2, b, g, r] = buffers;
   for (int c0 = u0; c0 < u1; c0 += BackgroundShader::kChunk) {
     const int n = std::min(BackgroundShader::kChunk, u1 - c0);
-    for (int k = 0; k < n; ++k) {
-      const auto u = static_cast<float>(c0 + k);
-      const float dx = d0.x() + u * step.x(), dy = d0.y() + u * step.y(), dz = d0.z() + u * step.z();
-      const float t = depth_row[c0 + k];
-      px[k] = o.x() + t * dx, py[k] = o.y() + t * dy, pz[k] = o.z() + t * dz;
-      const float range_m = t * std::sqrt(dx * dx + dy * dy + dz * dz);
-      keep[k] = haze_m / (range_m + haze_m);  // 1 - haze
-    }
+    hitPoints(frame, depth_row, c0, n, buffers);
     for (int k = 0; k < n; ++k) {
       const Eigen::Vector3f p(px[k], py[k], pz[k]);
-      float albedo = albedo0;
-      float lit = 0.0F;  // the normal's cosine to the sun
-      if (box != nullptr) {
-        int axis = 0;
-        float best = std::numeric_limits<float>::infinity(), sign = 1.0F;
-        for (int a = 0; a < 3; ++a) {  // the face hit: the plane nearest the hit point
-          const float dl = std::abs(p[a] - static_cast<float>(box->min_W_m[a]));
-          const float dh = std::abs(p[a] - static_cast<float>(box->max_W_m[a]));
-          if (dl < best) best = dl, axis = a, sign = -1.0F;
-          if (dh < best) best = dh, axis = a, sign = 1.0F;
-        }
-        lit = sign * sun[axis];
-        // Panels of 1 m with dark seams, each panel a little different.
-        const float s1 = p[(axis + 1) % 3], s2 = p[(axis + 2) % 3];
-        const std::int64_t i1 = fastFloor(s1), i2 = fastFloor(s2);
-        const bool seam = s1 - static_cast<float>(i1) < 0.03F || s2 - static_cast<float>(i2) < 0.03F;
-        albedo *= seam ? 0.55F : 0.9F + 0.2F * cellHash(i1, i2, 5 + static_cast<std::uint64_t>(axis));
-      } else {
-        Eigen::Vector3f n_W = Eigen::Vector3f::Zero();
-        if (p.z() >= static_cast<float>(cyl->z_max_m) - 1e-4F) {
-          n_W.z() = 1.0F;
-        } else if (p.z() <= static_cast<float>(cyl->z_min_m) + 1e-4F) {
-          n_W.z() = -1.0F;
-        } else {
-          const auto inv_r = static_cast<float>(1.0 / cyl->radius_m);
-          n_W.x() = (p.x() - static_cast<float>(cyl->center_W_m.x())) * inv_r;
-          n_W.y() = (p.y() - static_cast<float>(cyl->center_W_m.y())) * inv_r;
-        }
-        lit = n_W.dot(sun);
-        // Bark: furrows (by the normal's direction) broken into 0.4 m bands.
-        albedo *= 0.8F + 0.35F * cellHash(fastFloor((n_W.x() + 2.0F * n_W.y()) * 3.0F), fastFloor(p.z() * 2.5F), 7);
+      int axis = 0;
+      float best = std::numeric_limits<float>::infinity(), sign = 1.0F;
+      for (int a = 0; a < 3; ++a) {  // the face hit: the plane nearest the hit point
+        const float dl = std::abs(p[a] - lo[a]);
+        const float dh = std::abs(p[a] - hi[a]);
+        if (dl < best) best = dl, axis = a, sign = -1.0F;
+        if (dh < best) best = dh, axis = a, sign = 1.0F;
       }
-      const float shade = albedo * (0.45F + 0.6F * std::max(0.0F, lit));
-      const Eigen::Vector3f colour = keep[k] * shade * base + (1.0F - keep[k]) * horizon;
-      cv::Vec3b& out = row[c0 + k];
-      for (int ch = 0; ch < 3; ++ch) out[ch] = toByteF(colour[ch]);
+      light[k] = 0.45F + 0.6F * std::max(0.0F, sign * sun[axis]);
+      // Panels of 1 m with dark seams, each panel a little different: the seam as a hash of -1 (gain 1).
+      const float s1 = p[(axis + 1) % 3], s2 = p[(axis + 2) % 3];
+      const std::int64_t i1 = fastFloor(s1), i2 = fastFloor(s2);
+      const bool seam = s1 - static_cast<float>(i1) < 0.03F || s2 - static_cast<float>(i2) < 0.03F;
+      if (i1 != last_i1 || i2 != last_i2 || axis != last_axis) {
+        last_i1 = i1, last_i2 = i2, last_axis = axis;
+        last_hash = static_cast<float>(hash01(i1, i2, 5 + static_cast<std::uint64_t>(axis)));
+      }
+      // albedo x (0.9 + 0.2 h), or x 0.55 on a seam: 0.9 + 0.2 h' with h' = -1.75.
+      cell_hash[k] = seam ? -1.75F : last_hash;
     }
+    writeColours(kConcrete.cast<float>(), albedo0, 0.2F, 0.9F, c0, n, row, buffers);
+  }
+}
+
+/// The same for cylinder `cyl` (a trunk): bark furrows by the normal's direction, broken into 0.4 m bands,
+/// flat caps. Here the normal, light and texture cells are branch-free too (vectorised); only the cells'
+/// hashes are looked up one pixel at a time, kept while the cell does not change.
+void shadeCylinderSpan(const Cylinder& cyl, int id, const RowShading& frame, const float* depth_row, int u0, int u1,
+                       cv::Vec3b* row, ObstacleSpanBuffers& buffers) {
+  const auto albedo0 = static_cast<float>(0.85 + 0.3 * hash01(id, 0, 3));
+  const auto inv_r = static_cast<float>(1.0 / cyl.radius_m);
+  const auto cx = static_cast<float>(cyl.center_W_m.x()), cy = static_cast<float>(cyl.center_W_m.y());
+  const float z_top = static_cast<float>(cyl.z_max_m) - 1e-4F, z_bottom = static_cast<float>(cyl.z_min_m) + 1e-4F;
+  const float sx = frame.sun.x(), sy = frame.sun.y(), sz = frame.sun.z();
+  int last_1 = std::numeric_limits<int>::min(), last_2 = 0;
+  float last_hash = 0.0F;
+  auto& [px, py, pz, keep, light, cell_hash, cell1, cell2, b, g, r] = buffers;
+  for (int c0 = u0; c0 < u1; c0 += BackgroundShader::kChunk) {
+    const int n = std::min(BackgroundShader::kChunk, u1 - c0);
+    hitPoints(frame, depth_row, c0, n, buffers);
+    for (int k = 0; k < n; ++k) {
+      const bool top = pz[k] >= z_top, bottom = pz[k] <= z_bottom, side = !(top | bottom);
+      // The outward normal: radial on the side, up or down on a cap.
+      const float nx = side ? (px[k] - cx) * inv_r : 0.0F;
+      const float ny = side ? (py[k] - cy) * inv_r : 0.0F;
+      const float down = bottom ? -1.0F : 0.0F;
+      const float nz = top ? 1.0F : down;
+      light[k] = 0.45F + 0.6F * maxF(0.0F, nx * sx + ny * sy + nz * sz);
+      cell1[k] = floorToInt((nx + 2.0F * ny) * 3.0F);
+      cell2[k] = floorToInt(pz[k] * 2.5F);
+    }
+    for (int k = 0; k < n; ++k) {
+      if (cell1[k] != last_1 || cell2[k] != last_2) {
+        last_1 = cell1[k], last_2 = cell2[k];
+        last_hash = static_cast<float>(hash01(last_1, last_2, 7));
+      }
+      cell_hash[k] = last_hash;
+    }
+    writeColours(kBark.cast<float>(), albedo0, 0.35F, 0.8F, c0, n, row, buffers);
+  }
+}
+
+/// A trunk's depths along one row, seen from outside its footprint (the common case, the forest's): for
+/// pixels [u0, u0 + n) of rays d0 + k step (origin at (ox, oy, oz), the axis at x = y = 0), the side's
+/// first hit, or -1 where the ray passes over or under the side and may meet a cap, or infinity (a miss).
+/// Branch-free single precision (vectorised); the discriminant in Lagrange's form, a r^2 - (o x d)^2,
+/// without b^2 - a c's cancellation far from the trunk.
+void cylinderSideHits(const Eigen::Vector3f& d0, const Eigen::Vector3f& step, float ox, float oy, float oz, float r2,
+                      float z_min, float z_max, int n, float* t_out) {
+  // Locals, not references: t_out could alias them, and GCC would not vectorise the loop.
+  const float d0x = d0.x(), d0y = d0.y(), d0z = d0.z(), sx = step.x(), sy = step.y(), sz = step.z();
+  for (int k = 0; k < n; ++k) {
+    const auto kf = static_cast<float>(k);
+    const float dx = d0x + kf * sx, dy = d0y + kf * sy, dz = d0z + kf * sz;
+    const float b = ox * dx + oy * dy;  // < 0: towards the axis
+    const float a = dx * dx + dy * dy;
+    const float cross = ox * dy - oy * dx;
+    const float disc = a * r2 - cross * cross;
+    const float t = (-b - std::sqrt(maxF(disc, 0.0F))) / a;
+    const float z = oz + t * dz;
+    // Bitwise, not short-circuit: no branch, so GCC vectorises the loop.
+    const bool meets = (b < 0.0F) & (disc >= 0.0F) & (a > 0.0F);
+    const bool on_side = (z >= z_min) & (z <= z_max);
+    const float side_or_cap = on_side ? t : -1.0F;
+    t_out[k] = meets ? side_or_cap : kInf;  // NOLINT(bugprone-narrowing-conversions): float to float (a clang-tidy 14
+                                            // false positive on infinity)
   }
 }
 
@@ -212,12 +269,11 @@ void SceneRenderer::rasterObstacles(const ObstacleWorld& world, const Eigen::Iso
     if (distanceTo(aabb, o_W) > max_range) continue;
     PixelRect rect;
     if (!projectBoxToPixels(aabb, R_CW, o_W, k, kNearM, rect)) continue;
-    // Cylinder seen from outside its footprint: the side by the 2D quadratic, then the caps.
-    const double ox = cyl ? o_W.x() - cyl->center_W_m.x() : 0.0;
-    const double oy = cyl ? o_W.y() - cyl->center_W_m.y() : 0.0;
-    const double c = cyl ? ox * ox + oy * oy - cyl->radius_m * cyl->radius_m : 0.0;
-    const bool fast_cylinder = cyl != nullptr && c > 0.0;
     const int label = static_cast<int>(id);
+    if (cyl != nullptr && (o_W.head<2>() - cyl->center_W_m).squaredNorm() > cyl->radius_m * cyl->radius_m) {
+      rasterCylinderFromOutside(*cyl, label, T_WC, rect, scratch);
+      continue;
+    }
     for (int v = rect.v0; v <= rect.v1; ++v) {
       float* depth_row = scratch.depth_m.ptr<float>(v);
       int* id_row = scratch.obstacle_id.ptr<int>(v);
@@ -225,30 +281,52 @@ void SceneRenderer::rasterObstacles(const ObstacleWorld& world, const Eigen::Iso
           R_WC * Eigen::Vector3d((rect.u0 + 0.5 - k.cx_px) / k.fx_px, (v + 0.5 - k.cy_px) / k.fy_px, 1.0);
       for (int u = rect.u0; u <= rect.u1; ++u, d_W += step_W) {
         const double t_max = std::min(static_cast<double>(depth_row[u]), max_range);
-        double t = kNoHit;
-        if (fast_cylinder) {
-          const double b = ox * d_W.x() + oy * d_W.y();
-          if (b >= 0.0) continue;  // moving away from the axis
-          const double a = d_W.x() * d_W.x() + d_W.y() * d_W.y();
-          const double disc = b * b - a * c;
-          if (disc < 0.0) continue;
-          const double t_side = (-b - std::sqrt(disc)) / a;
-          const double z = o_W.z() + t_side * d_W.z();
-          if (z >= cyl->z_min_m && z <= cyl->z_max_m) {
-            t = t_side;
-          } else if (d_W.z() != 0.0) {  // over or under the side: through a cap?
-            const double z_cap = z > cyl->z_max_m ? cyl->z_max_m : cyl->z_min_m;
-            const double t_cap = (z_cap - o_W.z()) / d_W.z();
-            const double px = ox + t_cap * d_W.x(), py = oy + t_cap * d_W.y();
-            if (t_cap > t_side && px * px + py * py <= cyl->radius_m * cyl->radius_m) t = t_cap;
-          }
-        } else {
+        const Ray ray(o_W, d_W);
+        const std::optional<double> hit = is_box ? firstHit(aabb, ray, t_max) : firstHit(*cyl, ray, t_max);
+        if (!hit || *hit < kNearM || *hit >= t_max) continue;
+        depth_row[u] = static_cast<float>(*hit);
+        id_row[u] = label;
+      }
+    }
+  }
+}
+
+void SceneRenderer::rasterCylinderFromOutside(const Cylinder& cyl, int label, const Eigen::Isometry3d& T_WC,
+                                              const PixelRect& rect, RenderScratch& scratch) const {
+  const CameraIntrinsics& k = params_.intrinsics;
+  const Eigen::Matrix3d& R_WC = T_WC.linear();
+  const Eigen::Vector3d o_W = T_WC.translation();
+  const auto max_range = static_cast<float>(params_.max_range_m);
+  const auto near_m = static_cast<float>(kNearM);
+  // The camera relative to the trunk's axis (in double, then float: small numbers near the trunk).
+  const double ox = o_W.x() - cyl.center_W_m.x(), oy = o_W.y() - cyl.center_W_m.y();
+  const double r2 = cyl.radius_m * cyl.radius_m;
+  const Eigen::Vector3f step = (R_WC.col(0) / k.fx_px).cast<float>();
+  std::array<float, BackgroundShader::kChunk> t_side{};
+  for (int v = rect.v0; v <= rect.v1; ++v) {
+    float* depth_row = scratch.depth_m.ptr<float>(v);
+    int* id_row = scratch.obstacle_id.ptr<int>(v);
+    const Eigen::Vector3d d_row =
+        R_WC * Eigen::Vector3d((rect.u0 + 0.5 - k.cx_px) / k.fx_px, (v + 0.5 - k.cy_px) / k.fy_px, 1.0);
+    for (int c0 = rect.u0; c0 <= rect.u1; c0 += BackgroundShader::kChunk) {
+      const int n = std::min(BackgroundShader::kChunk, rect.u1 + 1 - c0);
+      const Eigen::Vector3f d0 = (d_row + static_cast<double>(c0 - rect.u0) * (R_WC.col(0) / k.fx_px)).cast<float>();
+      cylinderSideHits(d0, step, static_cast<float>(ox), static_cast<float>(oy), static_cast<float>(o_W.z()),
+                       static_cast<float>(r2), static_cast<float>(cyl.z_min_m), static_cast<float>(cyl.z_max_m), n,
+                       t_side.data());
+      for (int j = 0; j < n; ++j) {
+        float t = t_side[static_cast<std::size_t>(j)];
+        if (t == kInf) continue;
+        const int u = c0 + j;
+        if (t < 0.0F) {  // over or under the side: through a cap? (rare: a trunk's top seen from above)
+          const Eigen::Vector3d d_W = d_row + static_cast<double>(u - rect.u0) * (R_WC.col(0) / k.fx_px);
+          t = kInf;
           const Ray ray(o_W, d_W);
-          const std::optional<double> hit = is_box ? firstHit(aabb, ray, t_max) : firstHit(*cyl, ray, t_max);
-          if (hit) t = *hit;
+          if (const std::optional<double> hit = firstHit(cyl, ray, static_cast<double>(max_range)))
+            t = static_cast<float>(*hit);
         }
-        if (t < kNearM || t >= t_max) continue;
-        depth_row[u] = static_cast<float>(t);
+        if (t < near_m || t >= minF(depth_row[u], max_range)) continue;
+        depth_row[u] = t;
         id_row[u] = label;
       }
     }
@@ -276,10 +354,14 @@ void SceneRenderer::shade(const ObstacleWorld& world, const Eigen::Isometry3d& T
       const int id = id_row[u];
       int end = u + 1;
       while (end < k.width_px && (id < 0 ? id_row[end] < 0 : id_row[end] == id)) ++end;
+      const auto obstacle = static_cast<std::size_t>(id);
       if (id < 0) {
         background.shadeSpan(frame.rays, u, end, row);
+      } else if (obstacle < world.boxes().size()) {
+        shadeBoxSpan(world.boxes()[obstacle], id, frame, depth_row, u, end, row, buffers);
       } else {
-        shadeObstacleSpan(world, id, frame, depth_row, u, end, row, buffers);
+        shadeCylinderSpan(world.cylinders()[obstacle - world.boxes().size()], id, frame, depth_row, u, end, row,
+                          buffers);
       }
       u = end;
     }

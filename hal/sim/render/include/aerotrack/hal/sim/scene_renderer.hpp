@@ -30,6 +30,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "aerotrack/hal/sim/background_shader.hpp"
+#include "aerotrack/hal/sim/depth_camera.hpp"
 #include "aerotrack/hal/sim/keypoint_camera.hpp"
 #include "aerotrack/hal/sim/obstacle_world.hpp"
 #include "aerotrack/hal/sim/person_cast.hpp"
@@ -123,6 +124,10 @@ class SceneRenderer {
       : params_(params), sprites_(std::move(sprites)), ground_(std::move(ground)) {}
 
   void rasterObstacles(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, RenderScratch& scratch) const;
+  /// A trunk seen from outside its footprint, over its projected bounds: the side in single precision,
+  /// vectorised (a forest frame's most pixels); a cap, rarely seen, the general way.
+  void rasterCylinderFromOutside(const Cylinder& cyl, int label, const Eigen::Isometry3d& T_WC, const PixelRect& rect,
+                                 RenderScratch& scratch) const;
   void shade(const ObstacleWorld& world, const Eigen::Isometry3d& T_WC, const RenderScratch& scratch,
              cv::Mat& bgr) const;
   void drawPerson(const SpritePlacement& placement, cv::Mat& bgr, const cv::Mat& depth_m,
