@@ -73,12 +73,19 @@ TEST(ImageModeDetection, GivenRenderedFramesOfSharpTurn_WhenTheRealDetectorRuns_
     truth_at[sim.truth().stamp_ns] = projectTruth(sim.truth(), intrinsics);
     // Each detector output as it comes (newest_detection; the detections queue is the target task's,
     // which takes every frame at once since it is triggered by it). One output at most per step: the
-    // detection task's rate cap (30 ms) is longer than the 5 ms step.
+    // detection task's rate cap (66 ms) is longer than the 5 ms step.
     hal::DetectionFrame newest;
     const bool fresh = (*system)->channels().newest_detection.readIfNewer(detection_version, newest);
     for (std::optional<hal::DetectionFrame> frame = fresh ? std::optional(newest) : std::nullopt; frame;
          frame.reset()) {
       ++frames;
+      // The network ran on the lockstep executor's second thread; its result appears the task's latency
+      // (40 ms, the paper's detector) after the release. The release takes the newest image: grabbed at most
+      // 10 ms after its exposure (the camera task's period), and waiting at most a camera period (33.3 ms)
+      // for the detector, which is not in step with the camera.
+      const double delay_ms = 1e-6 * static_cast<double>(frame->result_ns - frame->stamp_ns);
+      EXPECT_GE(delay_ms, 40.0);
+      EXPECT_LE(delay_ms, 40.0 + 10.0 + 1000.0 / 30.0 + 1e-6);
       // Exposures fall between the 5 ms truth samples: interpolate the projection linearly (the
       // person moves under 1 cm and the image a few pixels in that time).
       const auto after = truth_at.lower_bound(frame->stamp_ns);
@@ -106,7 +113,7 @@ TEST(ImageModeDetection, GivenRenderedFramesOfSharpTurn_WhenTheRealDetectorRuns_
       length_error_ratio.push_back(std::abs((neck - hip).norm() / truth.torso_px - 1.0));
     }
   }
-  ASSERT_GT(truth_visible, 200U);  // ~30 Hz for 12 s, the person in view
+  ASSERT_GT(truth_visible, 120U);  // ~15 Hz (the paper's 13 Hz pipeline) for 12 s, the person in view
   const double found = static_cast<double>(with_target) / static_cast<double>(truth_visible);
   EXPECT_GE(found, 0.95);
   // The sprite's own torso is placed on the projected one (hal/sim/render), so these measure the

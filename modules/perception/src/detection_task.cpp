@@ -46,21 +46,34 @@ hal::DetectionFrame toDetectionFrame(const DetectorOutput& output, const hal::Im
   return frame;
 }
 
-void DetectionTask::step(rt::TimeNs now_ns) {
-  if (images_.version() == image_version_) return;
+bool DetectionTask::gather(rt::TimeNs /*now_ns*/) {
+  if (images_.version() == image_version_) return false;
   image_version_ = images_.version();
-  const auto image = images_.read();
-  if (!image || image->bgr.empty()) return;
+  auto image = images_.read();
+  if (!image || image->bgr.empty()) return false;
+  image_ = std::move(image);
+  return true;
+}
+
+void DetectionTask::work() {
   const rt::TimeNs begin_ns = stats_clock_.now();
-  const auto output = detector_.track(image->bgr, image->stamp_ns);
+  output_ = detector_.track(image_->bgr, image_->stamp_ns);
   detect_stats_.recordRun(stats_clock_.now() - begin_ns);
-  if (!output) {
+}
+
+void DetectionTask::publish(rt::TimeNs publish_ns) {
+  const std::shared_ptr<const hal::ImageFrame> image = std::move(image_);
+  image_.reset();
+  if (!output_ || !*output_) {
     ++failures_;
+    output_.reset();
     return;
   }
+  const DetectorOutput& output = output_->value();
   ++frames_detected_;
-  if (output->target) ++frames_with_target_;
-  const hal::DetectionFrame frame = toDetectionFrame(*output, *image, now_ns);
+  if (output.target) ++frames_with_target_;
+  const hal::DetectionFrame frame = toDetectionFrame(output, *image, publish_ns);
+  output_.reset();
   out_.try_push(frame);
   if (newest_ != nullptr) newest_->write(frame);
 }

@@ -3,9 +3,18 @@
 // followed person marked by target_index. Frames that arrive while the detector is busy are
 // skipped, not queued: the newest image is the one worth detecting. Inference failures are
 // counted, not printed (the app reports them).
+//
+// An rt::OverlappedTask: gather() takes the newest image, work() runs the network on it, publish()
+// writes the frame. In lockstep with a latency (the task table's latency_ms: the detector's time on
+// the drone's computer, the paper's 40 ms with the camera's own delay, Sect. VI-A), the network runs on
+// the executor's second thread while the simulation renders the next frame, and its result appears
+// that long after the image was taken, however fast this machine ran it: the run stays deterministic.
+// Inline (latency 0, the real-time executor), the three run in a row.
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <optional>
 
 #include "aerotrack/perception/detector.hpp"
 #include "aerotrack/rt/clock.hpp"
@@ -25,13 +34,15 @@ DetectorParams parseDetectorParams(const rt::ConfigNode& node);
 /// The DetectionFrame for one detector output on an image. Pure.
 hal::DetectionFrame toDetectionFrame(const DetectorOutput& output, const hal::ImageFrame& image, rt::TimeNs result_ns);
 
-class DetectionTask final : public rt::Task {
+class DetectionTask final : public rt::OverlappedTask {
  public:
   DetectionTask(Detector detector, const rt::SharedSlot<hal::ImageFrame>& images,
                 rt::SpscQueue<hal::DetectionFrame>& out, const rt::Clock& stats_clock)
       : detector_(std::move(detector)), images_(images), out_(out), stats_clock_(stats_clock) {}
 
-  void step(rt::TimeNs now_ns) override;
+  bool gather(rt::TimeNs now_ns) override;
+  void work() override;
+  void publish(rt::TimeNs publish_ns) override;
   /// Also publish every result on `newest` (for pictures and the recorder), besides the stream.
   void publishNewestTo(rt::LatestSlot<hal::DetectionFrame>& newest) { newest_ = &newest; }
 
@@ -49,6 +60,8 @@ class DetectionTask final : public rt::Task {
   const rt::Clock& stats_clock_;
   rt::TimingStats detect_stats_;
   std::uint64_t image_version_ = 0;
+  std::shared_ptr<const hal::ImageFrame> image_;        ///< gathered, held until published
+  std::optional<rt::Expected<DetectorOutput>> output_;  ///< work()'s result
   std::uint64_t frames_detected_ = 0;
   std::uint64_t frames_with_target_ = 0;
   std::uint64_t failures_ = 0;
