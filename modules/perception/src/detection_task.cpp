@@ -62,8 +62,7 @@ void DetectionTask::work() {
 }
 
 void DetectionTask::publish(rt::TimeNs publish_ns) {
-  const std::shared_ptr<const hal::ImageFrame> image = std::move(image_);
-  image_.reset();
+  const std::shared_ptr<const hal::ImageFrame> image = std::move(image_);  // leaves image_ empty
   if (!output_ || !*output_) {
     ++failures_;
     output_.reset();

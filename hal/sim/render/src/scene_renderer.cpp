@@ -301,7 +301,8 @@ void SceneRenderer::rasterCylinderFromOutside(const Cylinder& cyl, int label, co
   // The camera relative to the trunk's axis (in double, then float: small numbers near the trunk).
   const double ox = o_W.x() - cyl.center_W_m.x(), oy = o_W.y() - cyl.center_W_m.y();
   const double r2 = cyl.radius_m * cyl.radius_m;
-  const Eigen::Vector3f step = (R_WC.col(0) / k.fx_px).cast<float>();
+  const Eigen::Vector3d step_W = R_WC.col(0) / k.fx_px;  // one pixel to the right
+  const Eigen::Vector3f step = step_W.cast<float>();
   std::array<float, BackgroundShader::kChunk> t_side{};
   for (int v = rect.v0; v <= rect.v1; ++v) {
     float* depth_row = scratch.depth_m.ptr<float>(v);
@@ -310,7 +311,7 @@ void SceneRenderer::rasterCylinderFromOutside(const Cylinder& cyl, int label, co
         R_WC * Eigen::Vector3d((rect.u0 + 0.5 - k.cx_px) / k.fx_px, (v + 0.5 - k.cy_px) / k.fy_px, 1.0);
     for (int c0 = rect.u0; c0 <= rect.u1; c0 += BackgroundShader::kChunk) {
       const int n = std::min(BackgroundShader::kChunk, rect.u1 + 1 - c0);
-      const Eigen::Vector3f d0 = (d_row + static_cast<double>(c0 - rect.u0) * (R_WC.col(0) / k.fx_px)).cast<float>();
+      const Eigen::Vector3f d0 = (d_row + static_cast<double>(c0 - rect.u0) * step_W).cast<float>();
       cylinderSideHits(d0, step, static_cast<float>(ox), static_cast<float>(oy), static_cast<float>(o_W.z()),
                        static_cast<float>(r2), static_cast<float>(cyl.z_min_m), static_cast<float>(cyl.z_max_m), n,
                        t_side.data());
@@ -319,7 +320,7 @@ void SceneRenderer::rasterCylinderFromOutside(const Cylinder& cyl, int label, co
         if (t == kInf) continue;
         const int u = c0 + j;
         if (t < 0.0F) {  // over or under the side: through a cap? (rare: a trunk's top seen from above)
-          const Eigen::Vector3d d_W = d_row + static_cast<double>(u - rect.u0) * (R_WC.col(0) / k.fx_px);
+          const Eigen::Vector3d d_W = d_row + static_cast<double>(u - rect.u0) * step_W;
           t = kInf;
           const Ray ray(o_W, d_W);
           if (const std::optional<double> hit = firstHit(cyl, ray, static_cast<double>(max_range)))
