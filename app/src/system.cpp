@@ -230,6 +230,7 @@ System::TaskResult System::makeDetectionTask(System& s, const std::string& where
   auto task = std::make_unique<perception::DetectionTask>(std::move(detector.value()), s.channels_.images,
                                                           s.channels_.detections, s.stats_clock_);
   task->publishNewestTo(s.channels_.newest_detection);
+  if (params.follow_estimator) task->judgedBy(s.channels_.followed_detection);
   s.detection_task_ = task.get();
   return made(std::move(task));
 }

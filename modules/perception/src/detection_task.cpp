@@ -12,6 +12,11 @@ DetectorParams parseDetectorParams(const rt::ConfigNode& node) {
   p.dnn.target = node.getEnum("dnn_target", {"auto", "cpu", "cuda", "cuda_fp16"});
   p.min_person_score = node.getDouble("min_person_score", 0.0, 1.0);
   p.min_multipose_score = node.getDouble("min_multipose_score", 0.0, 1.0);
+  const rt::ConfigNode whole = node.child("whole_frame");
+  p.whole_frame.near_crop_sides = whole.getDouble("near_crop_sides", -1.0, 10.0);
+  p.whole_frame.every_s = whole.getDouble("every_s", 0.0, 3600.0);
+  whole.finish();
+  p.follow_estimator = node.getBool("follow_estimator");
   p.torso.min_joint_score = node.getDouble("torso_min_joint_score", 0.0, 1.0);
   p.torso.border_margin_px = node.getDouble("torso_border_margin_px", 0.0, 100.0);
   p.torso.edge_margin_torso_fraction = node.getDouble("torso_edge_margin_fraction", 0.0, 2.0);
@@ -52,11 +57,16 @@ bool DetectionTask::gather(rt::TimeNs /*now_ns*/) {
   auto image = images_.read();
   if (!image || image->bgr.empty()) return false;
   image_ = std::move(image);
+  if (verdicts_ != nullptr) verdict_ = verdicts_->read();
   return true;
 }
 
 void DetectionTask::work() {
   const rt::TimeNs begin_ns = stats_clock_.now();
+  if (verdict_) {
+    detector_.judged(*verdict_);
+    verdict_.reset();
+  }
   output_ = detector_.track(image_->bgr, image_->stamp_ns);
   detect_stats_.recordRun(stats_clock_.now() - begin_ns);
 }

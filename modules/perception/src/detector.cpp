@@ -52,6 +52,9 @@ rt::Status validate(const DetectorParams& p) {
     return rt::Error{"bbox_margin_fraction: must be in [0, 1]"};
   if (!(p.crop.min_score >= 0.0 && p.crop.min_score <= 1.0)) return rt::Error{"crop.min_score: must be in [0, 1]"};
   if (!(p.crop.torso_factor > 0.0 && p.crop.body_factor > 0.0)) return rt::Error{"crop: factors must be > 0"};
+  if (!(p.whole_frame.near_crop_sides <= 10.0)) return rt::Error{"whole_frame.near_crop_sides: must be <= 10"};
+  if (!(p.whole_frame.every_s >= 0.0 && p.whole_frame.every_s <= 3600.0))
+    return rt::Error{"whole_frame.every_s: must be in [0, 3600]"};
   if (!(p.crop.min_side_fraction > 0.0 && p.crop.min_side_fraction <= 1.0))
     return rt::Error{"crop.min_side_fraction: must be in (0, 1]"};
   if (!(p.torso.min_joint_score >= 0.0 && p.torso.min_joint_score <= 1.0))
@@ -159,9 +162,75 @@ rt::Expected<DetectorOutput> Detector::detectFrame(const cv::Mat& bgr, const std
   return runModel(**m, bgr, letterbox(bgr.cols, bgr.rows, (*m)->info().input_size_px));
 }
 
+const char* toString(WholeFrameReason reason) {
+  switch (reason) {
+    case WholeFrameReason::kNone:
+      return "crop";
+    case WholeFrameReason::kNoLock:
+      return "no_lock";
+    case WholeFrameReason::kCropLost:
+      return "crop_lost";
+    case WholeFrameReason::kOthersNear:
+      return "others_near";
+    case WholeFrameReason::kRefused:
+      return "refused";
+    case WholeFrameReason::kPeriodic:
+      return "periodic";
+  }
+  return "?";
+}
+
+bool someoneNearRegion(std::span<const hal::PersonDetection> persons, std::size_t target, const InputTransform& region,
+                       double margin_sides) {
+  if (margin_sides < 0.0) return false;
+  const double grow_px = margin_sides * region.region_side_px;
+  const double u0 = region.region_u0_px - grow_px;
+  const double v0 = region.region_v0_px - grow_px;
+  const double u1 = region.region_u0_px + region.region_side_px + grow_px;
+  const double v1 = region.region_v0_px + region.region_side_px + grow_px;
+  for (std::size_t i = 0; i < persons.size(); ++i) {
+    const hal::PersonDetection& p = persons[i];
+    if (i == target || !(p.bbox_w_px > 0.0 && p.bbox_h_px > 0.0)) continue;
+    if (p.bbox_u_px < u1 && p.bbox_u_px + p.bbox_w_px > u0 && p.bbox_v_px < v1 && p.bbox_v_px + p.bbox_h_px > v0)
+      return true;
+  }
+  return false;
+}
+
+void Detector::judged(const hal::DetectionFrame& verdict) {
+  if (verdict.stamp_ns <= newest_verdict_ns_) return;
+  const auto mine =
+      std::find_if(recent_.begin(), recent_.end(), [&](const Choice& c) { return c.stamp_ns == verdict.stamp_ns; });
+  if (mine == recent_.end()) return;  // not a frame of ours, or too old to matter
+  newest_verdict_ns_ = verdict.stamp_ns;
+  const int count = static_cast<int>(std::min(verdict.person_count, hal::kMaxPersons));
+  const int taken = verdict.target_index >= 0 && verdict.target_index < count ? verdict.target_index : -1;
+  if (taken == mine->person) {
+    refused_ = false;
+    return;
+  }
+  if (taken < 0) {  // the lock-on's choice was not the person, or not one the estimator could place
+    refused_ = true;
+    return;
+  }
+  // The estimator took someone else: continue from them. The frame a lock-on disagreed on is a whole-frame one
+  // (a crop's frame is published only when the lock-on took its one person), so it shows who is near them.
+  const auto& keypoints = verdict.persons[static_cast<std::size_t>(taken)].keypoints;
+  tracker_.reseat(verdict.stamp_ns, torsoFeatures(keypoints, width_px_, height_px_, params_.torso));
+  last_target_keypoints_ = keypoints;
+  refused_ = false;
+  ++counts_.reseated;
+  InputTransform crop;  // its region does not depend on the network's input size
+  if (cropAroundPerson(keypoints, width_px_, height_px_, /*input_size_px=*/1, params_.crop, crop))
+    others_near_ = someoneNearRegion(std::span(verdict.persons.data(), static_cast<std::size_t>(count)),
+                                     static_cast<std::size_t>(taken), crop, params_.whole_frame.near_crop_sides);
+}
+
 rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stamp_ns,
                                              const std::optional<ImagePrediction>& external) {
   if (bgr.empty() || bgr.type() != CV_8UC3) return rt::Error{"expected a non-empty 8-bit BGR image"};
+  width_px_ = bgr.cols;
+  height_px_ = bgr.rows;
   std::array<TrackCandidate, hal::kMaxPersons> candidates{};
   const auto choose = [&](DetectorOutput& out) {
     for (std::size_t i = 0; i < out.count; ++i)
@@ -169,29 +238,61 @@ rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stam
     out.target = tracker_.update(stamp_ns, std::span(candidates.data(), out.count), external);
     if (out.target) last_target_keypoints_ = out.persons[*out.target].detection.keypoints;
   };
+  const auto remember = [&](const DetectorOutput& out) {
+    recent_[recent_next_] = {stamp_ns, out.target ? static_cast<int>(*out.target) : -1};
+    recent_next_ = (recent_next_ + 1) % recent_.size();
+  };
 
-  // While locked: singlepose on the crop around the last keypoints.
   auto tracking_model = model(params_.tracking_model);
   if (!tracking_model) return tracking_model.error();
   MoveNetModel* tracking = tracking_model.value();
+  const WholeFrameParams& whole = params_.whole_frame;
+  WholeFrameReason reason = WholeFrameReason::kNone;
+  if (!tracker_.locked(stamp_ns) || !last_target_keypoints_)
+    reason = WholeFrameReason::kNoLock;
+  else if (refused_)
+    reason = WholeFrameReason::kRefused;
+  else if (others_near_)
+    reason = WholeFrameReason::kOthersNear;
+  else if (whole.every_s > 0.0 && stamp_ns - last_whole_ns_ >= rt::secondsToNs(whole.every_s))
+    reason = WholeFrameReason::kPeriodic;
+
+  // Locked, alone: singlepose on the crop around the last keypoints.
   InputTransform crop;
-  if (tracker_.locked(stamp_ns) && last_target_keypoints_ &&
-      cropAroundPerson(*last_target_keypoints_, bgr.cols, bgr.rows, tracking->info().input_size_px, params_.crop,
-                       crop)) {
-    auto out = runModel(*tracking, bgr, crop);
-    if (!out) return out.error();
-    out->cropped = true;
-    choose(*out);
-    if (out->target) return out;
+  if (reason == WholeFrameReason::kNone) {
+    if (cropAroundPerson(*last_target_keypoints_, bgr.cols, bgr.rows, tracking->info().input_size_px, params_.crop,
+                         crop)) {
+      auto out = runModel(*tracking, bgr, crop);
+      if (!out) return out.error();
+      out->cropped = true;
+      choose(*out);
+      if (out->target) {
+        ++counts_.runs[static_cast<std::size_t>(WholeFrameReason::kNone)];
+        remember(*out);
+        return out;
+      }
+    }
+    reason = WholeFrameReason::kCropLost;
   }
 
-  // No lock, or the crop lost the person: search the whole frame.
+  // Otherwise the whole frame, and the lock-on picks the person among everyone in it.
   auto search_model = model(params_.search_model);
   if (!search_model) return search_model.error();
   MoveNetModel* search = search_model.value();
   auto out = runModel(*search, bgr, letterbox(bgr.cols, bgr.rows, search->info().input_size_px));
   if (!out) return out.error();
   choose(*out);
+  ++counts_.runs[static_cast<std::size_t>(reason)];
+  last_whole_ns_ = stamp_ns;
+  refused_ = false;
+  others_near_ = false;
+  if (out->target && cropAroundPerson(out->persons[*out->target].detection.keypoints, bgr.cols, bgr.rows,
+                                      tracking->info().input_size_px, params_.crop, crop)) {
+    std::array<hal::PersonDetection, hal::kMaxPersons> people{};
+    for (std::size_t i = 0; i < out->count; ++i) people[i] = out->persons[i].detection;
+    others_near_ = someoneNearRegion(std::span(people.data(), out->count), *out->target, crop, whole.near_crop_sides);
+  }
+  remember(*out);
   return out;
 }
 

@@ -80,6 +80,13 @@ void PersonTracker::accept(rt::TimeNs stamp_ns, const TrackCandidate& c) {
   blendAppearance(reference_, c.appearance, params_.appearance_rate);
 }
 
+void PersonTracker::reseat(rt::TimeNs stamp_ns, const TorsoFeatures& torso) {
+  has_track_ = true;
+  last_ns_ = stamp_ns;
+  last_ = {torso.u_px, torso.v_px, torso.torso_px};
+  du_pxps_ = dv_pxps_ = dtorso_pxps_ = 0.0;
+}
+
 std::optional<std::size_t> PersonTracker::update(rt::TimeNs stamp_ns, std::span<const TrackCandidate> candidates,
                                                  const std::optional<ImagePrediction>& external) {
   std::optional<ImagePrediction> prediction = external;

@@ -4,6 +4,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "aerotrack/perception/detector.hpp"
 #include "aerotrack/perception/input_transform.hpp"
 #include "aerotrack/perception/torso_features.hpp"
 
@@ -91,6 +92,33 @@ TEST(CropAroundPerson, GivenAPersonFillingTheFrame_WhenCropped_ThenTheWholeFrame
   InputTransform t;
   ASSERT_TRUE(cropAroundPerson(k, 640, 480, 192, CropParams{}, t));
   EXPECT_DOUBLE_EQ(t.region_side_px, 640.0);
+}
+
+hal::PersonDetection boxAt(double u0_px, double v0_px, double w_px, double h_px) {
+  hal::PersonDetection p;
+  p.bbox_u_px = u0_px;
+  p.bbox_v_px = v0_px;
+  p.bbox_w_px = w_px;
+  p.bbox_h_px = h_px;
+  return p;
+}
+
+TEST(SomeoneNearRegion, GivenPeopleAroundACrop_WhenTheMarginGrows_ThenThoseWithinItAreNear) {
+  // The crop: the square [100, 300) x [100, 300), side 200; margin 0.5 sides: [0, 400) x [0, 400).
+  const InputTransform crop = squareRegion(200.0, 200.0, 200.0, 192);
+  const std::array<hal::PersonDetection, 3> people = {boxAt(150.0, 120.0, 60.0, 150.0),   // the target
+                                                      boxAt(380.0, 150.0, 40.0, 100.0),   // 80 px right of it
+                                                      boxAt(600.0, 150.0, 40.0, 100.0)};  // far right
+  EXPECT_TRUE(someoneNearRegion(std::span(people), 0, crop, 0.5));
+  EXPECT_FALSE(someoneNearRegion(std::span(people), 0, crop, 0.3));   // the crop grown to [40, 360)
+  EXPECT_FALSE(someoneNearRegion(std::span(people), 0, crop, -1.0));  // never
+  // The target alone never counts, however large the margin; nor does an empty box.
+  EXPECT_FALSE(someoneNearRegion(std::span(people).first(1), 0, crop, 10.0));
+  const std::array<hal::PersonDetection, 2> empty_box = {people[0], boxAt(200.0, 200.0, 0.0, 0.0)};
+  EXPECT_FALSE(someoneNearRegion(std::span(empty_box), 0, crop, 1.0));
+  // Someone inside the crop itself is near at any margin >= 0.
+  const std::array<hal::PersonDetection, 2> inside = {people[0], boxAt(250.0, 130.0, 30.0, 90.0)};
+  EXPECT_TRUE(someoneNearRegion(std::span(inside), 0, crop, 0.0));
 }
 
 TEST(TorsoFeatures, GivenAConfidentTorso_WhenMeasured_ThenLengthAndCentreComeFromNeckAndMidHip) {

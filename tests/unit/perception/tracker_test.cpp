@@ -127,6 +127,33 @@ TEST(PersonTracker, GivenAnExternalPrediction_WhenTheImageMovedByGimbalRotation_
   ASSERT_TRUE(chosen.has_value());
 }
 
+TEST(PersonTracker, GivenTheEstimatorJudgedAnotherPersonTheTarget_WhenReseated_ThenTheTrackGoesOnFromThem) {
+  // Two people in the same shirt (the look-alike); the lock-on took the one at u = 200 walking right, the
+  // estimator judged the one at u = 320 to be the person (issue 22, item 2).
+  PersonTracker tracker(TrackerParams{});
+  for (int i = 0; i < 10; ++i) {
+    const std::array<TrackCandidate, 1> lookalike = {person(200.0 + 3.0 * i, 50.0, shirt(0))};
+    ASSERT_TRUE(tracker.update(i * kFrameNs, lookalike).has_value());
+  }
+  TorsoFeatures judged;
+  judged.u_px = 320.0;
+  judged.v_px = 250.0;
+  judged.torso_px = 55.0;
+  tracker.reseat(9 * kFrameNs, judged);
+  ASSERT_TRUE(tracker.locked(10 * kFrameNs));
+  // The prediction is where the estimator's person was, not carried on with the look-alike's image velocity.
+  const auto predicted = tracker.predict(12 * kFrameNs);
+  ASSERT_TRUE(predicted.has_value());
+  EXPECT_DOUBLE_EQ(predicted->u_px, 320.0);
+  EXPECT_DOUBLE_EQ(predicted->v_px, 250.0);
+  EXPECT_DOUBLE_EQ(predicted->torso_px, 55.0);
+  // Both in the next frame: the lock-on now takes the estimator's person (both inside the gate; the nearer).
+  const std::array<TrackCandidate, 2> both = {person(236.0, 50.0, shirt(0)), person(318.0, 55.0, shirt(0))};
+  const auto chosen = tracker.update(12 * kFrameNs, both);
+  ASSERT_TRUE(chosen.has_value());
+  EXPECT_EQ(*chosen, 1U);
+}
+
 TEST(Appearance, GivenTwoShirtColours_WhenMeasuredFromImages_ThenSameIsNearAndDifferentIsFar) {
   const auto torso_keypoints = [] {
     std::array<hal::Keypoint2D, hal::kNumKeypoints> k{};

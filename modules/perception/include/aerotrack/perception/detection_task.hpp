@@ -45,18 +45,26 @@ class DetectionTask final : public rt::OverlappedTask {
   void publish(rt::TimeNs publish_ns) override;
   /// Also publish every result on `newest` (for pictures and the recorder), besides the stream.
   void publishNewestTo(rt::LatestSlot<hal::DetectionFrame>& newest) { newest_ = &newest; }
+  /// The target estimator's verdicts (the target task's frames with whom it took, TargetTask::publishFollowedTo):
+  /// the newest at each release goes to Detector::judged before the network runs, so the crop follows the
+  /// person the estimator follows.
+  void judgedBy(const rt::LatestSlot<hal::DetectionFrame>& verdicts) { verdicts_ = &verdicts; }
 
   std::uint64_t framesDetected() const { return frames_detected_; }
   std::uint64_t framesWithTarget() const { return frames_with_target_; }
   std::uint64_t failures() const { return failures_; }
   /// Per detected frame: transform, inference, decoding, lock-on.
   const rt::TimingStats& detectStats() const { return detect_stats_; }
+  /// How the network was run (crop or whole frame, and why), and the verdicts that moved the lock.
+  const TrackCounts& trackCounts() const { return detector_.counts(); }
 
  private:
   Detector detector_;
   const rt::SharedSlot<hal::ImageFrame>& images_;
   rt::SpscQueue<hal::DetectionFrame>& out_;
   rt::LatestSlot<hal::DetectionFrame>* newest_ = nullptr;
+  const rt::LatestSlot<hal::DetectionFrame>* verdicts_ = nullptr;
+  std::optional<hal::DetectionFrame> verdict_;  ///< gathered, judged before the next track()
   const rt::Clock& stats_clock_;
   rt::TimingStats detect_stats_;
   std::uint64_t image_version_ = 0;

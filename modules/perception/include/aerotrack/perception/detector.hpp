@@ -10,12 +10,20 @@
 //     people keep their detail); when the crop finds nobody the tracker accepts, or before the first
 //     lock, the search model (multipose by default) runs on the whole frame and the tracker picks
 //     the target among everyone it finds (person_tracker.hpp), so a bystander cannot steal the track.
+//     While locked, the whole frame is searched too when the crop would hide someone (WholeFrameParams):
+//     another person near the crop, the target estimator refusing the crop's person, and now and then.
+//   The target estimator has the last word on who the person is (its association sees the people in the
+//   world): judged() takes its verdict on an earlier frame, and where it took someone other than the
+//   lock-on's choice, the crop moves to them (issue 22, item 2: a crop on the look-alike showed the
+//   network nobody else, and the person, back in view, was never detected again).
 // Not thread-safe: one Detector per thread. Allocation-free per frame after the first frames of a
 // given size (OpenCV's DNN reuses its buffers).
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 
 #include <opencv2/core/mat.hpp>
@@ -28,6 +36,18 @@
 #include "aerotrack/rt/expected.hpp"
 
 namespace aerotrack::perception {
+
+/// When the tracking loop, locked, runs the search model on the whole frame instead of the crop (issue 22,
+/// item 2). Singlepose on a crop reports one person: with two people in it, the estimator sees one of them,
+/// whichever the network prefers, and cannot keep both on their tracks.
+struct WholeFrameParams {
+  /// Another person of the last whole-frame result whose box comes within this many crop sides of the crop
+  /// around the followed person: the next frame is searched whole as well (< 0: never, the default: measured in
+  /// the image-mode crowd it did not help, docs/benchmarks.md; 0.5 tried).
+  double near_crop_sides = -1.0;
+  /// At least this often (a newcomer walking towards the crop is noticed before they are in it; 0: never; 1 tried).
+  double every_s = 0.0;
+};
 
 struct DetectorParams {
   std::string model_dir = "models";
@@ -43,6 +63,10 @@ struct DetectorParams {
   double bbox_min_keypoint_score = 0.2;  ///< Singlepose boxes bound the joints above this score...
   double bbox_margin_fraction = 0.1;     ///< ...grown by this fraction of the larger side.
   CropParams crop;
+  WholeFrameParams whole_frame;
+  /// The app hands the detection task the target estimator's verdicts (DetectionTask::judgedBy): the crop
+  /// follows whom the estimator follows. The detector itself only acts on verdicts it is given.
+  bool follow_estimator = false;
   TorsoFeatureParams torso;
   TrackerParams tracker;
 };
@@ -62,6 +86,25 @@ struct DetectorOutput {
   bool cropped = false;               ///< The model ran on a tracking crop, not the whole frame.
 };
 
+/// Why track() ran the search model on the whole frame.
+enum class WholeFrameReason : std::uint8_t {
+  kNone,        ///< It did not: the crop found the person.
+  kNoLock,      ///< No lock (before the first, or lost).
+  kCropLost,    ///< The crop found nobody the lock-on accepts.
+  kOthersNear,  ///< Someone else was near the crop (WholeFrameParams::near_crop_sides).
+  kRefused,     ///< The estimator's newest verdict did not take the lock-on's choice.
+  kPeriodic,    ///< WholeFrameParams::every_s.
+};
+inline constexpr std::size_t kWholeFrameReasons = 6;
+/// "crop", "no_lock", "crop_lost", "others_near", "refused", "periodic".
+const char* toString(WholeFrameReason reason);
+
+/// How often each way of running the network was taken, and the verdicts that moved the crop.
+struct TrackCounts {
+  std::array<std::uint64_t, kWholeFrameReasons> runs{};  ///< By WholeFrameReason (kNone: the crop alone).
+  std::uint64_t reseated = 0;                            ///< Verdicts that moved the lock to another person.
+};
+
 class Detector {
  public:
   /// Loads the tracking and search models (once each when they are the same).
@@ -75,7 +118,14 @@ class Detector {
   rt::Expected<DetectorOutput> track(const cv::Mat& bgr, rt::TimeNs stamp_ns,
                                      const std::optional<ImagePrediction>& external = std::nullopt);
 
+  /// The target estimator's verdict on an earlier frame of track(): that frame as published (its stamp
+  /// names it), target_index the person the estimator took (-1: nobody). Where the estimator took someone
+  /// else than the lock-on did, the lock moves to them; where it took nobody, the next frame is searched
+  /// whole. A verdict on a frame this detector does not remember (too old, or another's) is ignored.
+  void judged(const hal::DetectionFrame& verdict);
+
   const PersonTracker& tracker() const { return tracker_; }
+  const TrackCounts& counts() const { return counts_; }
   const DetectorParams& params() const { return params_; }
   /// The loaded model of that name, loading it on first use.
   rt::Expected<MoveNetModel*> model(const std::string& name);
@@ -90,7 +140,27 @@ class Detector {
   TransformScratch scratch_;
   std::array<cv::Mat, 3> blobs_;  ///< By model index.
   std::optional<std::array<hal::Keypoint2D, hal::kNumKeypoints>> last_target_keypoints_;
+  /// After a whole-frame result: nearby people (WholeFrameParams::near_crop_sides).
+  bool others_near_ = false;
+  /// The newest verdict did not take the lock-on's choice.
+  bool refused_ = false;
+  rt::TimeNs last_whole_ns_ = 0;
+  rt::TimeNs newest_verdict_ns_ = -1;
+  /// The lock-on's choice on the latest frames (stamp, person; -1 nobody), oldest overwritten first.
+  struct Choice {
+    rt::TimeNs stamp_ns = -1;
+    int person = -1;
+  };
+  std::array<Choice, 8> recent_{};
+  std::size_t recent_next_ = 0;
+  int width_px_ = 0, height_px_ = 0;  ///< Of the latest image.
+  TrackCounts counts_;
 };
+
+/// Whether a person other than persons[target] has a box within margin_sides x the region's side of the
+/// region (the crop around the target). Pure.
+bool someoneNearRegion(std::span<const hal::PersonDetection> persons, std::size_t target, const InputTransform& region,
+                       double margin_sides);
 
 /// The person a singlepose result describes, in image pixels: keypoints mapped back through the
 /// transform, the box around the joints above min_score grown by margin_fraction and clipped to the

@@ -54,6 +54,10 @@ class PersonTracker {
   std::optional<std::size_t> update(rt::TimeNs stamp_ns, std::span<const TrackCandidate> candidates,
                                     const std::optional<ImagePrediction>& external = std::nullopt);
 
+  /// Someone who knows better (the target estimator) judged the target in the image stamped stamp_ns to be
+  /// the person with this torso: the track goes on from them, its image velocity unknown (zero), its
+  /// reference appearance kept.
+  void reseat(rt::TimeNs stamp_ns, const TorsoFeatures& torso);
   /// True while the target was accepted within lost_after_s of stamp_ns.
   bool locked(rt::TimeNs stamp_ns) const;
   /// The tracker's own prediction of the target at stamp_ns; nothing before the first lock.
