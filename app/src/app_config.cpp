@@ -210,6 +210,11 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "dnn_target" << YAML::Value << p.dnn.target;
     out << YAML::Key << "min_person_score" << YAML::Value << p.min_person_score;
     out << YAML::Key << "min_multipose_score" << YAML::Value << p.min_multipose_score;
+    out << YAML::Key << "whole_frame" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "near_crop_sides" << YAML::Value << p.whole_frame.near_crop_sides;
+    out << YAML::Key << "every_s" << YAML::Value << p.whole_frame.every_s;
+    out << YAML::EndMap;
+    out << YAML::Key << "follow_estimator" << YAML::Value << p.follow_estimator;
     out << YAML::Key << "torso_min_joint_score" << YAML::Value << p.torso.min_joint_score;
     out << YAML::Key << "torso_border_margin_px" << YAML::Value << p.torso.border_margin_px;
     out << YAML::Key << "torso_edge_margin_fraction" << YAML::Value << p.torso.edge_margin_torso_fraction;
@@ -244,6 +249,13 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "look_gate_sigmas" << YAML::Value << e.task.look_gate_sigmas;
     out << YAML::Key << "look_gate_confirm_s" << YAML::Value << e.task.look_gate_confirm_s;
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
+    const estimation::SwapCheckParams& w = e.task.swap_check;
+    out << YAML::Key << "swap_check" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "frames" << YAML::Value << w.frames;
+    out << YAML::Key << "chi2" << YAML::Value << w.chi2;
+    out << YAML::Key << "horizon_s" << YAML::Value << w.horizon_s;
+    out << YAML::Key << "confirm_frames" << YAML::Value << w.confirm_frames;
+    out << YAML::EndMap;
     const estimation::DepthRangeParams& r = e.task.depth_range;
     out << YAML::Key << "depth_range" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "enabled" << YAML::Value << r.enabled;

@@ -37,11 +37,12 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
 nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check) {
   if (task == nullptr) return nullptr;
   const estimation::TargetTaskStats& s = task->stats();
-  nlohmann::json out = {
-      {"detections", s.detections},    {"unreliable", s.unreliable},     {"bearings", s.bearings},
-      {"reassigned", s.reassigned},    {"no_pose", s.no_pose},           {"accepted", s.accepted},
-      {"rejected", s.rejected},        {"depth_ranged", s.depth_ranged}, {"depth_disagreed", s.depth_disagreed},
-      {"depth_unseen", s.depth_unseen}};
+  nlohmann::json out = {{"detections", s.detections},     {"unreliable", s.unreliable},
+                        {"bearings", s.bearings},         {"reassigned", s.reassigned},
+                        {"swapped_back", s.swapped_back}, {"no_pose", s.no_pose},
+                        {"accepted", s.accepted},         {"rejected", s.rejected},
+                        {"depth_ranged", s.depth_ranged}, {"depth_disagreed", s.depth_disagreed},
+                        {"depth_unseen", s.depth_unseen}};
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =
@@ -166,7 +167,13 @@ nlohmann::json supervisorSummary(const supervisor::SupervisorTask* task, rt::Tim
 nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
   if (task == nullptr) return nullptr;
   const rt::TimingSnapshot detect = task->detectStats().snapshot();
+  nlohmann::json runs = nlohmann::json::object();
+  const perception::TrackCounts& counts = task->trackCounts();
+  for (std::size_t i = 0; i < counts.runs.size(); ++i)
+    runs[perception::toString(static_cast<perception::WholeFrameReason>(i))] = counts.runs[i];
   return {{"frames_detected", task->framesDetected()},
+          {"network_runs", runs},
+          {"reseated_by_estimator", counts.reseated},
           {"frames_with_target", task->framesWithTarget()},
           {"target_ratio", task->framesDetected() > 0 ? static_cast<double>(task->framesWithTarget()) /
                                                             static_cast<double>(task->framesDetected())

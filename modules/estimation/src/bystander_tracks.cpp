@@ -11,7 +11,7 @@ rt::Expected<BystanderTracks> BystanderTracks::create(const TargetEstimatorParam
   for (std::size_t i = 0; i < capacity; ++i) {
     auto filter = TargetEstimator::create(params);
     if (!filter) return filter.error();
-    tracks.push_back(Track{std::move(filter.value()), false, false, perception::Appearance{}});
+    tracks.push_back(Track{std::move(filter.value()), false, false, 0, perception::Appearance{}});
   }
   return BystanderTracks(std::move(tracks));
 }
@@ -54,6 +54,7 @@ std::size_t BystanderTracks::start(const TargetMeasurement& m, const perception:
   t.filter.reset();
   t.used = true;
   t.seen_with_followed = with_followed;
+  t.started_ns = m.stamp_ns;
   t.look = look;
   (void)t.filter.add(m);  // the first measurement starts the filter
   return slot;

@@ -18,6 +18,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
   if (node.has("depth_range")) params.depth_range = parseDepthRangeParams(node.child("depth_range"));
+  if (node.has("swap_check")) params.swap_check = parseSwapCheckParams(node.child("swap_check"));
 }
 
 rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
@@ -35,12 +36,16 @@ rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
   if (!estimator) return rt::Error{"estimator: " + estimator.error().message};
   auto bystanders = BystanderTracks::create(params.estimator, params.choose_by_estimate ? kMaxBystanderTracks : 0);
   if (!bystanders) return rt::Error{"bystander tracks: " + bystanders.error().message};
+  SwapCheckParams swap = params.swap_check;
+  if (!params.choose_by_estimate) swap.frames = 0;  // no other tracks to swap with
+  auto swap_check = SwapCheck::create(swap, params.estimator);
+  if (!swap_check) return swap_check.error();
   return TargetTask(params, std::move(poses.value()), std::move(gimbal_history.value()), std::move(estimator.value()),
-                    std::move(bystanders.value()), detections, odometry, gimbal, out);
+                    std::move(bystanders.value()), std::move(swap_check.value()), detections, odometry, gimbal, out);
 }
 
 TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
-                       TargetEstimator estimator, BystanderTracks bystanders,
+                       TargetEstimator estimator, BystanderTracks bystanders, SwapCheck swap_check,
                        rt::SpscQueue<hal::DetectionFrame>& detections, rt::SpscQueue<hal::OdometrySample>& odometry,
                        rt::SpscQueue<hal::GimbalState>& gimbal, rt::LatestSlot<TargetEstimate>& out)
     : params_(params),
@@ -51,7 +56,8 @@ TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory pose
       odometry_(odometry),
       gimbal_(gimbal),
       out_(out),
-      bystanders_(std::move(bystanders)) {}
+      bystanders_(std::move(bystanders)),
+      swap_check_(std::move(swap_check)) {}
 
 Eigen::Vector3d TargetTask::localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
                                      Eigen::Vector3d& p_C_m) const {
@@ -302,6 +308,55 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   return a;
 }
 
+void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
+                           Association& a) {
+  if (!swap_check_.active(frame.stamp_ns)) return;
+  const TargetEstimator& kept = swap_check_.kept();
+  const double gate = params_.estimator.gate_chi2;
+  const auto fitsKept = [&](int i) -> std::optional<double> {
+    const Candidate& c = candidates[static_cast<std::size_t>(i)];
+    if (!c.measurement || c.measurement->bearingOnly()) return std::nullopt;
+    const std::optional<double> d2 = kept.mahalanobisSq(c.judged());
+    if (!d2 || !(*d2 <= gate)) return std::nullopt;
+    return d2;
+  };
+  // Someone else who fits the kept track better than the followed track's own person does (who may not fit it at
+  // all), looks like the person (the colour gate), and is on no track older than the hypothesis (a track seen
+  // before it is someone known to be someone else).
+  const std::optional<double> held_d2 = a.followed >= 0 ? fitsKept(a.followed) : std::nullopt;
+  const int count = static_cast<int>(std::min(frame.person_count, hal::kMaxPersons));
+  int best = -1;
+  double best_d2 = held_d2 ? *held_d2 : std::numeric_limits<double>::infinity();
+  for (int i = 0; i < count; ++i) {
+    if (i == a.followed) continue;
+    const int track = a.track[static_cast<std::size_t>(i)];
+    if (track >= 0 && bystanders_.startedNs(static_cast<std::size_t>(track)) < swap_check_.keptSinceNs()) continue;
+    const Candidate& c = candidates[static_cast<std::size_t>(i)];
+    if (c.look.valid && reference_.valid &&
+        perception::appearanceDistance(reference_, c.look) > params_.tracker.max_appearance_distance)
+      continue;
+    const std::optional<double> d2 = fitsKept(i);
+    if (d2 && *d2 < best_d2) {
+      best_d2 = *d2;
+      best = i;
+    }
+  }
+  if (!swap_check_.vote(best >= 0)) return;
+  // Confirmed: the kept track was the person. It takes their measurement; whom the followed track held is someone
+  // else from now on (a new bystander track), and the track the person was given as a stranger is forgotten.
+  ++stats_.swapped_back;
+  estimator_ = kept;
+  const int held = a.followed;
+  const int track = a.track[static_cast<std::size_t>(best)];
+  if (track >= 0) bystanders_.drop(static_cast<std::size_t>(track));
+  a.track[static_cast<std::size_t>(best)] = kNoTrack;
+  a.followed = best;
+  if (held >= 0) {
+    const auto& m = candidates[static_cast<std::size_t>(held)].measurement;
+    a.track[static_cast<std::size_t>(held)] = m && !m->bearingOnly() ? kNewTrack : kNoTrack;
+  }
+}
+
 int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
   std::array<Candidate, hal::kMaxPersons> candidates;
   return associate(frame, candidates).followed;
@@ -440,7 +495,8 @@ void TargetTask::step(rt::TimeNs now_ns) {
     const bool covered = newest_pose_ns_ >= frame.stamp_ns && newest_gimbal_ns_ >= frame.stamp_ns;
     if (!covered && now_ns - frame.stamp_ns < params_.max_wait_ns) break;  // readings still on their way
     std::array<Candidate, hal::kMaxPersons> candidates;
-    const Association a = associate(frame, candidates);
+    Association a = associate(frame, candidates);
+    checkSwap(frame, candidates, a);
     const int person = a.followed;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
@@ -456,6 +512,14 @@ void TargetTask::step(rt::TimeNs now_ns) {
     bool followed_measured = false;
     if (person >= 0) {
       ++stats_.detections;
+      const Candidate& c = candidates[static_cast<std::size_t>(person)];
+      const TargetEstimate before = estimator_.estimate(frame.stamp_ns);
+      if (c.measurement && !c.measurement->bearingOnly() && before.initialised && !before.lost) {
+        if (const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged()))
+          swap_check_.beforeUpdate(estimator_, *d2, frame.stamp_ns);
+      } else if (!before.initialised || before.lost) {
+        swap_check_.reset();  // a window or a kept track from the track's earlier life
+      }
       if (person != frame.target_index) ++stats_.reassigned;
       followed_measured = process(candidates[static_cast<std::size_t>(person)]);
     } else if (frame.target_index >= 0 &&

@@ -42,6 +42,8 @@ class BystanderTracks {
   const perception::Appearance& look(std::size_t i) const { return tracks_[i].look; }
   /// Track i was measured in a frame where the followed person was too.
   bool seenWithFollowed(std::size_t i) const { return tracks_[i].seen_with_followed; }
+  /// When track i was started (the capture time of its first measurement).
+  rt::TimeNs startedNs(std::size_t i) const { return tracks_[i].started_ns; }
   /// Forgets track i (its measurements are the followed person's after all).
   void drop(std::size_t i);
   /// Live tracks at t_ns.
@@ -54,6 +56,7 @@ class BystanderTracks {
     TargetEstimator filter;
     bool used = false;
     bool seen_with_followed = false;
+    rt::TimeNs started_ns = 0;
     perception::Appearance look;
   };
   explicit BystanderTracks(std::vector<Track> tracks) : tracks_(std::move(tracks)) {}

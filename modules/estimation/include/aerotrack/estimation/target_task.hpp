@@ -26,6 +26,7 @@
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/depth_range.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
+#include "aerotrack/estimation/swap_check.hpp"
 #include "aerotrack/estimation/target_estimator.hpp"
 #include "aerotrack/hal/odometry_history.hpp"
 #include "aerotrack/localization/localization_model.hpp"
@@ -75,6 +76,11 @@ struct TargetTaskParams {
   /// lock-on's choice. false (`association: lock_on`): always the lock-on's choice. Why: the lock-on judges in
   /// the image, where a bystander beside the target matches as well; in the world they stand apart.
   bool choose_by_estimate = true;
+  /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
+  /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
+  /// new fits it while the followed track's person does not. frames 0: off (the default: measured in the image-mode
+  /// crowd it undid the head-on swap of seed 9 but did not improve the crowd as a whole, docs/benchmarks.md).
+  SwapCheckParams swap_check{.frames = 0};
   /// The distance from the depth camera where it sees the person (`depth_range:`; absent: off).
   DepthRangeParams depth_range;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
@@ -95,6 +101,7 @@ struct TargetTaskStats {
   std::uint64_t accepted = 0;         ///< Measurements the estimator used (or started from).
   std::uint64_t rejected = 0;         ///< Measurements the estimator refused.
   std::uint64_t reassigned = 0;       ///< Frames whose person the track's prediction chose over the lock-on's.
+  std::uint64_t swapped_back = 0;     ///< Times the swap check gave the followed track back its kept hypothesis.
   std::uint64_t depth_ranged = 0;     ///< ... of the followed person's frames, ranged by the depth camera.
   std::uint64_t depth_disagreed = 0;  ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;     ///< ... for which no depth image near in time saw them (occluded, out of view).
@@ -120,9 +127,9 @@ class TargetTask final : public rt::Task {
 
  private:
   TargetTask(const TargetTaskParams& params, hal::OdometryHistory poses, GimbalAngleHistory gimbal_history,
-             TargetEstimator estimator, BystanderTracks bystanders, rt::SpscQueue<hal::DetectionFrame>& detections,
-             rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
-             rt::LatestSlot<TargetEstimate>& out);
+             TargetEstimator estimator, BystanderTracks bystanders, SwapCheck swap_check,
+             rt::SpscQueue<hal::DetectionFrame>& detections, rt::SpscQueue<hal::OdometrySample>& odometry,
+             rt::SpscQueue<hal::GimbalState>& gimbal, rt::LatestSlot<TargetEstimate>& out);
   /// A detected person as the estimator would be given them.
   struct Candidate {
     perception::TorsoFeatures torso;
@@ -153,6 +160,10 @@ class TargetTask final : public rt::Task {
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
   Association associate(const hal::DetectionFrame& frame, std::array<Candidate, hal::kMaxPersons>& candidates) const;
+  /// The swap check's evidence in this frame (SwapCheck): if confirmed, the followed track becomes the kept one and
+  /// `a` is rewritten (its person the one who fit the kept track, whom the followed track held a new bystander).
+  void checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
+                 Association& a);
   /// Gives the candidate to the estimator; true if it took a distance.
   bool process(const Candidate& candidate);
   /// The person's position in W from their (levelled) torso: the regression, read in the level camera frame
@@ -197,6 +208,7 @@ class TargetTask final : public rt::Task {
   double look_refused_d2_sum_ = 0.0;       ///< Over the run's frames with a refused distance...
   int look_refused_d2_count_ = 0;          ///< ... and their number.
   BystanderTracks bystanders_;             ///< The torso colour of the people given to the estimator and taken.
+  SwapCheck swap_check_;
   const rt::SharedSlot<hal::DepthFrame>* depth_in_ = nullptr;
   std::uint64_t depth_version_ = 0;
   /// The newest depth frames, oldest first (a detection arrives ~50 ms after its photo: older frames are needed).

@@ -1,0 +1,77 @@
+// A second opinion on whom the followed track holds (issue 22, item 2). A look-alike who walks into the
+// followed person's place while hiding them -- in the crowd in image mode, head-on along the camera's line of
+// sight, the look-alike hidden behind the person until they meet and the person behind the look-alike after --
+// is measured at the very place the person was predicted (d2 0.2). The track takes them, and then turns with
+// them: its innovations stay large (d2 5-7 a frame, traced: crowd seed 9) but inside the gate, and when the
+// person comes out from behind, 1-2 m from the turned prediction, they are someone new.
+//
+// The check is the innovation test of Bar-Shalom et al. (Estimation with Applications to Tracking and
+// Navigation, Sect. 5.4: the normalised innovations of a consistent filter are chi-square) over a short window:
+// when the sum of the followed track's last `frames` normalised innovations (3 dof each) exceeds `chi2` (set
+// at their mean: the test only has to catch the turn, and it fires now and then on the person's own noise), the
+// track as it was before them is kept aside and coasted (a second hypothesis: they were someone else). For
+// horizon_s the caller looks for evidence for it: someone who fits the kept track (its gate and colour) better
+// than the person the followed track holds (who may not fit it at all: in the crowd the kept track's gate, grown
+// over 1.8 s of coasting, held both), and who is on no track older than the kept one. After
+// confirm_frames such frames in a row the kept track was the person (TargetTask swaps them back).
+//
+// Allocation: all in create() (the kept track and the window are filters of the estimator's params, whose
+// buffers are reserved); copying a filter into them reuses that memory.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "aerotrack/estimation/target_estimator.hpp"
+#include "aerotrack/rt/config_node.hpp"
+#include "aerotrack/rt/expected.hpp"
+#include "aerotrack/rt/time.hpp"
+
+namespace aerotrack::estimation {
+
+struct SwapCheckParams {
+  int frames = 3;  ///< The innovation window, followed-track measurements; 0: the check is off.
+  /// Its bound on the window's sum: 9, the sum a consistent filter's innovations have on average over 3 frames
+  /// (3 dof each). Low on purpose: a kept track costs nothing until the evidence, which is strict, comes.
+  double chi2 = 9.0;
+  double horizon_s = 2.0;  ///< How long the kept track waits for evidence (an occlusion by a passer-by).
+  int confirm_frames = 2;  ///< Frames in a row of evidence that swap the tracks back; >= 1.
+};
+rt::Status validate(const SwapCheckParams& params);
+/// Reads `swap_check:` (frames, chi2, horizon_s, confirm_frames). Throws rt::ConfigError naming the key.
+SwapCheckParams parseSwapCheckParams(const rt::ConfigNode& node);
+
+class SwapCheck {
+ public:
+  static rt::Expected<SwapCheck> create(const SwapCheckParams& params, const TargetEstimatorParams& filter);
+
+  /// The followed track is about to take a distance measurement at normalised innovation d2 (its squared
+  /// Mahalanobis distance): remembers the track as it is, and keeps it aside if the window's sum is too large.
+  void beforeUpdate(const TargetEstimator& followed, double d2, rt::TimeNs stamp_ns);
+  /// A kept track is waiting for evidence at stamp_ns (within horizon_s of the window's first measurement).
+  bool active(rt::TimeNs stamp_ns) const;
+  /// The followed track as it was before the window (valid while active()).
+  const TargetEstimator& kept() const { return kept_; }
+  /// When the kept track's hypothesis began (the first measurement of the window that set it aside).
+  rt::TimeNs keptSinceNs() const { return kept_since_ns_; }
+  /// One frame's evidence for the kept track; true when it reaches confirm_frames in a row (and the check resets).
+  bool vote(bool evidence);
+  /// Forgets the window and any kept track (the followed track restarted, was lost, or was swapped).
+  void reset();
+
+ private:
+  SwapCheck(const SwapCheckParams& params, std::vector<TargetEstimator> window, TargetEstimator kept);
+
+  SwapCheckParams params_;
+  std::vector<TargetEstimator> window_;  ///< The followed track before each of the last `frames` measurements.
+  std::vector<double> d2_;
+  std::vector<rt::TimeNs> stamps_;
+  std::size_t next_ = 0;
+  std::size_t count_ = 0;
+  TargetEstimator kept_;
+  bool kept_valid_ = false;
+  rt::TimeNs kept_since_ns_ = 0;
+  int votes_ = 0;
+};
+
+}  // namespace aerotrack::estimation
