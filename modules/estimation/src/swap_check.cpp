@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include <Eigen/Cholesky>
+
 namespace aerotrack::estimation {
 
 rt::Status validate(const SwapCheckParams& p) {
@@ -42,22 +44,30 @@ rt::Expected<SwapCheck> SwapCheck::create(const SwapCheckParams& params, const T
 SwapCheck::SwapCheck(const SwapCheckParams& params, std::vector<TargetEstimator> window, TargetEstimator kept)
     : params_(params),
       window_(std::move(window)),
-      d2_(window_.size(), 0.0),
+      nu_(window_.size(), Eigen::Vector2d::Zero()),
+      S_(window_.size(), Eigen::Matrix2d::Identity()),
       stamps_(window_.size(), 0),
       kept_(std::move(kept)) {}
 
-void SwapCheck::beforeUpdate(const TargetEstimator& followed, double d2, rt::TimeNs stamp_ns) {
+void SwapCheck::beforeUpdate(const TargetEstimator& followed, const TargetEstimator::Innovation& innovation,
+                             rt::TimeNs stamp_ns) {
   if (kept_valid_ && !active(stamp_ns)) reset();  // no evidence came in time: the track was the person's
   if (window_.empty() || kept_valid_) return;     // off, or one hypothesis at a time
   window_[next_] = followed;
-  d2_[next_] = d2;
+  nu_[next_] = innovation.nu_m.head<2>();
+  S_[next_] = innovation.S_m2.topLeftCorner<2, 2>();
   stamps_[next_] = stamp_ns;
   next_ = (next_ + 1) % window_.size();
   if (count_ < window_.size()) ++count_;
   if (count_ < window_.size()) return;
-  double sum = 0.0;
-  for (const double d : d2_) sum += d;
-  if (!(sum > params_.chi2)) return;
+  Eigen::Vector2d nu_sum = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d S_sum = Eigen::Matrix2d::Zero();
+  for (std::size_t i = 0; i < nu_.size(); ++i) {
+    nu_sum += nu_[i];
+    S_sum += S_[i];
+  }
+  const Eigen::LLT<Eigen::Matrix2d> llt(S_sum);
+  if (llt.info() != Eigen::Success || !(nu_sum.dot(llt.solve(nu_sum)) > params_.chi2)) return;
   // next_ is now the oldest: the track before the window's first measurement.
   kept_ = window_[next_];
   kept_since_ns_ = stamps_[next_];

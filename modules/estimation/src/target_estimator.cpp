@@ -299,6 +299,14 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
 }
 
 std::optional<double> TargetEstimator::mahalanobisSq(const TargetMeasurement& m) const {
+  const std::optional<Innovation> i = innovation(m);
+  if (!i) return std::nullopt;
+  const Eigen::LLT<Matrix3d> llt(i->S_m2);
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  return i->nu_m.dot(llt.solve(i->nu_m));
+}
+
+std::optional<TargetEstimator::Innovation> TargetEstimator::innovation(const TargetMeasurement& m) const {
   if (!valid(m) || (folded_any_ && m.stamp_ns < folded_until_ns_)) return std::nullopt;
   // The state add() would update: after the newest buffered measurement at or before m's time.
   const auto after = std::upper_bound(buffer_.begin(), buffer_.end(), m.stamp_ns,
@@ -306,10 +314,7 @@ std::optional<double> TargetEstimator::mahalanobisSq(const TargetMeasurement& m)
   State state = after == buffer_.begin() ? anchor_ : std::prev(after)->after;
   if (!state.initialised) return std::nullopt;
   predict(state, m.stamp_ns);
-  const Eigen::Vector3d innovation = m.p_WT_m - state.x.head<3>();
-  const Eigen::LLT<Matrix3d> llt(state.P.topLeftCorner<3, 3>() + measurementNoise(params_, m));
-  if (llt.info() != Eigen::Success) return std::nullopt;
-  return innovation.dot(llt.solve(innovation));
+  return Innovation{m.p_WT_m - state.x.head<3>(), state.P.topLeftCorner<3, 3>() + measurementNoise(params_, m)};
 }
 
 MeasurementVerdict TargetEstimator::add(const TargetMeasurement& m) {

@@ -320,13 +320,17 @@ void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
     if (!d2 || !(*d2 <= gate)) return std::nullopt;
     return d2;
   };
-  // Someone else who fits the kept track better than the followed track's own person does (who may not fit it at
-  // all), looks like the person (the colour gate), and is on no track older than the hypothesis (a track seen
-  // before it is someone known to be someone else).
-  const std::optional<double> held_d2 = a.followed >= 0 ? fitsKept(a.followed) : std::nullopt;
+  // The followed track's own person where the kept track would have the person: no evidence either way (a turn of
+  // the person's own set it aside).
+  if (a.followed >= 0 && fitsKept(a.followed)) {
+    (void)swap_check_.vote(false);
+    return;
+  }
+  // Someone else who fits the kept track, looks like the person (the colour gate), and is on no track older than
+  // the hypothesis (a track seen before it is someone known to be someone else).
   const int count = static_cast<int>(std::min(frame.person_count, hal::kMaxPersons));
   int best = -1;
-  double best_d2 = held_d2 ? *held_d2 : std::numeric_limits<double>::infinity();
+  double best_d2 = std::numeric_limits<double>::infinity();
   for (int i = 0; i < count; ++i) {
     if (i == a.followed) continue;
     const int track = a.track[static_cast<std::size_t>(i)];
@@ -515,8 +519,8 @@ void TargetTask::step(rt::TimeNs now_ns) {
       const Candidate& c = candidates[static_cast<std::size_t>(person)];
       const TargetEstimate before = estimator_.estimate(frame.stamp_ns);
       if (c.measurement && !c.measurement->bearingOnly() && before.initialised && !before.lost) {
-        if (const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged()))
-          swap_check_.beforeUpdate(estimator_, *d2, frame.stamp_ns);
+        if (const auto innovation = estimator_.innovation(c.judged()))
+          swap_check_.beforeUpdate(estimator_, *innovation, frame.stamp_ns);
       } else if (!before.initialised || before.lost) {
         swap_check_.reset();  // a window or a kept track from the track's earlier life
       }

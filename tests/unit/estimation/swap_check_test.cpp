@@ -24,23 +24,34 @@ TargetEstimator filterAt(double x_m, rt::TimeNs t_ns) {
   return f;
 }
 
-TEST(SwapCheck, GivenAnInnovationWindow_WhenItsSumPassesTheBound_ThenTheTrackBeforeItIsKeptForTheHorizon) {
-  SwapCheckParams params;  // 3 frames, 9, 2 s, 2 to confirm
+/// A horizontal innovation of (x, y) metres with covariance 0.01 m^2 on each axis: normalised d2 (x^2 + y^2) / 0.01.
+TargetEstimator::Innovation innovationOf(double x_m, double y_m) {
+  TargetEstimator::Innovation i;
+  i.nu_m = {x_m, y_m, 0.0};
+  i.S_m2 = 0.01 * Eigen::Matrix3d::Identity();
+  return i;
+}
+
+TEST(SwapCheck, GivenAnInnovationWindow_WhenItsSumPointsAwayTooFar_ThenTheTrackBeforeItIsKeptForTheHorizon) {
+  SwapCheckParams params;  // 3 frames, 9.21 (chi-square 99 %, 2 dof), 2 s, 2 to confirm
   SwapCheck check = aerotrack::test::require(SwapCheck::create(params, {}), "check");
   const rt::TimeNs s = rt::kNsPerSecond;
-  // Ordinary innovations (sums 6, then 8, not above 9): nothing kept.
-  check.beforeUpdate(filterAt(1.0, 0), 2.0, 0);
-  check.beforeUpdate(filterAt(2.0, s), 2.0, s);
-  check.beforeUpdate(filterAt(3.0, 2 * s), 2.0, 2 * s);
-  check.beforeUpdate(filterAt(4.0, 3 * s), 4.0, 3 * s);
+  // Large innovations (d2 4 each) that point every which way: they cancel, nothing is kept. (Their sum of squares,
+  // the NIS, 12, would have passed its own bound.)
+  check.beforeUpdate(filterAt(1.0, 0), innovationOf(0.2, 0.0), 0);
+  check.beforeUpdate(filterAt(2.0, s), innovationOf(-0.2, 0.0), s);
+  check.beforeUpdate(filterAt(3.0, 2 * s), innovationOf(0.0, 0.2), 2 * s);
+  EXPECT_FALSE(check.active(2 * s));
+  // Window (-0.2, 0), (0, 0.2), (0, 0.2): sum (-0.2, 0.4) over covariance 0.03: d2 6.7, not above 9.21.
+  check.beforeUpdate(filterAt(4.0, 3 * s), innovationOf(0.0, 0.2), 3 * s);
   EXPECT_FALSE(check.active(3 * s));
-  // The window (2, 4, 4) sums to 10: the track before the first of them (the one at 2 s) is kept.
-  check.beforeUpdate(filterAt(5.0, 4 * s), 4.0, 4 * s);
+  // Window (0, 0.2) x 3, all one way: sum (0, 0.6), d2 12: the track before the first of them (at 2 s) is kept.
+  check.beforeUpdate(filterAt(5.0, 4 * s), innovationOf(0.0, 0.2), 4 * s);
   ASSERT_TRUE(check.active(4 * s));
   EXPECT_EQ(check.keptSinceNs(), 2 * s);
   EXPECT_DOUBLE_EQ(check.kept().estimate(2 * s).p_WT_m.x(), 3.0);
   // One kept track at a time: a further window does not replace it.
-  check.beforeUpdate(filterAt(6.0, 4 * s + 1), 100.0, 4 * s + 1);
+  check.beforeUpdate(filterAt(6.0, 4 * s + 1), innovationOf(0.0, 5.0), 4 * s + 1);
   EXPECT_DOUBLE_EQ(check.kept().estimate(2 * s).p_WT_m.x(), 3.0);
   // Evidence must come in frames in a row; the second in a row confirms and resets.
   EXPECT_FALSE(check.vote(true));
@@ -49,7 +60,8 @@ TEST(SwapCheck, GivenAnInnovationWindow_WhenItsSumPassesTheBound_ThenTheTrackBef
   EXPECT_TRUE(check.vote(true));
   EXPECT_FALSE(check.active(4 * s));
   // Kept again, then no evidence within the horizon (2 s): it expires.
-  for (int i = 0; i < 3; ++i) check.beforeUpdate(filterAt(7.0 + i, (5 + i) * s / 10), 6.0, (50 + i) * s / 10);
+  for (int i = 0; i < 3; ++i)
+    check.beforeUpdate(filterAt(7.0 + i, (50 + i) * s / 10), innovationOf(0.3, 0.0), (50 + i) * s / 10);
   ASSERT_TRUE(check.active(5 * s));
   EXPECT_TRUE(check.active(7 * s));
   EXPECT_FALSE(check.active(7 * s + 1));

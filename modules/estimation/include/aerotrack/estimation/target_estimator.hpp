@@ -163,6 +163,14 @@ class TargetEstimator {
   /// covariance: where the person can have gone since). Allocation-free.
   std::optional<double> mahalanobisSq(const TargetMeasurement& measurement) const;
 
+  /// The innovation behind mahalanobisSq: the measurement's position minus the prediction, and its covariance (the
+  /// prediction's plus the measurement's noise). Nothing where mahalanobisSq gives nothing.
+  struct Innovation {
+    Eigen::Vector3d nu_m = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d S_m2 = Eigen::Matrix3d::Identity();
+  };
+  std::optional<Innovation> innovation(const TargetMeasurement& measurement) const;
+
   /// Forgets everything (the buffer keeps its memory).
   void reset();
 
