@@ -320,9 +320,12 @@ void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
     if (!d2 || !(*d2 <= gate)) return std::nullopt;
     return d2;
   };
-  // The followed track's own person where the kept track would have the person: no evidence either way (a turn of
-  // the person's own set it aside).
-  if (a.followed >= 0 && fitsKept(a.followed)) {
+  // Evidence needs the followed track to hold someone the kept track does not explain (the look-alike walking
+  // away from where the person would be). Holding nobody, it is coasting, and the re-identification in its grown
+  // gate is the association's (measured: taking whoever fit the coasted kept track then took bystanders, crowd
+  // seed 4 at 20.8 s, 1.8 s into the coasting). Holding someone the kept track explains: a turn of the person's
+  // own set it aside.
+  if (a.followed < 0 || fitsKept(a.followed)) {
     (void)swap_check_.vote(false);
     return;
   }

@@ -13,7 +13,7 @@
 // second hypothesis: they were someone else). A sum of squares instead (the NIS) did not see the head-on case in
 // the unit test (three innovations of d2 3.9-4.3 that point the same way: 12.2 against its bound 14.7). For
 // horizon_s the caller looks for evidence for it: someone who fits the kept track (its gate and colour), who is
-// on no track older than the kept one, while the person the followed track holds does not fit it. After
+// on no track older than the kept one, while the followed track holds someone who does not fit it. After
 // confirm_frames such frames in a row the kept track was the person (TargetTask swaps them back).
 //
 // Allocation: all in create() (the kept track and the window are filters of the estimator's params, whose
