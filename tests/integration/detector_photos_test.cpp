@@ -269,6 +269,16 @@ TEST(DetectorOnPhotos, GivenTheEstimatorsVerdict_WhenItTookAnotherPedestrian_The
   ASSERT_TRUE(third.has_value());
   EXPECT_FALSE(third->cropped);
   EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kRefused)], refused_before + 1);
+  // The estimator took the lock-on's choice but asks for everyone (its second hypothesis is open): whole again.
+  ASSERT_TRUE(third->target.has_value());
+  hal::DetectionFrame wanted = verdictOn(*third, rt::secondsToNs(0.2), static_cast<int>(*third->target));
+  wanted.whole_frame_wanted = true;
+  detector.judged(wanted);
+  ASSERT_TRUE(video.read(frame));
+  const auto fourth = detector.track(frame, rt::secondsToNs(0.3));
+  ASSERT_TRUE(fourth.has_value());
+  EXPECT_FALSE(fourth->cropped);
+  EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kWanted)], 1U);
 }
 
 }  // namespace

@@ -308,9 +308,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   return a;
 }
 
-void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
+bool TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
                            Association& a) {
-  if (!swap_check_.active(frame.stamp_ns)) return;
+  if (!swap_check_.active(frame.stamp_ns)) return false;
   const TargetEstimator& kept = swap_check_.kept();
   const double gate = params_.estimator.gate_chi2;
   const auto fitsKept = [&](int i) -> std::optional<double> {
@@ -327,7 +327,7 @@ void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
   // own set it aside.
   if (a.followed < 0 || fitsKept(a.followed)) {
     (void)swap_check_.vote(false);
-    return;
+    return false;
   }
   // Someone else who fits the kept track, looks like the person (the colour gate), and is on no track older than
   // the hypothesis (a track seen before it is someone known to be someone else).
@@ -348,7 +348,7 @@ void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
       best = i;
     }
   }
-  if (!swap_check_.vote(best >= 0)) return;
+  if (!swap_check_.vote(best >= 0)) return true;
   // Confirmed: the kept track was the person. It takes their measurement; whom the followed track held is someone
   // else from now on (a new bystander track), and the track the person was given as a stranger is forgotten.
   ++stats_.swapped_back;
@@ -362,6 +362,7 @@ void TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
     const auto& m = candidates[static_cast<std::size_t>(held)].measurement;
     a.track[static_cast<std::size_t>(held)] = m && !m->bearingOnly() ? kNewTrack : kNoTrack;
   }
+  return false;
 }
 
 int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
@@ -503,7 +504,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (!covered && now_ns - frame.stamp_ns < params_.max_wait_ns) break;  // readings still on their way
     std::array<Candidate, hal::kMaxPersons> candidates;
     Association a = associate(frame, candidates);
-    checkSwap(frame, candidates, a);
+    const bool whole_frame_wanted = checkSwap(frame, candidates, a);
     const int person = a.followed;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
@@ -546,6 +547,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (followed_out_ != nullptr) {
       hal::DetectionFrame followed = frame;
       followed.target_index = person;
+      followed.whole_frame_wanted = whole_frame_wanted;
       followed_out_->write(followed);
     }
   }

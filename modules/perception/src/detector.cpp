@@ -176,6 +176,8 @@ const char* toString(WholeFrameReason reason) {
       return "refused";
     case WholeFrameReason::kPeriodic:
       return "periodic";
+    case WholeFrameReason::kWanted:
+      return "wanted";
   }
   return "?";
 }
@@ -203,6 +205,7 @@ void Detector::judged(const hal::DetectionFrame& verdict) {
       std::find_if(recent_.begin(), recent_.end(), [&](const Choice& c) { return c.stamp_ns == verdict.stamp_ns; });
   if (mine == recent_.end()) return;  // not a frame of ours, or too old to matter
   newest_verdict_ns_ = verdict.stamp_ns;
+  wanted_ = verdict.whole_frame_wanted;
   const int count = static_cast<int>(std::min(verdict.person_count, hal::kMaxPersons));
   const int taken = verdict.target_index >= 0 && verdict.target_index < count ? verdict.target_index : -1;
   if (taken == mine->person) {
@@ -252,6 +255,8 @@ rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stam
     reason = WholeFrameReason::kNoLock;
   else if (refused_)
     reason = WholeFrameReason::kRefused;
+  else if (wanted_)
+    reason = WholeFrameReason::kWanted;
   else if (others_near_)
     reason = WholeFrameReason::kOthersNear;
   else if (whole.every_s > 0.0 && stamp_ns - last_whole_ns_ >= rt::secondsToNs(whole.every_s))
@@ -285,6 +290,7 @@ rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stam
   ++counts_.runs[static_cast<std::size_t>(reason)];
   last_whole_ns_ = stamp_ns;
   refused_ = false;
+  wanted_ = false;
   others_near_ = false;
   if (out->target && cropAroundPerson(out->persons[*out->target].detection.keypoints, bgr.cols, bgr.rows,
                                       tracking->info().input_size_px, params_.crop, crop)) {

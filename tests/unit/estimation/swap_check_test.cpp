@@ -107,6 +107,7 @@ struct Crossing {
   TargetTaskStats stats;
   int last_followed = -2;      ///< whom the last frame was given (index)
   int person_index_last = -1;  ///< the person's index in the last frame
+  int whole_frame_wanted = 0;  ///< frames handed back asking the detector for the whole frame
 };
 
 Crossing runCrossing(int swap_check_frames, double end_s = 4.5) {
@@ -153,6 +154,7 @@ Crossing runCrossing(int swap_check_frames, double end_s = 4.5) {
     if (const auto f = followed.read(); f && f->sequence == frame.sequence) {
       scene.last_followed = f->target_index;
       scene.person_index_last = person;
+      scene.whole_frame_wanted += f->whole_frame_wanted ? 1 : 0;
     }
   }
   scene.estimate = aerotrack::test::require(out.read(), "an estimate");
@@ -166,10 +168,14 @@ TEST(SwapCheck, GivenALookAlikeHeadOnAlongTheLineOfSight_WhenThePersonComesOutFr
   const Crossing unchecked = runCrossing(0);
   EXPECT_EQ(unchecked.stats.swapped_back, 0U);
   EXPECT_EQ(unchecked.last_followed, 0) << "the look-alike";
+  EXPECT_EQ(unchecked.whole_frame_wanted, 0);
   EXPECT_NEAR(unchecked.estimate.p_WT_m.x(), lookAlikeX(4.5), 0.3);
   // With it: given back within the confirmation after the person reappears, and followed to the end.
   const Crossing checked = runCrossing(SwapCheckParams{}.frames);
   EXPECT_EQ(checked.stats.swapped_back, 1U);
+  // While the track held the look-alike, whom the kept track does not explain, its verdicts asked the detector for
+  // the whole frame (a crop on the look-alike would never show the person again).
+  EXPECT_GE(checked.whole_frame_wanted, 1);
   EXPECT_EQ(checked.last_followed, checked.person_index_last);
   ASSERT_FALSE(checked.estimate.lost);
   EXPECT_NEAR(checked.estimate.p_WT_m.x(), personX(4.5), 0.3);

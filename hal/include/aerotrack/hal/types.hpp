@@ -149,6 +149,10 @@ struct DetectionFrame {
   /// Which of persons[] is the followed person (the detector's lock-on), -1 if none of them is:
   /// bystanders alone, or the target was not found.
   int target_index = -1;
+  /// On the frames the target task hands back as its verdicts (whom it took): its second hypothesis of the followed
+  /// person is open and the followed track holds someone that hypothesis does not explain, so the detector should
+  /// show it everyone in the next frame, not the crop around whom it holds (issue 22, item 2; swap_check.hpp).
+  bool whole_frame_wanted = false;
 };
 
 /// Vehicle state estimate from the flight controller or the simulator.

@@ -160,9 +160,11 @@ class TargetTask final : public rt::Task {
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
   Association associate(const hal::DetectionFrame& frame, std::array<Candidate, hal::kMaxPersons>& candidates) const;
-  /// The swap check's evidence in this frame (SwapCheck): if confirmed, the followed track becomes the kept one and
-  /// `a` is rewritten (its person the one who fit the kept track, whom the followed track held a new bystander).
-  void checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
+  /// The swap check's evidence in this frame (SwapCheck); true while its kept hypothesis is open and the followed
+  /// track holds someone it does not explain (the verdict then asks the detector for the whole frame). If confirmed,
+  /// the followed track becomes the kept one and `a` is rewritten (its person the one who fit the kept track, whom the
+  /// followed track held a new bystander).
+  bool checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
                  Association& a);
   /// Gives the candidate to the estimator; true if it took a distance.
   bool process(const Candidate& candidate);

@@ -94,9 +94,10 @@ enum class WholeFrameReason : std::uint8_t {
   kOthersNear,  ///< Someone else was near the crop (WholeFrameParams::near_crop_sides).
   kRefused,     ///< The estimator's newest verdict did not take the lock-on's choice.
   kPeriodic,    ///< WholeFrameParams::every_s.
+  kWanted,      ///< The estimator's newest verdict asked for it (DetectionFrame::whole_frame_wanted).
 };
-inline constexpr std::size_t kWholeFrameReasons = 6;
-/// "crop", "no_lock", "crop_lost", "others_near", "refused", "periodic".
+inline constexpr std::size_t kWholeFrameReasons = 7;
+/// "crop", "no_lock", "crop_lost", "others_near", "refused", "periodic", "wanted".
 const char* toString(WholeFrameReason reason);
 
 /// How often each way of running the network was taken, and the verdicts that moved the crop.
@@ -121,7 +122,8 @@ class Detector {
   /// The target estimator's verdict on an earlier frame of track(): that frame as published (its stamp
   /// names it), target_index the person the estimator took (-1: nobody). Where the estimator took someone
   /// else than the lock-on did, the lock moves to them; where it took nobody, the next frame is searched
-  /// whole. A verdict on a frame this detector does not remember (too old, or another's) is ignored.
+  /// whole, as it is where the verdict asks for it (whole_frame_wanted). A verdict on a frame this detector does not
+  /// remember (too old, or another's) is ignored.
   void judged(const hal::DetectionFrame& verdict);
 
   const PersonTracker& tracker() const { return tracker_; }
@@ -144,6 +146,8 @@ class Detector {
   bool others_near_ = false;
   /// The newest verdict did not take the lock-on's choice.
   bool refused_ = false;
+  /// The newest verdict asked for the whole frame.
+  bool wanted_ = false;
   rt::TimeNs last_whole_ns_ = 0;
   rt::TimeNs newest_verdict_ns_ = -1;
   /// The lock-on's choice on the latest frames (stamp, person; -1 nobody), oldest overwritten first.
