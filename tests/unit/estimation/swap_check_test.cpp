@@ -123,17 +123,7 @@ Crossing runCrossing(int swap_check_frames, double end_s = 4.5) {
     const double t_s = i / kRateHz;
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     test::pushHover(odometry, gimbal, t_ns);
-    hal::DetectionFrame frame;
-    frame.stamp_ns = t_ns;
-    frame.result_ns = t_ns;
-    frame.sequence = static_cast<std::uint64_t>(i) + 1;
-    frame.intrinsics = {test::kWidthPx,
-                        test::kHeightPx,
-                        test::kFocalPx,
-                        test::kFocalPx,
-                        0.5 * test::kWidthPx,
-                        0.5 * test::kHeightPx,
-                        {}};
+    hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
     frame.target_index = i == 0 ? 0 : -1;  // designated in the first frame
     int person = -1;
     if (t_s < 2.4) {
@@ -194,17 +184,7 @@ TEST(SwapCheck, GivenThePersonTurningBackWhileAlone_WhenChecked_ThenNothingIsSwa
     const double t_s = i / kRateHz;
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     test::pushHover(odometry, gimbal, t_ns);
-    hal::DetectionFrame frame;
-    frame.stamp_ns = t_ns;
-    frame.result_ns = t_ns;
-    frame.sequence = static_cast<std::uint64_t>(i) + 1;
-    frame.intrinsics = {test::kWidthPx,
-                        test::kHeightPx,
-                        test::kFocalPx,
-                        test::kFocalPx,
-                        0.5 * test::kWidthPx,
-                        0.5 * test::kHeightPx,
-                        {}};
+    hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
     frame.target_index = i == 0 ? 0 : -1;
     frame.person_count = 1;
     draw(frame.persons[0], t_s < 2.5 ? personX(t_s) : lookAlikeX(t_s), t_s < 2.5 ? 0.0 : lookAlikeY(t_s));

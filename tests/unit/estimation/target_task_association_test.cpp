@@ -30,15 +30,7 @@ void drawPerson(hal::PersonDetection& person, double x_m, double y_m, int colour
   person.has_appearance = true;
 }
 
-/// Frame i of the level camera at 30 Hz, stamped t_ns, with nobody in it yet.
-hal::DetectionFrame emptyFrame(int i, rt::TimeNs t_ns) {
-  hal::DetectionFrame frame;
-  frame.stamp_ns = t_ns;
-  frame.result_ns = t_ns;
-  frame.sequence = static_cast<std::uint64_t>(i) + 1;
-  frame.intrinsics = {kW, kH, kFx, kFx, 0.5 * kW, 0.5 * kH, {}};
-  return frame;
-}
+using test::emptyFrame;
 
 struct Scene {
   TargetEstimate estimate;

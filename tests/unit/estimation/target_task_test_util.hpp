@@ -46,6 +46,16 @@ inline void drawTorso(hal::PersonDetection& person, double x_m, double y_m, doub
   person.score = 0.6;
 }
 
+/// Frame i of the camera, stamped t_ns, with nobody in it yet and nobody designated.
+inline hal::DetectionFrame emptyFrame(int i, rt::TimeNs t_ns) {
+  hal::DetectionFrame frame;
+  frame.stamp_ns = t_ns;
+  frame.result_ns = t_ns;
+  frame.sequence = static_cast<std::uint64_t>(i) + 1;
+  frame.intrinsics = {kWidthPx, kHeightPx, kFocalPx, kFocalPx, 0.5 * kWidthPx, 0.5 * kHeightPx, {}};
+  return frame;
+}
+
 /// The drone hovering at the origin, the gimbal at 0: one odometry sample and one encoder reading at t_ns.
 inline void pushHover(rt::SpscQueue<hal::OdometrySample>& odometry, rt::SpscQueue<hal::GimbalState>& gimbal,
                       rt::TimeNs t_ns) {
