@@ -520,13 +520,15 @@ void TargetTask::step(rt::TimeNs now_ns) {
     bool followed_measured = false;
     if (person >= 0) {
       ++stats_.detections;
-      const Candidate& c = candidates[static_cast<std::size_t>(person)];
-      const TargetEstimate before = estimator_.estimate(frame.stamp_ns);
-      if (c.measurement && !c.measurement->bearingOnly() && before.initialised && !before.lost) {
-        if (const auto innovation = estimator_.innovation(c.judged()))
-          swap_check_.beforeUpdate(estimator_, *innovation, frame.stamp_ns);
-      } else if (!before.initialised || before.lost) {
-        swap_check_.reset();  // a window or a kept track from the track's earlier life
+      if (swap_check_.enabled()) {  // off (the default): no estimate or innovation computed for it
+        const Candidate& c = candidates[static_cast<std::size_t>(person)];
+        const TargetEstimate before = estimator_.estimate(frame.stamp_ns);
+        if (c.measurement && !c.measurement->bearingOnly() && before.initialised && !before.lost) {
+          if (const auto innovation = estimator_.innovation(c.judged()))
+            swap_check_.beforeUpdate(estimator_, *innovation, frame.stamp_ns);
+        } else if (!before.initialised || before.lost) {
+          swap_check_.reset();  // a window or a kept track from the track's earlier life
+        }
       }
       if (person != frame.target_index) ++stats_.reassigned;
       followed_measured = process(candidates[static_cast<std::size_t>(person)]);

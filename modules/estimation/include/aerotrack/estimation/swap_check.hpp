@@ -50,6 +50,8 @@ class SwapCheck {
   /// remembers the track as it is, and keeps it aside if the window's innovations add up too far.
   void beforeUpdate(const TargetEstimator& followed, const TargetEstimator::Innovation& innovation,
                     rt::TimeNs stamp_ns);
+  /// The check runs (frames > 0).
+  bool enabled() const { return !window_.empty(); }
   /// A kept track is waiting for evidence at stamp_ns (within horizon_s of the window's first measurement).
   bool active(rt::TimeNs stamp_ns) const;
   /// The followed track as it was before the window (valid while active()).
