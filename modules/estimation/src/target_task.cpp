@@ -16,6 +16,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.look_gate_sigmas = node.getDoubleOr("look_gate_sigmas", params.look_gate_sigmas, 0.0, 100.0);
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
+  params.refuse_ambiguous = node.getBoolOr("refuse_ambiguous", params.refuse_ambiguous);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
   if (node.has("depth_range")) params.depth_range = parseDepthRangeParams(node.child("depth_range"));
   if (node.has("swap_check")) params.swap_check = parseSwapCheckParams(node.child("swap_check"));
@@ -297,6 +298,14 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     best_bearing = i;
   }
   if (a.followed < 0) a.followed = best_bearing;
+  // Two people where the live track expects one (refuse_ambiguous): the frame is not the track's. The person taken
+  // stays out of the bystander tracks too: they may be the followed person.
+  if (params_.refuse_ambiguous && a.followed >= 0 && !prior.lost &&
+      ambiguous(a.followed, count, candidates, track_taken)) {
+    person_taken[static_cast<std::size_t>(a.followed)] = true;
+    a.followed = -1;
+    a.ambiguous = true;
+  }
   // Someone new is someone else only beside the followed person's distance in the same frame: alone, they may
   // be the followed person whom the gate lost (a turn, a jump of the localization), and a track started on
   // them would then take the person's measurements from their own track.
@@ -306,6 +315,28 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (followed_ranged && !person_taken[static_cast<std::size_t>(i)] && distance(i))
       a.track[static_cast<std::size_t>(i)] = kNewTrack;
   return a;
+}
+
+bool TargetTask::ambiguous(int followed, int count, const std::array<Candidate, hal::kMaxPersons>& candidates,
+                           const std::array<bool, kMaxBystanderTracks>& track_taken) const {
+  // A gate is where the track's person can be; two people in it, or the one taken in a bystander's, and either could
+  // be the person. Neither colour nor cost decides it: the look-alike passes both, and two bodies this near overlap
+  // in the image, where the network reports one person made of both, or each in turn (issue 22 item 2: the crowd's
+  // switches left in image mode).
+  const double gate = params_.estimator.gate_chi2;
+  for (int i = 0; i < count; ++i) {
+    const Candidate& c = candidates[static_cast<std::size_t>(i)];
+    if (i == followed || !c.measurement || c.measurement->bearingOnly()) continue;
+    const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
+    if (d2 && *d2 <= gate) return true;
+  }
+  const TargetMeasurement& m = candidates[static_cast<std::size_t>(followed)].judged();
+  for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
+    if (track_taken[j]) continue;
+    const std::optional<double> d2 = bystanders_.mahalanobisSq(j, m);
+    if (d2 && *d2 <= gate) return true;
+  }
+  return false;
 }
 
 bool TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
@@ -506,6 +537,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     Association a = associate(frame, candidates);
     const bool whole_frame_wanted = checkSwap(frame, candidates, a);
     const int person = a.followed;
+    if (a.ambiguous) ++stats_.ambiguous;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
       look_refused_d2_sum_ = 0.0;
