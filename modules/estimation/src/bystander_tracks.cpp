@@ -73,6 +73,13 @@ std::size_t BystanderTracks::liveCount(rt::TimeNs t_ns) const {
   return n;
 }
 
+std::optional<Eigen::Vector3d> BystanderTracks::position(std::size_t i, rt::TimeNs t_ns) const {
+  if (!tracks_[i].used) return std::nullopt;
+  const TargetEstimate e = tracks_[i].filter.estimate(t_ns);
+  if (!e.initialised || e.lost) return std::nullopt;
+  return e.p_WT_m;
+}
+
 void BystanderTracks::fillOthers(rt::TimeNs t_ns, TargetEstimate& estimate) const {
   estimate.other_count = 0;
   for (const Track& track : tracks_) {

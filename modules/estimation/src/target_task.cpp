@@ -16,7 +16,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.look_gate_sigmas = node.getDoubleOr("look_gate_sigmas", params.look_gate_sigmas, 0.0, 100.0);
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
-  params.refuse_ambiguous = node.getBoolOr("refuse_ambiguous", params.refuse_ambiguous);
+  params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
   if (node.has("depth_range")) params.depth_range = parseDepthRangeParams(node.child("depth_range"));
   if (node.has("swap_check")) params.swap_check = parseSwapCheckParams(node.child("swap_check"));
@@ -298,10 +298,10 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     best_bearing = i;
   }
   if (a.followed < 0) a.followed = best_bearing;
-  // Two people where the live track expects one (refuse_ambiguous): the frame is not the track's. The person taken
+  // Someone else too near the person taken (ambiguity_radius_m): the frame is not the track's. The person taken
   // stays out of the bystander tracks too: they may be the followed person.
-  if (params_.refuse_ambiguous && a.followed >= 0 && !prior.lost &&
-      ambiguous(a.followed, count, candidates, track_taken)) {
+  if (params_.ambiguity_radius_m > 0.0 && a.followed >= 0 && !prior.lost &&
+      ambiguous(frame, a.followed, count, candidates, track_taken)) {
     person_taken[static_cast<std::size_t>(a.followed)] = true;
     a.followed = -1;
     a.ambiguous = true;
@@ -317,24 +317,22 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   return a;
 }
 
-bool TargetTask::ambiguous(int followed, int count, const std::array<Candidate, hal::kMaxPersons>& candidates,
+bool TargetTask::ambiguous(const hal::DetectionFrame& frame, int followed, int count,
+                           const std::array<Candidate, hal::kMaxPersons>& candidates,
                            const std::array<bool, kMaxBystanderTracks>& track_taken) const {
-  // A gate is where the track's person can be; two people in it, or the one taken in a bystander's, and either could
-  // be the person. Neither colour nor cost decides it: the look-alike passes both, and two bodies this near overlap
-  // in the image, where the network reports one person made of both, or each in turn (issue 22 item 2: the crowd's
-  // switches left in image mode).
-  const double gate = params_.estimator.gate_chi2;
+  // A fixed reach, not the track's gate: the gate grows while the track coasts, and two people a step apart
+  // would then stay ambiguous until the track is lost.
+  const Eigen::Vector2d p_m = candidates[static_cast<std::size_t>(followed)].judged().p_WT_m.head<2>();
+  const auto near = [&](const Eigen::Vector3d& q_m) {
+    return (q_m.head<2>() - p_m).norm() < params_.ambiguity_radius_m;
+  };
   for (int i = 0; i < count; ++i) {
     const Candidate& c = candidates[static_cast<std::size_t>(i)];
-    if (i == followed || !c.measurement || c.measurement->bearingOnly()) continue;
-    const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
-    if (d2 && *d2 <= gate) return true;
+    if (i != followed && c.measurement && !c.measurement->bearingOnly() && near(c.judged().p_WT_m)) return true;
   }
-  const TargetMeasurement& m = candidates[static_cast<std::size_t>(followed)].judged();
   for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
     if (track_taken[j]) continue;
-    const std::optional<double> d2 = bystanders_.mahalanobisSq(j, m);
-    if (d2 && *d2 <= gate) return true;
+    if (const auto q_m = bystanders_.position(j, frame.stamp_ns); q_m && near(*q_m)) return true;
   }
   return false;
 }

@@ -30,6 +30,8 @@ class BystanderTracks {
   std::size_t capacity() const { return tracks_.size(); }
   /// Track `i` is live at t_ns (started and not lost).
   bool live(std::size_t i, rt::TimeNs t_ns) const;
+  /// Live track i's predicted position at t_ns; nothing if it is not live.
+  std::optional<Eigen::Vector3d> position(std::size_t i, rt::TimeNs t_ns) const;
   /// The squared Mahalanobis distance of m from live track i's prediction (TargetEstimator::mahalanobisSq).
   std::optional<double> mahalanobisSq(std::size_t i, const TargetMeasurement& m) const;
   /// Updates live track i with m (its own gate applies) and blends `look` into its colour at `rate`;

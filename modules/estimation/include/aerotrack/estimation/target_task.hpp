@@ -76,10 +76,12 @@ struct TargetTaskParams {
   /// lock-on's choice. false (`association: lock_on`): always the lock-on's choice. Why: the lock-on judges in
   /// the image, where a bystander beside the target matches as well; in the world they stand apart.
   bool choose_by_estimate = true;
-  /// With choose_by_estimate: while the followed track is live, a frame with a second person in its gate, or whose
-  /// person taken lies in the gate of a live bystander track no one else explains, gives the track nobody (it
-  /// coasts): two people that near overlap in the image and either may be the person.
-  bool refuse_ambiguous = false;
+  /// With choose_by_estimate: while the followed track is live, the person it would take is refused when someone
+  /// else -- another person of the frame with a distance, or a live bystander track that no one in the frame
+  /// explains -- stands within this horizontal distance of them; the track coasts. Two people this near overlap
+  /// in the image: the network reports one made of both, or each in turn, and neither colour (a look-alike) nor
+  /// the motion gate (both inside it) can tell which. 0: off.
+  double ambiguity_radius_m = 0.0;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default: measured in the image-mode
@@ -106,7 +108,7 @@ struct TargetTaskStats {
   std::uint64_t rejected = 0;         ///< Measurements the estimator refused.
   std::uint64_t reassigned = 0;       ///< Frames whose person the track's prediction chose over the lock-on's.
   std::uint64_t swapped_back = 0;     ///< Times the swap check gave the followed track back its kept hypothesis.
-  std::uint64_t ambiguous = 0;        ///< Frames the followed track was given nobody: two people in reach.
+  std::uint64_t ambiguous = 0;        ///< Frames the followed track was given nobody: someone within reach.
   std::uint64_t depth_ranged = 0;     ///< ... of the followed person's frames, ranged by the depth camera.
   std::uint64_t depth_disagreed = 0;  ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;     ///< ... for which no depth image near in time saw them (occluded, out of view).
@@ -161,13 +163,14 @@ class TargetTask final : public rt::Task {
     std::array<int, hal::kMaxPersons> track{};  ///< Each person's bystander track, kNoTrack or kNewTrack.
     bool look_refused = false;                  ///< Someone fit the followed track but for the look gate...
     double look_refused_d2 = std::numeric_limits<double>::infinity();  ///< ... the nearest such distance's d2.
-    bool ambiguous = false;  ///< The followed track was given nobody: two people in its reach (refuse_ambiguous).
+    bool ambiguous = false;  ///< The followed track was given nobody: someone stood too near (ambiguity_radius_m).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
   Association associate(const hal::DetectionFrame& frame, std::array<Candidate, hal::kMaxPersons>& candidates) const;
-  /// Whether the followed track's choice, person `followed` (a live track), is ambiguous (refuse_ambiguous).
-  bool ambiguous(int followed, int count, const std::array<Candidate, hal::kMaxPersons>& candidates,
+  /// Whether the followed track's choice, person `followed`, has someone else within ambiguity_radius_m.
+  bool ambiguous(const hal::DetectionFrame& frame, int followed, int count,
+                 const std::array<Candidate, hal::kMaxPersons>& candidates,
                  const std::array<bool, kMaxBystanderTracks>& track_taken) const;
   /// The swap check's evidence in this frame (SwapCheck); true while its kept hypothesis is open and the followed
   /// track holds someone it does not explain (the verdict then asks the detector for the whole frame). If confirmed,
