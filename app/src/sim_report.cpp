@@ -228,6 +228,8 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"longest_excursion_s", m.longestExcursionS()},
       // Null when the run reported no followed identities (recordFollowed never called).
       {"identity_switches", m.followedFrames() > 0 ? nlohmann::json(m.identitySwitches()) : nlohmann::json(nullptr)},
+      {"identity_switches_nearest",
+       m.followedFrames() > 0 ? nlohmann::json(m.identitySwitchesNearest()) : nlohmann::json(nullptr)},
       {"time_on_wrong_person_s",
        m.followedFrames() > 0 ? nlohmann::json(m.timeOnWrongPersonS()) : nlohmann::json(nullptr)},
       {"person_top_speed_mps", m.personTopSpeedMps()},

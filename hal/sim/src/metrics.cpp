@@ -62,10 +62,14 @@ void SimMetrics::record(const MetricsSample& sample) {
   }
 }
 
-void SimMetrics::recordFollowed(double t_s, int person_id) {
+void SimMetrics::recordFollowed(double t_s, int person_id, int nearest_id) {
   (void)t_s;  // the id holds until the next call; record() integrates it at the metrics samples
   ++followed_frames_;
   last_person_id_ = person_id;
+  if (nearest_id >= 0) {
+    if (last_nearest_id_ >= 0 && nearest_id != last_nearest_id_) ++identity_switches_nearest_;
+    last_nearest_id_ = nearest_id;
+  }
   if (person_id < 0) return;
   if (last_real_person_id_ >= 0 && person_id != last_real_person_id_) ++identity_switches_;
   last_real_person_id_ = person_id;

@@ -471,9 +471,11 @@ void Simulation::sampleOdometry() {
 
 namespace aerotrack::hal::sim {
 
-int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& detection) const {
+int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& detection, int keep_id) const {
   const Exposure& exposure = exposures_[sequence % exposures_.size()];
   if (exposure.sequence != sequence || sequence == 0) return -1;
+  // Within half a torso on average: farther, the detection is of nobody we simulate.
+  constexpr double kMatchMaxError = 0.5;
   // Every reported keypoint against the same keypoint of each person, projected at the exposure:
   // the torso centre alone confuses two people who overlap in the image, their limbs do not.
   const CameraIntrinsics& k = scenario_.spec.gimbal_camera.camera.intrinsics;
@@ -485,8 +487,8 @@ int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& de
     std::array<Eigen::Vector3d, kNumKeypoints> keypoints_C_m;
     for (std::size_t i = 0; i < kNumKeypoints; ++i) keypoints_C_m[i] = T_CW * p.keypoints_W_m[i];
     const std::optional<double> error = keypointMatchError(detection, keypoints_C_m, k);
-    // Within half a torso on average: farther, the detection is of nobody we simulate.
-    if (error && *error <= 0.5 && *error < best_error) {
+    if (error && *error <= kMatchMaxError && static_cast<int>(id) == keep_id) return keep_id;
+    if (error && *error <= kMatchMaxError && *error < best_error) {
       best_error = *error;
       best = static_cast<int>(id);
     }
@@ -500,8 +502,9 @@ void Simulation::recordFollowed(const DetectionFrame& frame) {
     metrics_.recordFollowed(t_s, -1);
     return;
   }
-  metrics_.recordFollowed(t_s,
-                          matchDetection(frame.sequence, frame.persons[static_cast<std::size_t>(frame.target_index)]));
+  const PersonDetection& followed = frame.persons[static_cast<std::size_t>(frame.target_index)];
+  metrics_.recordFollowed(t_s, matchDetection(frame.sequence, followed, metrics_.lastFollowedPersonId()),
+                          matchDetection(frame.sequence, followed));
 }
 
 }  // namespace aerotrack::hal::sim

@@ -330,6 +330,48 @@ TEST(Bystanders, EachReportedDetectionIsMatchedToItsOwnPersonAndFollowingABystan
   EXPECT_EQ(sim->metrics().identitySwitches(), 2);
 }
 
+TEST(Bystanders, GivenTwoOverlappingPeople_WhenADetectionFitsBoth_ThenTheOneMatchedBeforeIsKept) {
+  // A bystander stands 0.3 m behind the target, 0.1 m aside, both facing the hovering drone (6 m away): a
+  // detection of the target fits the bystander within half a torso too. The nearest match names the target;
+  // one kept from before (CLEAR MOT) names whoever was matched before while the detection still fits them.
+  auto sim = crowdSim(crowdYaml(R"(bystanders:
+  people:
+    - {path: [{p_m: [6.3, 0.1]}]}
+)",
+                                false, 6.0));
+  std::vector<DetectionFrame> frames;
+  hoverCrowd(*sim, 1.0, &frames);
+  ASSERT_FALSE(frames.empty());
+  const DetectionFrame& f = frames.back();
+  ASSERT_GE(f.target_index, 0);
+  const PersonDetection& target = f.persons[static_cast<std::size_t>(f.target_index)];
+  ASSERT_EQ(sim->matchDetection(f.sequence, target), 0);
+  EXPECT_EQ(sim->matchDetection(f.sequence, target, 1), 1) << "it fits the bystander behind too";
+  EXPECT_EQ(sim->matchDetection(f.sequence, target, 0), 0);
+  // Moved a torso aside, it fits neither: nobody, whoever was matched before.
+  PersonDetection aside = target;
+  const double torso_px = std::abs(aside.keypoints[11].v_px - aside.keypoints[5].v_px);
+  for (Keypoint2D& k : aside.keypoints) k.u_px += 1.5 * torso_px;
+  EXPECT_EQ(sim->matchDetection(f.sequence, aside, 1), -1);
+  // Recorded: following the bystander (nearest: them), then the same detection of both -- no switch by CLEAR
+  // MOT's rule, one by the nearest match.
+  DetectionFrame followed = f;
+  PersonDetection bystander = target;
+  const auto b = std::find_if(f.persons.begin(), f.persons.begin() + static_cast<std::ptrdiff_t>(f.person_count),
+                              [&](const PersonDetection& p) { return sim->matchDetection(f.sequence, p) == 1; });
+  if (b != f.persons.begin() + static_cast<std::ptrdiff_t>(f.person_count)) bystander = *b;
+  followed.persons[0] = bystander;
+  followed.persons[1] = target;
+  followed.person_count = 2;
+  followed.target_index = 0;
+  ASSERT_EQ(sim->matchDetection(f.sequence, followed.persons[0]), 1) << "the bystander is detected on their own";
+  sim->recordFollowed(followed);
+  followed.target_index = 1;
+  sim->recordFollowed(followed);
+  EXPECT_EQ(sim->metrics().identitySwitches(), 0);
+  EXPECT_EQ(sim->metrics().identitySwitchesNearest(), 1);
+}
+
 TEST(Bystanders, AtMostSixPersonsAreReportedTheLargestFirst) {
   std::string people = "bystanders:\n  people:\n";
   for (int i = 0; i < 8; ++i)  // a row across the view, farther and farther

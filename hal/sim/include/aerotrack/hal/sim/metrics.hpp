@@ -77,7 +77,11 @@ class SimMetrics {
   /// target, k >= 1 bystander k, kNoPerson (-1) no followed detection or one that matches nobody.
   /// Called once per detection frame, in time order, interleaved with record() by time; the id holds
   /// until the next call (time_on_wrong_person_s integrates it over the metrics samples).
-  void recordFollowed(double t_s, int person_id);
+  /// `nearest_id`: the person the detection fits best whoever was followed before; person_id may keep the person
+  /// followed before where the detection still fits them (CLEAR MOT's correspondences, Simulation::matchDetection).
+  /// Both count switches: identitySwitches person_id's, identitySwitchesNearest nearest_id's.
+  void recordFollowed(double t_s, int person_id, int nearest_id);
+  void recordFollowed(double t_s, int person_id) { recordFollowed(t_s, person_id, person_id); }
 
   /// The verdict at the end of the run; final distance is the last sample's.
   bool success() const;
@@ -96,6 +100,11 @@ class SimMetrics {
   /// Times the followed id changed from one person (>= 0) to a different person (>= 0); frames
   /// without a followed detection (-1) between them are ignored (0, -1, 0 is no switch; 0, -1, 2 is one).
   int identitySwitches() const { return identity_switches_; }
+  /// The same count over the nearest ids: a detection of two overlapping people that fits both switches to
+  /// whichever it fits a little better, frame by frame (the stricter count, before CLEAR MOT's rule).
+  int identitySwitchesNearest() const { return identity_switches_nearest_; }
+  /// The latest person id >= 0 recordFollowed() took (kNoPerson before any).
+  int lastFollowedPersonId() const { return last_real_person_id_; }
   /// Tracked time during which the latest recordFollowed() id was a bystander (>= 1), seconds.
   double timeOnWrongPersonS() const { return time_on_wrong_person_s_; }
   /// recordFollowed() calls so far (0: the run reported no identities; the metrics mean nothing).
@@ -137,6 +146,8 @@ class SimMetrics {
   int last_person_id_ = kNoPerson;       // the latest recordFollowed() id
   int last_real_person_id_ = kNoPerson;  // the latest id >= 0 (switches skip -1 gaps)
   int identity_switches_ = 0;
+  int last_nearest_id_ = kNoPerson;  // the latest nearest id >= 0
+  int identity_switches_nearest_ = 0;
   long long followed_frames_ = 0;
   double time_on_wrong_person_s_ = 0.0;
   double person_top_speed_mps_ = 0.0, walking_s_ = 0.0, walking_distance_m_ = 0.0;

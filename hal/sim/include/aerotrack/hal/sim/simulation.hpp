@@ -188,7 +188,10 @@ class Simulation {
   void recordFollowed(const DetectionFrame& frame);
   /// The true person a detection (image pixels of the exposure `sequence`) belongs to, as above;
   /// -1 if none or the exposure is forgotten.
-  int matchDetection(std::uint64_t sequence, const PersonDetection& detection) const;
+  /// `keep_id` (>= 0): the person matched before, kept while the detection still fits them within the threshold
+  /// even if another fits better -- CLEAR MOT's rule for keeping a correspondence (Bernardin and Stiefelhagen 2008,
+  /// Sect. 2.1.2): a detection of two overlapping people fits both, and the nearer by a few pixels is noise.
+  int matchDetection(std::uint64_t sequence, const PersonDetection& detection, int keep_id = -1) const;
 
   /// Whether the person's torso is in the gimbal camera's view and line of sight, and if not why
   /// (out of the image is reported first: then the obstacles do not matter). The line of sight is
