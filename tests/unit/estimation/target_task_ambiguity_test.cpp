@@ -1,15 +1,14 @@
-// Two people in the followed track's reach (refuse_ambiguous, issue 22 item 2). Against ground truth: the
-// followed person walks left 5 m ahead of a hovering drone; a look-alike in the same clothes walks right
-// 0.3 m behind them, so that they pass each other at 2 s. While they are more than a body apart both are
-// detected; nearer, the network reports one person, the person and the look-alike in turn (what singlepose
-// on a crop does with two overlapping bodies, crowd seeds 17 and 18 in image mode). Without the rule the
-// track takes the look-alike in those frames; with it, it takes nobody while either could be the person,
-// then the person again.
+// Someone else within reach of the followed person (ambiguity_radius_m, issue 22 item 2). Against ground
+// truth: the followed person walks left 5 m ahead of a hovering drone; a look-alike in the same clothes walks
+// right 0.3 m behind them, so that they pass each other at 2 s. While they are more than a body apart both
+// are detected; nearer, the network reports one person made of both (their keypoints between the two
+// bodies), whom the truth's matcher calls the person or the look-alike in turn -- crowd seeds 2, 17 and 18
+// in image mode. Without the reach the track takes such blends when they fit it better than the
+// look-alike's own track; with it, the track takes nobody while someone else is that near, then the person
+// again.
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <random>
 
 #include "aerotrack/estimation/target_task.hpp"
@@ -39,14 +38,15 @@ void drawPerson(hal::PersonDetection& person, double x_m, double y_m) {
 
 struct Scene {
   int look_alike_given = 0;    ///< frames whose followed person was the look-alike
+  int given_in_overlap = 0;    ///< frames of the overlap (one person reported) given to the track
+  int given_near = 0;          ///< frames given to the track while the two stood within 0.55 m (the reach less noise)
   int person_given_after = 0;  ///< frames from 2.6 s whose followed person was the person
   int nobody_given = 0;
   TargetEstimate estimate;
   TargetTaskStats stats;
 };
 
-/// `lone_look_alike`: in the overlap only the look-alike is reported (the crop's network held them), not
-/// the two in turn.
+/// `lone_look_alike`: in the overlap the network reports the look-alike alone (the crop held them), not a blend.
 Scene run(double ambiguity_radius_m, bool lone_look_alike = false) {
   TargetTaskParams params;
   params.localization = test::pinholeLocalization();
@@ -73,21 +73,22 @@ Scene run(double ambiguity_radius_m, bool lone_look_alike = false) {
       drawPerson(frame.persons[1], 5.3 + range_noise_m(rng), lookAlikeY(t_s));
     } else {
       frame.person_count = 1;
-      const bool look_alike = lone_look_alike || i % 2 == 1;
-      truth[0] = look_alike ? 1 : 0;
-      drawPerson(frame.persons[0], (look_alike ? 5.3 : 5.0) + range_noise_m(rng),
-                 look_alike ? lookAlikeY(t_s) : personY(t_s));
+      truth[0] = lone_look_alike || i % 2 == 1 ? 1 : 0;
+      const double blend = lone_look_alike ? 1.0 : 0.5;
+      drawPerson(frame.persons[0], 5.0 + 0.3 * blend + range_noise_m(rng),
+                 (1.0 - blend) * personY(t_s) + blend * lookAlikeY(t_s));
     }
     frame.target_index = 0;
     detections.try_push(frame);
     task.step(t_ns + 1);
     const auto f = followed.read();
     if (!f || f->sequence != frame.sequence) continue;
-    if (std::getenv("DBG")) { const auto e = out.read(); std::fprintf(stderr, "t=%.2f n=%zu followed=%d est=(%.2f %.2f) lost=%d init=%d amb=%lu\n", t_s, frame.person_count, f->target_index, e->p_WT_m.x(), e->p_WT_m.y(), e->lost, e->initialised, (unsigned long)task.stats().ambiguous); }
     if (f->target_index < 0) {
       ++scene.nobody_given;
       continue;
     }
+    if (overlap) ++scene.given_in_overlap;
+    if (std::hypot(personY(t_s) - lookAlikeY(t_s), 0.3) < 0.55) ++scene.given_near;
     const int who = truth[static_cast<std::size_t>(f->target_index)];
     if (who == 1) ++scene.look_alike_given;
     if (who == 0 && t_s >= 2.6) ++scene.person_given_after;
@@ -97,31 +98,33 @@ Scene run(double ambiguity_radius_m, bool lone_look_alike = false) {
   return scene;
 }
 
-TEST(TargetTaskAmbiguity, GivenALookAlikePassingThroughThePersonsPlace_WhenRefusingAmbiguity_ThenNeverTaken) {
+TEST(TargetTaskAmbiguity, GivenALookAlikePassingThroughThePersonsPlace_WhenInReach_ThenTheTrackTakesNobody) {
   const Scene refused = run(0.7);
   const Scene taken = run(0.0);
-  // Without the rule: the look-alike, alone in the frame and inside the gate, is given to the track.
-  EXPECT_GT(taken.look_alike_given, 3);
+  EXPECT_GT(taken.given_in_overlap, 0) << "without the reach, blends of the two are given to the track";
+  EXPECT_EQ(refused.given_in_overlap, 0);
   EXPECT_EQ(refused.look_alike_given, 0);
-  EXPECT_GT(refused.stats.ambiguous, 10U) << "the frames of the overlap, and both near each other before it";
-  // After the meeting the person is taken again, in every frame, and the track is where they are.
-  EXPECT_EQ(refused.person_given_after, static_cast<int>(std::round((3.5 - 2.6) * kRateHz)) + 1);
+  // Nobody given while the two stand within 0.55 m (the reach less the noise), and the refusals counted.
+  EXPECT_EQ(refused.given_near, 0);
+  EXPECT_GE(refused.stats.ambiguous, 6U);
+  // After, the person is taken again in every frame, and the track is where they are.
+  EXPECT_GE(refused.person_given_after, static_cast<int>((3.5 - 2.7) * kRateHz));
   ASSERT_TRUE(refused.estimate.initialised && !refused.estimate.lost);
   EXPECT_NEAR(refused.estimate.p_WT_m.y(), personY(3.5), 0.15);
   EXPECT_NEAR(refused.estimate.p_WT_m.x(), 5.0, 0.15);
 }
 
 TEST(TargetTaskAmbiguity, GivenOnlyTheLookAlikeInTheOverlap_WhenTheirOwnTrackIsLive_ThenTheTrackCoasts) {
-  // The look-alike's own track (they were seen beside the person before) is live and holds the lone
-  // detection in its gate, as the followed track does: nobody is given, the person's track coasts on their
-  // walk and takes them back after.
+  // The look-alike's own track (they were seen beside the person before) is live, and the lone detection lies
+  // within reach of its prediction: nobody is given, the person's track coasts on their walk for a second
+  // and takes them back after.
   const Scene refused = run(0.7, true);
   EXPECT_EQ(refused.look_alike_given, 0);
-  EXPECT_GT(refused.nobody_given, 10);
+  EXPECT_EQ(refused.given_in_overlap, 0);
+  EXPECT_GE(refused.person_given_after, static_cast<int>((3.5 - 2.7) * kRateHz));
   ASSERT_TRUE(refused.estimate.initialised && !refused.estimate.lost);
   EXPECT_NEAR(refused.estimate.p_WT_m.y(), personY(3.5), 0.15);
-  const Scene taken = run(0.0, true);
-  EXPECT_GT(taken.look_alike_given, 3);
+  EXPECT_NEAR(refused.estimate.p_WT_m.x(), 5.0, 0.15);
 }
 
 }  // namespace
