@@ -37,11 +37,17 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
 nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check) {
   if (task == nullptr) return nullptr;
   const estimation::TargetTaskStats& s = task->stats();
-  nlohmann::json out = {{"detections", s.detections},     {"unreliable", s.unreliable},
-                        {"bearings", s.bearings},         {"reassigned", s.reassigned},
-                        {"swapped_back", s.swapped_back}, {"ambiguous", s.ambiguous}, {"no_pose", s.no_pose},
-                        {"accepted", s.accepted},         {"rejected", s.rejected},
-                        {"depth_ranged", s.depth_ranged}, {"depth_disagreed", s.depth_disagreed},
+  nlohmann::json out = {{"detections", s.detections},
+                        {"unreliable", s.unreliable},
+                        {"bearings", s.bearings},
+                        {"reassigned", s.reassigned},
+                        {"swapped_back", s.swapped_back},
+                        {"ambiguous", s.ambiguous},
+                        {"no_pose", s.no_pose},
+                        {"accepted", s.accepted},
+                        {"rejected", s.rejected},
+                        {"depth_ranged", s.depth_ranged},
+                        {"depth_disagreed", s.depth_disagreed},
                         {"depth_unseen", s.depth_unseen}};
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
