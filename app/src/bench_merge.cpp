@@ -138,8 +138,13 @@ rt::Status benchCellReport(const TrialPlan& plan, const SuiteCell& cell,
       stats["followed_all_the_way"].get<int>(), formatInterval(stats["followed_ci95"]).c_str(),
       identity["trials_reported"].get<int>() > 0
           ? (std::to_string(identity["trials_without_switch"].get<int>()) + "/" +
-             std::to_string(identity["trials_reported"].get<int>()) + " trials without a switch, " +
-             std::to_string(identity["time_on_wrong_person_s_mean"].get<double>()) + " s on a wrong person on average")
+             std::to_string(identity["trials_reported"].get<int>()) + " trials without a switch" +
+             (identity["trials_without_switch_nearest"].is_number()
+                  ? " (" + std::to_string(identity["trials_without_switch_nearest"].get<int>()) +
+                        " by the nearest match)"
+                  : std::string()) +
+             ", " + std::to_string(identity["time_on_wrong_person_s_mean"].get<double>()) +
+             " s on a wrong person on average")
                 .c_str()
           : "not reported",
       stats["person_top_speed_mps_mean"].is_number() ? stats["person_top_speed_mps_mean"].get<double>() : 0.0,

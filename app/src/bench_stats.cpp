@@ -40,6 +40,7 @@ nlohmann::json statsMeanOrNull(double sum, int n) {
 nlohmann::json aggregateSummaries(const std::vector<nlohmann::json>& summaries) {
   const int n = static_cast<int>(summaries.size());
   int successes = 0, followed = 0, collisions = 0, identity_trials = 0, no_switch = 0, speed_trials = 0;
+  int nearest_trials = 0, no_switch_nearest = 0;  // by the nearest match alone (identity_switches_nearest)
   double visible_sum = 0.0, distance_sum = 0.0, switches_sum = 0.0, wrong_sum_s = 0.0;
   double top_speed_sum = 0.0, top_speed_max = 0.0, mean_speed_sum = 0.0;
   double min_clearance = std::numeric_limits<double>::infinity();
@@ -56,6 +57,10 @@ nlohmann::json aggregateSummaries(const std::vector<nlohmann::json>& summaries) 
       switches_sum += switches;
       no_switch += switches == 0.0 ? 1 : 0;
       wrong_sum_s += statsNumberOr(s, "time_on_wrong_person_s", 0.0);
+    }
+    if (s.contains("identity_switches_nearest") && s["identity_switches_nearest"].is_number()) {
+      ++nearest_trials;
+      no_switch_nearest += s["identity_switches_nearest"].get<double>() == 0.0 ? 1 : 0;
     }
     if (s.contains("person_top_speed_mps") && s["person_top_speed_mps"].is_number()) {
       ++speed_trials;
@@ -79,6 +84,8 @@ nlohmann::json aggregateSummaries(const std::vector<nlohmann::json>& summaries) 
       {"identity",
        {{"trials_reported", identity_trials},
         {"trials_without_switch", no_switch},
+        {"trials_without_switch_nearest",
+         nearest_trials > 0 ? nlohmann::json(no_switch_nearest) : nlohmann::json(nullptr)},
         {"switches_mean", statsMeanOrNull(switches_sum, identity_trials)},
         {"time_on_wrong_person_s_mean", statsMeanOrNull(wrong_sum_s, identity_trials)}}},
       {"person_top_speed_mps_mean", statsMeanOrNull(top_speed_sum, speed_trials)},

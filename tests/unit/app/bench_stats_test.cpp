@@ -52,6 +52,7 @@ TEST(AggregateSummaries, GivenTrialsThenCountsMeansAndIdentity) {
        {"distance_mean_m", 3.0},
        {"min_clearance_m", 0.5},
        {"identity_switches", 0},
+       {"identity_switches_nearest", 3},
        {"time_on_wrong_person_s", 0.0},
        {"person_top_speed_mps", 1.5},
        {"person_mean_speed_mps", 1.2}},
@@ -85,6 +86,8 @@ TEST(AggregateSummaries, GivenTrialsThenCountsMeansAndIdentity) {
   EXPECT_NEAR(a["min_clearance_m"].get<double>(), 0.3, 1e-12);
   EXPECT_EQ(a["identity"]["trials_reported"], 2);  // the third reported no identities
   EXPECT_EQ(a["identity"]["trials_without_switch"], 1);
+  // By the nearest match (CLEAR MOT's kept correspondences aside): reported by one trial, with switches.
+  EXPECT_EQ(a["identity"]["trials_without_switch_nearest"], 0);
   EXPECT_NEAR(a["identity"]["time_on_wrong_person_s_mean"].get<double>(), 1.5, 1e-12);
   EXPECT_NEAR(a["person_top_speed_mps_mean"].get<double>(), 1.6, 1e-12);
   EXPECT_NEAR(a["person_top_speed_mps_max"].get<double>(), 1.7, 1e-12);
@@ -96,6 +99,7 @@ TEST(AggregateSummaries, GivenNoTrialsThenNullMeansAndFullInterval) {
   EXPECT_EQ(a["completed"], 0);
   EXPECT_TRUE(a["visible_ratio_mean"].is_null());
   EXPECT_TRUE(a["identity"]["time_on_wrong_person_s_mean"].is_null());
+  EXPECT_TRUE(a["identity"]["trials_without_switch_nearest"].is_null());
   EXPECT_EQ(a["success_ci95"], nlohmann::json::array({0.0, 1.0}));
 }
 
