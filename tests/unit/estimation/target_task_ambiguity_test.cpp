@@ -30,10 +30,7 @@ double lookAlikeY(double t_s) {
 }
 
 void drawPerson(hal::PersonDetection& person, double x_m, double y_m) {
-  test::drawTorso(person, x_m, y_m, 0.3, false);
-  person.appearance.fill(0.0F);
-  person.appearance[kColour] = 1.0F;
-  person.has_appearance = true;
+  test::drawPersonInColour(person, x_m, y_m, kColour);
 }
 
 struct Scene {

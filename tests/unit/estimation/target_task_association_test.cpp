@@ -21,14 +21,9 @@ constexpr int kW = test::kWidthPx;
 constexpr int kH = test::kHeightPx;
 constexpr double kRateHz = test::kFrameRateHz;
 
-/// A whole upright torso of a person at (x forward, y left) of a level camera at the origin along W x, in
-/// one colour (a one-bin appearance signature); `cut`: the hips guessed on the bottom rows (no distance).
-void drawPerson(hal::PersonDetection& person, double x_m, double y_m, int colour_bin, bool cut = false) {
-  test::drawTorso(person, x_m, y_m, 0.3, cut);
-  person.appearance.fill(0.0F);
-  person.appearance[static_cast<std::size_t>(colour_bin)] = 1.0F;
-  person.has_appearance = true;
-}
+// A person at (x forward, y left) of a level camera at the origin along W x, in one colour; `cut`: the hips
+// guessed on the bottom rows (no distance).
+using test::drawPersonInColour;
 
 using test::emptyFrame;
 
@@ -75,17 +70,17 @@ Scene run(bool choose_by_estimate, Event event, double end_s = 4.0) {
     hal::DetectionFrame frame = emptyFrame(i, t_ns);
     if (swapped && hide_person) {
       frame.person_count = 1;
-      drawPerson(frame.persons[0], 5.0, kLookAlikeY, kPersonColour);  // only the look-alike, listed first
+      drawPersonInColour(frame.persons[0], 5.0, kLookAlikeY, kPersonColour);  // only the look-alike, listed first
       frame.target_index = 0;
     } else if (during && event == Event::kPasserBy) {
       frame.person_count = 2;
-      drawPerson(frame.persons[0], 5.0, personY(t_s), kPersonColour, true);
-      drawPerson(frame.persons[1], 4.7, personY(t_s), kOtherColour);
+      drawPersonInColour(frame.persons[0], 5.0, personY(t_s), kPersonColour, true);
+      drawPersonInColour(frame.persons[1], 4.7, personY(t_s), kOtherColour);
       frame.target_index = 0;
     } else {
       frame.person_count = 2;
-      drawPerson(frame.persons[0], 5.0, personY(t_s), kPersonColour);
-      drawPerson(frame.persons[1], 5.0, kLookAlikeY, kPersonColour);
+      drawPersonInColour(frame.persons[0], 5.0, personY(t_s), kPersonColour);
+      drawPersonInColour(frame.persons[1], 5.0, kLookAlikeY, kPersonColour);
       frame.target_index = swapped ? 1 : 0;
     }
     detections.try_push(frame);
@@ -184,15 +179,15 @@ LookScene runLook(LookEvent event, double look_gate_sigmas, double end_s = 2.5) 
     frame.target_index = i == 0 ? 0 : -1;  // designated in the first frame only
     hal::PersonDetection& p = frame.persons[0];
     if (!after) {
-      drawPerson(p, 5.0, personY(t_s), kPersonColour);
+      drawPersonInColour(p, 5.0, personY(t_s), kPersonColour);
       const float noise = 0.02F * static_cast<float>(i % 3);  // the person's own frames differ a little
       p.appearance[kPersonColour] = 1.0F - noise;
       p.appearance[kPersonColour + 1] = noise;
     } else {
       if (event == LookEvent::kNewcomer)
-        drawPerson(p, 5.0 - 1.2 * (t_s - 1.5), personY(t_s) + 0.3, kPersonColour);
+        drawPersonInColour(p, 5.0 - 1.2 * (t_s - 1.5), personY(t_s) + 0.3, kPersonColour);
       else
-        drawPerson(p, 5.0, personY(t_s), kPersonColour);
+        drawPersonInColour(p, 5.0, personY(t_s), kPersonColour);
       p.appearance[kPersonColour] = 0.7F;  // distance 0.41 to the person's colour: inside the colour gate (0.45)
       p.appearance[kPersonColour + 2] = 0.3F;
     }

@@ -46,6 +46,15 @@ inline void drawTorso(hal::PersonDetection& person, double x_m, double y_m, doub
   person.score = 0.6;
 }
 
+/// A whole upright torso (drawTorso, the neck 0.3 torso lengths above the centre row) in one colour: a one-bin
+/// appearance signature; `cut` as drawTorso's.
+inline void drawPersonInColour(hal::PersonDetection& person, double x_m, double y_m, int colour_bin, bool cut = false) {
+  drawTorso(person, x_m, y_m, 0.3, cut);
+  person.appearance.fill(0.0F);
+  person.appearance[static_cast<std::size_t>(colour_bin)] = 1.0F;
+  person.has_appearance = true;
+}
+
 /// Frame i of the camera, stamped t_ns, with nobody in it yet and nobody designated.
 inline hal::DetectionFrame emptyFrame(int i, rt::TimeNs t_ns) {
   hal::DetectionFrame frame;
