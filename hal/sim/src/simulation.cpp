@@ -472,28 +472,36 @@ void Simulation::sampleOdometry() {
 namespace aerotrack::hal::sim {
 
 int Simulation::matchDetection(std::uint64_t sequence, const PersonDetection& detection, int keep_id) const {
+  return match(sequence, detection, keep_id).kept;
+}
+
+Simulation::DetectionMatch Simulation::match(std::uint64_t sequence, const PersonDetection& detection,
+                                             int keep_id) const {
   const Exposure& exposure = exposures_[sequence % exposures_.size()];
-  if (exposure.sequence != sequence || sequence == 0) return -1;
+  if (exposure.sequence != sequence || sequence == 0) return {};
   // Within half a torso on average: farther, the detection is of nobody we simulate.
   constexpr double kMatchMaxError = 0.5;
   // Every reported keypoint against the same keypoint of each person, projected at the exposure:
   // the torso centre alone confuses two people who overlap in the image, their limbs do not.
   const CameraIntrinsics& k = scenario_.spec.gimbal_camera.camera.intrinsics;
   const Eigen::Isometry3d T_CW = exposure.T_WC.inverse();
-  int best = -1;
+  DetectionMatch m;
+  bool keep_fits = false;
   double best_error = std::numeric_limits<double>::infinity();
   for (std::size_t id = 0; id < personCount(); ++id) {
     const PersonState p = personStateAt(id, exposure.stamp_ns);
     std::array<Eigen::Vector3d, kNumKeypoints> keypoints_C_m;
     for (std::size_t i = 0; i < kNumKeypoints; ++i) keypoints_C_m[i] = T_CW * p.keypoints_W_m[i];
     const std::optional<double> error = keypointMatchError(detection, keypoints_C_m, k);
-    if (error && *error <= kMatchMaxError && static_cast<int>(id) == keep_id) return keep_id;
-    if (error && *error <= kMatchMaxError && *error < best_error) {
+    if (!error || !(*error <= kMatchMaxError)) continue;
+    keep_fits = keep_fits || static_cast<int>(id) == keep_id;
+    if (*error < best_error) {
       best_error = *error;
-      best = static_cast<int>(id);
+      m.nearest = static_cast<int>(id);
     }
   }
-  return best;
+  m.kept = keep_fits ? keep_id : m.nearest;
+  return m;
 }
 
 void Simulation::recordFollowed(const DetectionFrame& frame) {
@@ -502,9 +510,9 @@ void Simulation::recordFollowed(const DetectionFrame& frame) {
     metrics_.recordFollowed(t_s, -1);
     return;
   }
-  const PersonDetection& followed = frame.persons[static_cast<std::size_t>(frame.target_index)];
-  metrics_.recordFollowed(t_s, matchDetection(frame.sequence, followed, metrics_.lastFollowedPersonId()),
-                          matchDetection(frame.sequence, followed));
+  const DetectionMatch m = match(frame.sequence, frame.persons[static_cast<std::size_t>(frame.target_index)],
+                                 metrics_.lastFollowedPersonId());
+  metrics_.recordFollowed(t_s, m.kept, m.nearest);
 }
 
 }  // namespace aerotrack::hal::sim

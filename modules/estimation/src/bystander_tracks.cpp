@@ -17,9 +17,7 @@ rt::Expected<BystanderTracks> BystanderTracks::create(const TargetEstimatorParam
 }
 
 bool BystanderTracks::live(std::size_t i, rt::TimeNs t_ns) const {
-  if (!tracks_[i].used) return false;
-  const TargetEstimate e = tracks_[i].filter.estimate(t_ns);
-  return e.initialised && !e.lost;
+  return position(i, t_ns).has_value();
 }
 
 std::optional<double> BystanderTracks::mahalanobisSq(std::size_t i, const TargetMeasurement& m) const {

@@ -208,6 +208,12 @@ class Simulation {
   Eigen::Vector3d windW() const { return wind_ ? wind_->velocityW() : Eigen::Vector3d::Zero(); }
 
  private:
+  struct DetectionMatch {
+    int nearest = -1;  ///< The person the detection fits best, or -1.
+    int kept = -1;     ///< keep_id if the detection fits them, else nearest.
+  };
+  /// matchDetection's both answers from one pass over the people.
+  DetectionMatch match(std::uint64_t sequence, const PersonDetection& detection, int keep_id) const;
   Simulation(const ScenarioInstance& scenario, const SimulationOptions& options, ObstacleWorld obstacles,
              WalkingPerson person, Quadrotor quad, GeometricController controller, TimeNs start_ns);
   void physicsStep(double dt_s);
