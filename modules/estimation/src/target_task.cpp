@@ -437,8 +437,12 @@ bool TargetTask::process(const Candidate& c) {
     // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
     // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).
     if (c.look.valid && reference_.valid) {
-      // The spread of the person's own colour distance, over their recent frames (robust: look_spread.hpp).
-      own_looks_.push(perception::appearanceDistance(reference_, c.look));
+      // The spread of the person's own colour distance, learnt at the colour's rate (the first samples averaged).
+      const double d = perception::appearanceDistance(reference_, c.look);
+      ++own_look_count_;
+      const double rate = std::max(params_.tracker.appearance_rate, 1.0 / own_look_count_);
+      own_look_mean_ += rate * (d - own_look_mean_);
+      own_look_mean_sq_ += rate * (d * d - own_look_mean_sq_);
     }
     if (c.look.valid) perception::blendAppearance(reference_, c.look, params_.tracker.appearance_rate);
     return true;
@@ -449,21 +453,17 @@ bool TargetTask::process(const Candidate& c) {
 
 bool TargetTask::looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const {
   // Too few of the person's own distances to know their spread, or no colour to judge: the colour gate alone.
-  constexpr std::size_t kMinSamples = 10;
-  if (params_.look_gate_sigmas <= 0.0 || own_looks_.count() < kMinSamples || !look.valid || !reference_.valid)
-    return true;
-  if (lookChangeConfirmed(stamp_ns)) return true;
-  return perception::appearanceDistance(reference_, look) <= own_looks_.threshold(params_.look_gate_sigmas);
-}
-
-bool TargetTask::lookChangeConfirmed(rt::TimeNs stamp_ns) const {
-  if (look_refused_since_ns_ < 0 || look_refused_d2_count_ == 0 ||
-      rt::nsToSeconds(stamp_ns - look_refused_since_ns_) < params_.look_gate_confirm_s)
-    return false;
-  // Confirmed over frames if the refused sat on the prediction: the mean of n chi-square (3 dof) values is 3
-  // with a standard deviation of sqrt(6 / n).
-  const double n = look_refused_d2_count_;
-  return look_refused_d2_sum_ / n <= 3.0 + 3.0 * std::sqrt(6.0 / n);
+  constexpr int kMinSamples = 10;
+  if (params_.look_gate_sigmas <= 0.0 || own_look_count_ < kMinSamples || !look.valid || !reference_.valid) return true;
+  if (look_refused_since_ns_ >= 0 &&
+      rt::nsToSeconds(stamp_ns - look_refused_since_ns_) >= params_.look_gate_confirm_s && look_refused_d2_count_ > 0) {
+    // Confirmed over frames if the refused sat on the prediction: the mean of n chi-square (3 dof) values is 3
+    // with a standard deviation of sqrt(6 / n).
+    const double n = look_refused_d2_count_;
+    if (look_refused_d2_sum_ / n <= 3.0 + 3.0 * std::sqrt(6.0 / n)) return true;
+  }
+  const double std_dev = std::sqrt(std::max(0.0, own_look_mean_sq_ - own_look_mean_ * own_look_mean_));
+  return perception::appearanceDistance(reference_, look) <= own_look_mean_ + params_.look_gate_sigmas * std_dev;
 }
 
 std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::DetectionFrame& frame,
@@ -535,9 +535,6 @@ void TargetTask::step(rt::TimeNs now_ns) {
     Association a = associate(frame, candidates);
     const bool whole_frame_wanted = checkSwap(frame, candidates, a);
     const int person = a.followed;
-    // The person taken on a confirmed change of their look: their old spread no longer describes them; it is
-    // learnt again from this frame on (the colour gate alone until it has enough frames).
-    if (person >= 0 && lookChangeConfirmed(frame.stamp_ns)) own_looks_.clear();
     if (a.ambiguous) ++stats_.ambiguous;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;

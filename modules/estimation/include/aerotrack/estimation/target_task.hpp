@@ -26,7 +26,6 @@
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/depth_range.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
-#include "aerotrack/estimation/look_spread.hpp"
 #include "aerotrack/estimation/swap_check.hpp"
 #include "aerotrack/estimation/target_estimator.hpp"
 #include "aerotrack/hal/odometry_history.hpp"
@@ -54,12 +53,12 @@ struct TargetTaskParams {
   /// at the estimate's distance (issue 22, item 4; docs/modules/localization-estimation.md), or skipped.
   bool bearing_fallback = true;
   /// While the followed track is live, a person is given to it only if they look like the followed person as
-  /// closely as the person's own frames have: their colour distance to the learnt colour within the median of the
-  /// person's recent own distances plus this many robust standard deviations (1.4826 MAD; look_spread.hpp, which
-  /// says why not the mean and standard deviation) -- one-sided: looking more alike is never refused. A look-alike
-  /// beside a hidden person passes the colour gate (tracker.max_appearance_distance) and, in reach of the prediction,
-  /// the motion gate; in the crowd in keypoint mode every identity switch left was one (0.11-0.23 against the person's
-  /// own 0.05 +- 0.015). After a loss (re-identification) only the colour gate applies. 0: off.
+  /// closely as the person's own frames have: their colour distance to the learnt colour within the running mean
+  /// of the person's own distances plus this many standard deviations (one-sided: looking more alike is never
+  /// refused). A look-alike beside a hidden person passes the colour gate (tracker.max_appearance_distance) and,
+  /// in reach of the prediction, the motion gate; in the crowd in keypoint mode every identity switch left was one
+  /// (0.11-0.23 against the person's own 0.05 +- 0.015). After a loss (re-identification) only the colour gate
+  /// applies. 0: off.
   double look_gate_sigmas = 3.0;
   /// ... unless the look gate alone has refused someone the followed track would have taken in every frame for
   /// this long, with distances that sat on the prediction as the person's own do (the mean Mahalanobis
@@ -214,12 +213,11 @@ class TargetTask final : public rt::Task {
   TargetTaskStats stats_;
   rt::LatestSlot<hal::DetectionFrame>* followed_out_ = nullptr;
   perception::Appearance reference_;
-  /// The followed person's own colour distances to reference_ (taken distances), their robust spread.
-  LookSpread own_looks_;
+  /// The followed person's own colour distances to reference_ (taken distances): running mean and mean square.
+  double own_look_mean_ = 0.0, own_look_mean_sq_ = 0.0;
+  int own_look_count_ = 0;
   /// Whether a colour is as near the learnt one as the followed person's own frames are (look_gate_sigmas).
   bool looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const;
-  /// Whether the look gate's refusals so far confirm that the person's look has changed (look_gate_confirm_s).
-  bool lookChangeConfirmed(rt::TimeNs stamp_ns) const;
   rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
   double look_refused_d2_sum_ = 0.0;       ///< Over the run's frames with a refused distance...
   int look_refused_d2_count_ = 0;          ///< ... and their number.
