@@ -8,6 +8,7 @@
 #include <algorithm>
 
 #include "aerotrack/estimation/target_estimator.hpp"
+#include "aerotrack/hal/depth_view.hpp"
 #include "aerotrack/hal/devices.hpp"
 #include "aerotrack/hal/sim/baseline_follower.hpp"
 #include "aerotrack/hal/sim/simulation.hpp"
@@ -82,22 +83,29 @@ class GimbalCameraTask final : public rt::Task {
   perception::KeypointLockOn lock_on_;
 };
 
-/// Publishes each new depth frame on the depth channel -- unless it is blank (fewer than 0.5 % of
-/// its pixels, sampled on a grid of every 8th row and column, hold a range) after the camera has
-/// once shown data. A camera that goes on delivering frames of zeros is as blind as one delivering
-/// none, and the supervisor's depth failsafe must see it so (issue 23's fault matrix: with them
-/// published, the drone flew on a map no longer updated). Before the first frame with data they are
-/// published: on the ground in an open field everything is nearer than the minimum range or beyond
-/// the maximum, and take-off must not wait for data it cannot have. In the air the ground is in range.
+/// Publishes each new depth frame on the depth channel -- unless it is blank (hal::isBlankDepth: fewer than 0.5 %
+/// of its pixels hold a range) after the camera has once shown data, while its view holds ground it would range. A
+/// camera that goes on delivering frames of zeros is as blind as one delivering none, and the supervisor's depth
+/// failsafe must see it so (issue 23's fault matrix: with them published, the drone flew on a map no longer
+/// updated). Before the first frame with data they are published: on the ground in an open field everything is
+/// nearer than the minimum range or beyond the maximum, and take-off must not wait for data it cannot have. A
+/// view of the sky -- the nose pitched up braking, at the newest odometry's attitude and height
+/// (hal::viewHoldsGroundWithin) -- returns zeros from a working camera too, and those are published
+/// (hal/depth_view.hpp: the supervisor held a drone braking at the world's edge).
 class DepthCameraTask final : public rt::Task {
  public:
-  DepthCameraTask(hal::DepthCamera& device, rt::SharedSlot<hal::DepthFrame>& out) : device_(device), out_(out) {}
+  /// A working depth camera ranges the ground nearer than this: the mapper's own reach (mapping.max_range_m),
+  /// about where a D435 still ranges a floor at a grazing angle.
+  static constexpr double kGroundReachM = 6.0;
+  DepthCameraTask(hal::DepthCamera& device, rt::SharedSlot<hal::DepthFrame>& out,
+                  const rt::LatestSlot<hal::OdometrySample>& odometry)
+      : device_(device), out_(out), odometry_(odometry) {}
   void step(rt::TimeNs now_ns) override {
     auto frame = device_.grab(now_ns);
     if (!frame) return;
-    if (isBlank(*frame)) {
+    if (hal::isBlankDepth(*frame)) {
       ++blank_frames_;
-      if (seen_data_) return;
+      if (seen_data_ && viewHoldsGround(*frame)) return;
     } else {
       seen_data_ = true;
     }
@@ -105,21 +113,21 @@ class DepthCameraTask final : public rt::Task {
   }
   std::uint64_t blankFrames() const { return blank_frames_; }
 
-  static bool isBlank(const hal::DepthFrame& frame) {
-    constexpr int kStride = 8;
-    std::size_t sampled = 0;
-    std::size_t valid = 0;
-    for (int v = 0; v < frame.depth_m.rows; v += kStride) {
-      const float* row = frame.depth_m.ptr<float>(v);
-      for (int u = 0; u < frame.depth_m.cols; u += kStride, ++sampled)
-        if (row[u] > 0.0F && std::isfinite(row[u])) ++valid;
-    }
-    return valid * 200 < sampled || sampled == 0;  // under 0.5 %
+ private:
+  /// Whether the view at the newest odometry holds ground in reach; unknown attitude (no odometry yet): as if it
+  /// did -- a silent camera is not given the benefit of the doubt.
+  bool viewHoldsGround(const hal::DepthFrame& frame) const {
+    const auto pose = odometry_.read();
+    if (!pose) return true;
+    Eigen::Isometry3d T_WB = Eigen::Isometry3d::Identity();
+    T_WB.linear() = pose->q_WB.toRotationMatrix();
+    T_WB.translation() = pose->p_WB_m;
+    return hal::viewHoldsGroundWithin(T_WB * frame.T_BC, frame.intrinsics, kGroundReachM);
   }
 
- private:
   hal::DepthCamera& device_;
   rt::SharedSlot<hal::DepthFrame>& out_;
+  const rt::LatestSlot<hal::OdometrySample>& odometry_;
   std::uint64_t blank_frames_ = 0;
   bool seen_data_ = false;
 };

@@ -147,7 +147,8 @@ std::span<const System::TaskKind> System::taskKinds() {
        }},
       {"depth_camera", false,
        [](System& s, const std::string& /*where*/) {
-         return made(std::make_unique<DepthCameraTask>(*s.devices_.depth_camera, s.channels_.depth));
+         return made(
+             std::make_unique<DepthCameraTask>(*s.devices_.depth_camera, s.channels_.depth, s.channels_.odometry));
        }},
       {"gimbal", false,
        [](System& s, const std::string& /*where*/) {
