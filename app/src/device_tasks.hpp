@@ -94,8 +94,8 @@ class GimbalCameraTask final : public rt::Task {
 /// (hal/depth_view.hpp: the supervisor held a drone braking at the world's edge).
 class DepthCameraTask final : public rt::Task {
  public:
-  /// A working depth camera ranges the ground nearer than this: the mapper's own reach (mapping.max_range_m),
-  /// about where a D435 still ranges a floor at a grazing angle.
+  /// A working depth camera ranges the ground nearer than this: the reach the mapper is configured to trust
+  /// (mapping.max_range_m, 6 m in config/sim.yaml and config/drone.yaml; the D435 driver itself reads to 8 m).
   static constexpr double kGroundReachM = 6.0;
   DepthCameraTask(hal::DepthCamera& device, rt::SharedSlot<hal::DepthFrame>& out,
                   const rt::LatestSlot<hal::OdometrySample>& odometry)
