@@ -2,6 +2,8 @@
 // Each checks the invariant a reader relies on: SPSC order with no item duplicated or invented,
 // drop counts that add up, latest-value reads that are never torn and never go back in time.
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <array>
 #include <atomic>
@@ -133,6 +135,69 @@ TEST(LatestSlotStress, ReadersNeverSeeTornOrOlderValues) {
   EXPECT_EQ(torn.load(), 0);
   EXPECT_EQ(backwards.load(), 0);
   EXPECT_EQ(slot.read()->words[0], kItems);
+}
+
+/// Puts the calling thread on one CPU at a SCHED_FIFO priority; false where that is not permitted.
+bool runFifoOn(int cpu, int priority) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  if (pthread_setaffinity_np(pthread_self(), sizeof(set), &set) != 0) return false;
+  sched_param param{};
+  param.sched_priority = priority;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+}
+
+TEST(LatestSlotStress, AHigherPriorityReaderOnTheWritersCpuNeverWaitsForIt) {
+  // The real-time executor's situation: a reader at a higher SCHED_FIFO priority wakes on the CPU
+  // where the writer is copying a write in, so the writer cannot run until the reader sleeps again.
+  // A reader that waited for the write to finish would spin forever (a single-buffer seqlock did,
+  // and froze a realtime sim in CI). Here the writer writes without pause, so most wake-ups land
+  // mid-write. Where SCHED_FIFO is refused (not root, no CAP_SYS_NICE) there is nothing to test.
+  cpu_set_t allowed;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(allowed), &allowed), 0);
+  int cpu = 0;
+  while (cpu < CPU_SETSIZE && !CPU_ISSET(cpu, &allowed)) ++cpu;
+  LatestSlot<Wide> slot;
+  std::atomic<bool> done{false};
+  std::atomic<int> refused{0};
+  std::atomic<int> reads{0};
+  std::atomic<int> torn{0};
+  std::thread writer([&] {
+    if (!runFifoOn(cpu, 10)) refused.fetch_add(1);
+    Wide w{};
+    for (std::uint64_t i = 1; !done.load(std::memory_order_relaxed); ++i) {
+      w.words.fill(i);
+      slot.write(w);
+    }
+  });
+  constexpr int kReads = 500;
+  std::thread reader([&] {
+    if (!runFifoOn(cpu, 20)) refused.fetch_add(1);
+    for (int k = 0; k < kReads; ++k) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      const auto w = slot.read();
+      if (w && w->words.front() != w->words.back()) torn.fetch_add(1);
+      reads.fetch_add(1);
+    }
+  });
+  // This thread is on the other CPUs at normal priority: it watches, and if the reader is stuck it
+  // stops the writer and takes the reader's priority away, so that the writer can finish its write
+  // and leave, and the test end.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (reads.load() < kReads && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const int finished = reads.load();
+  done.store(true);
+  if (finished < kReads) {
+    const sched_param normal{};
+    pthread_setschedparam(reader.native_handle(), SCHED_OTHER, &normal);
+  }
+  writer.join();
+  reader.join();
+  if (refused.load() > 0) GTEST_SKIP() << "SCHED_FIFO or CPU affinity not permitted here";
+  EXPECT_EQ(finished, kReads) << "the reader waited for a writer it had preempted";
+  EXPECT_EQ(torn.load(), 0);
 }
 
 TEST(SharedSlotStress, ReadersAlwaysGetACompleteObject) {
