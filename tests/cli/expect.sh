@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs a command and checks its exit status and that its output (stdout+stderr) matches a regex.
-# usage: expect.sh EXPECTED_STATUS REGEX COMMAND [ARGS...]   (EXPECT_TIMEOUT_S: limit, default 60 s)
+# usage: expect.sh EXPECTED_STATUS REGEX COMMAND [ARGS...]   (EXPECT_TIMEOUT_S: limit, default 180 s)
 set -u
 expected=$1 pattern=$2
 shift 2
@@ -9,7 +9,7 @@ shift 2
 # killed with the group, and neither holds this script up nor runs on, slowing every later test.
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-setsid timeout -k 10 "${EXPECT_TIMEOUT_S:-60}" "$@" > "$out" 2>&1 < /dev/null &
+setsid timeout -k 10 "${EXPECT_TIMEOUT_S:-180}" "$@" > "$out" 2>&1 < /dev/null &
 group=$!
 wait "$group"
 status=$?
