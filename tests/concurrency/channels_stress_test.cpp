@@ -151,9 +151,10 @@ bool runFifoOn(int cpu, int priority) {
 TEST(LatestSlotStress, AHigherPriorityReaderOnTheWritersCpuNeverWaitsForIt) {
   // The real-time executor's situation: a reader at a higher SCHED_FIFO priority wakes on the CPU
   // where the writer is copying a write in, so the writer cannot run until the reader sleeps again.
-  // A reader that waited for the write to finish would spin forever (a single-buffer seqlock did,
-  // and froze a realtime sim in CI). Here the writer writes without pause, so most wake-ups land
-  // mid-write. Where SCHED_FIFO is refused (not root, no CAP_SYS_NICE) there is nothing to test.
+  // A reader that waited for the write to finish would spin forever (the single-buffer seqlock did:
+  // 0 of 500 reads in 10 s; the likely cause of a realtime sim that froze in CI). The writer writes
+  // without pause, so wake-ups land mid-write. Where SCHED_FIFO is refused (not root, no CAP_SYS_NICE)
+  // there is nothing to test.
   cpu_set_t allowed;
   ASSERT_EQ(sched_getaffinity(0, sizeof(allowed), &allowed), 0);
   int cpu = 0;

@@ -10,8 +10,8 @@
 // when the writer has finished a whole write during the read: it never waits for a write in
 // progress. That is what SCHED_FIFO needs. A single seqlock (one buffer, readers spinning while the
 // sequence is odd) livelocks when a higher-priority reader preempts the writer mid-copy on its CPU:
-// the reader spins and the writer never runs again; that froze a realtime sim in CI
-// (docs/testing.md, "A reader that waited for a preempted writer"). No allocation after construction.
+// the reader spins and the writer never runs again: the likely cause of a realtime sim that froze in
+// CI (docs/testing.md, "A reader that waited for a preempted writer"). No allocation after construction.
 #pragma once
 
 #include <array>
