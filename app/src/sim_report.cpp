@@ -180,6 +180,7 @@ nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
   return {{"frames_detected", task->framesDetected()},
           {"network_runs", runs},
           {"reseated_by_estimator", counts.reseated},
+          {"crops_at_prediction", counts.to_prediction},
           {"frames_with_target", task->framesWithTarget()},
           {"target_ratio", task->framesDetected() > 0 ? static_cast<double>(task->framesWithTarget()) /
                                                             static_cast<double>(task->framesDetected())

@@ -281,5 +281,46 @@ TEST(DetectorOnPhotos, GivenTheEstimatorsVerdict_WhenItTookAnotherPedestrian_The
   EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kWanted)], 1U);
 }
 
+TEST(DetectorOnPhotos, GivenAVerdictThatTookNobody_WhenItPredictsThePerson_ThenTheNextCropLooksThereNotWholeFrame) {
+  Detector detector = makeDetector("multipose", /*whole_frame_when_crowded=*/true);
+  cv::VideoCapture video(kData + "vtest.avi");
+  ASSERT_TRUE(video.isOpened());
+  cv::Mat frame;
+  ASSERT_TRUE(video.read(frame));
+  const auto first = detector.track(frame, 0);
+  ASSERT_TRUE(first.has_value() && first->target.has_value());
+  ASSERT_GE(first->count, 2U);
+  // The estimator took nobody; its track predicts the person where another pedestrian of the frame stands (the
+  // reliable torso farthest across the image from the lock-on's choice).
+  const auto torsoU = [&](std::size_t i) { return first->persons[i].torso.u_px; };
+  std::size_t other = *first->target;
+  for (std::size_t i = 0; i < first->count; ++i)
+    if (first->persons[i].torso.reliable &&
+        std::abs(torsoU(i) - torsoU(*first->target)) > std::abs(torsoU(other) - torsoU(*first->target)))
+      other = i;
+  ASSERT_NE(other, *first->target);
+  hal::DetectionFrame verdict = verdictOn(*first, 0, -1);
+  const TorsoFeatures& there = first->persons[other].torso;
+  verdict.predicted_torso = {there.u_px + 4.0, there.v_px - 3.0, 1.1 * there.torso_px};  // a prediction, not exact
+  detector.judged(verdict);
+  EXPECT_EQ(detector.counts().to_prediction, 1U);
+  EXPECT_EQ(detector.counts().reseated, 0U);
+  // The next frame: the crop around the prediction, and the pedestrian there, not a whole frame.
+  ASSERT_TRUE(video.read(frame));
+  const auto second = detector.track(frame, rt::secondsToNs(0.1));
+  ASSERT_TRUE(second.has_value() && second->target.has_value());
+  EXPECT_TRUE(second->cropped);
+  EXPECT_EQ(second->count, 1U);
+  EXPECT_NEAR(second->persons[*second->target].torso.u_px, there.u_px, 15.0);
+  EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kRefused)], 0U);
+  // Without a prediction (the track lost, or the person out of view) a verdict of nobody still means the whole frame.
+  detector.judged(verdictOn(*second, rt::secondsToNs(0.1), -1));
+  ASSERT_TRUE(video.read(frame));
+  const auto third = detector.track(frame, rt::secondsToNs(0.2));
+  ASSERT_TRUE(third.has_value());
+  EXPECT_FALSE(third->cropped);
+  EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kRefused)], 1U);
+}
+
 }  // namespace
 }  // namespace aerotrack::perception

@@ -65,6 +65,14 @@ Eigen::Matrix3d levelHomography(const Eigen::Isometry3d& T_WC, const hal::Camera
   return K * (R_W_level_optical.transpose() * R_W_optical) * K.inverse();
 }
 
+std::optional<PixelAndDepth> worldToPixel(const Eigen::Vector3d& p_W_m, const Eigen::Isometry3d& T_WC,
+                                          const hal::CameraIntrinsics& intrinsics) {
+  const Eigen::Vector3d p_optical = opticalAxesInCamera().transpose() * (T_WC.inverse() * p_W_m);
+  if (!p_optical.allFinite() || !(p_optical.z() > 0.01)) return std::nullopt;
+  return PixelAndDepth{intrinsics.fx_px * p_optical.x() / p_optical.z() + intrinsics.cx_px,
+                       intrinsics.fy_px * p_optical.y() / p_optical.z() + intrinsics.cy_px, p_optical.z()};
+}
+
 rt::Expected<Eigen::Isometry3d> cameraPoseAt(rt::TimeNs stamp_ns, const hal::OdometryHistory& poses,
                                              const GimbalAngleHistory& gimbal,
                                              const GimbalCameraExtrinsics& extrinsics) {

@@ -17,6 +17,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
+  params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
+  params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
   if (node.has("depth_range")) params.depth_range = parseDepthRangeParams(node.child("depth_range"));
   if (node.has("swap_check")) params.swap_check = parseSwapCheckParams(node.child("swap_check"));
@@ -500,6 +502,22 @@ std::optional<TargetMeasurement> TargetTask::bearingMeasurement(const hal::Detec
   return m;
 }
 
+hal::DetectionFrame::PredictedTorso TargetTask::predictedTorso(const hal::DetectionFrame& frame) const {
+  // Taking nobody, the track coasts where the person should be; the lock-on's crop may sit on whom the track
+  // refused (a look-alike beside the person, crowd seed 24: the crop stayed on them while the person stood
+  // unseen at the prediction). Saying where the prediction falls lets the detector look there.
+  const TargetEstimate e = estimator_.estimate(frame.stamp_ns);
+  if (!e.initialised || e.lost) return {};
+  const auto T_WC = cameraPoseAt(frame.stamp_ns, poses_, gimbal_history_, params_.extrinsics);
+  if (!T_WC) return {};
+  const Eigen::Vector3d torso_W(e.p_WT_m.x(), e.p_WT_m.y(), params_.verdict_torso_height_m);
+  const std::optional<PixelAndDepth> seen = worldToPixel(torso_W, *T_WC, frame.intrinsics);
+  if (!seen || seen->u_px < 0.0 || seen->u_px >= frame.intrinsics.width_px || seen->v_px < 0.0 ||
+      seen->v_px >= frame.intrinsics.height_px)
+    return {};  // out of the image: the detector searches the whole frame
+  return {seen->u_px, seen->v_px, frame.intrinsics.fy_px * params_.verdict_torso_m / seen->depth_m};
+}
+
 void TargetTask::step(rt::TimeNs now_ns) {
   while (const auto sample = odometry_.try_pop())
     if (poses_.push(*sample) == rt::HistoryPush::kAccepted) newest_pose_ns_ = sample->stamp_ns;
@@ -580,6 +598,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
       hal::DetectionFrame followed = frame;
       followed.target_index = person;
       followed.whole_frame_wanted = whole_frame_wanted;
+      if (person < 0) followed.predicted_torso = predictedTorso(frame);
       followed_out_->write(followed);
     }
   }

@@ -208,6 +208,12 @@ void Detector::judged(const hal::DetectionFrame& verdict) {
   wanted_ = verdict.whole_frame_wanted;
   const int count = static_cast<int>(std::min(verdict.person_count, hal::kMaxPersons));
   const int taken = verdict.target_index >= 0 && verdict.target_index < count ? verdict.target_index : -1;
+  if (taken < 0 && verdict.predicted_torso.torso_px > 0.0) {
+    // The estimator took nobody and its live track says where the person should be: the next crop looks there.
+    // The lock-on's crop may sit on whom the estimator refused, a look-alike beside the person (crowd seed 24).
+    lookAt(verdict.stamp_ns, verdict.predicted_torso);
+    return;
+  }
   if (taken == mine->person) {
     refused_ = false;
     return;
@@ -227,6 +233,30 @@ void Detector::judged(const hal::DetectionFrame& verdict) {
   if (cropAroundPerson(keypoints, width_px_, height_px_, /*input_size_px=*/1, params_.crop, crop))
     others_near_ = someoneNearRegion(std::span(verdict.persons.data(), static_cast<std::size_t>(count)),
                                      static_cast<std::size_t>(taken), crop, params_.whole_frame.near_crop_sides);
+}
+
+void Detector::lookAt(rt::TimeNs stamp_ns, const hal::DetectionFrame::PredictedTorso& torso) {
+  // A torso of the predicted centre and length, upright, its shoulders 0.7 torso lengths apart (a crop's size
+  // only): the crop is cut around it as around a detected person's joints, and the lock-on goes on from it.
+  std::array<hal::Keypoint2D, hal::kNumKeypoints> keypoints{};  // scores 0: nothing but the torso is known
+  const double half_width_px = 0.35 * torso.torso_px;
+  const double half_length_px = 0.5 * torso.torso_px;
+  const auto place = [&](hal::CocoKeypoint k, double du_px, double dv_px) {
+    keypoints[hal::index(k)] = {torso.u_px + du_px, torso.v_px + dv_px, 1.0};
+  };
+  place(hal::CocoKeypoint::kLeftShoulder, half_width_px, -half_length_px);
+  place(hal::CocoKeypoint::kRightShoulder, -half_width_px, -half_length_px);
+  place(hal::CocoKeypoint::kLeftHip, half_width_px, half_length_px);
+  place(hal::CocoKeypoint::kRightHip, -half_width_px, half_length_px);
+  TorsoFeatures predicted;
+  predicted.u_px = torso.u_px;
+  predicted.v_px = torso.v_px;
+  predicted.torso_px = torso.torso_px;
+  tracker_.reseat(stamp_ns, predicted);
+  last_target_keypoints_ = keypoints;
+  refused_ = false;
+  others_near_ = false;
+  ++counts_.to_prediction;
 }
 
 rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stamp_ns,

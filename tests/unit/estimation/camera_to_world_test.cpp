@@ -81,6 +81,51 @@ TEST(CameraToWorld, GivenTheSimulatorsConventionThenTheOpticalPoseMatchesItExact
   expectNear(p_C, Eigen::Vector3d(4.0, -0.5, 0.0));
 }
 
+TEST(CameraToWorld, GivenWorldPoints_ThenWorldToPixelIsTheSimulatorsPinholeAndRefusesPointsBehind) {
+  // By hand: a level camera at the origin looking along W x; a point 5 m ahead, 1 m left, 0.5 m up.
+  const hal::CameraIntrinsics k{640, 480, 337.2, 331.0, 322.0, 236.0, {}};
+  const Eigen::Isometry3d level = cameraPoseInWorld(Eigen::Isometry3d::Identity(), 0.0, GimbalCameraExtrinsics{});
+  const auto ahead = worldToPixel(Eigen::Vector3d(5.0, 1.0, 0.5), level, k);
+  ASSERT_TRUE(ahead.has_value());
+  EXPECT_NEAR(ahead->u_px, 322.0 - 337.2 * 1.0 / 5.0, 1e-9);
+  EXPECT_NEAR(ahead->v_px, 236.0 - 331.0 * 0.5 / 5.0, 1e-9);
+  EXPECT_NEAR(ahead->depth_m, 5.0, 1e-12);
+  // Behind the camera, beside it, or not finite: nothing.
+  EXPECT_FALSE(worldToPixel(Eigen::Vector3d(-5.0, 1.0, 0.5), level, k).has_value());
+  EXPECT_FALSE(worldToPixel(Eigen::Vector3d(0.0, 3.0, 0.0), level, k).has_value());
+  EXPECT_FALSE(worldToPixel(Eigen::Vector3d(5.0, std::nan(""), 0.5), level, k).has_value());
+  // A tilted, yawed drone with the gimbal turned: the simulator's optical pose (hal/sim Simulation::cameraPose,
+  // rebuilt here as the test above does) projects the same points to the same pixels.
+  Eigen::Matrix3d R_flu_optical;
+  R_flu_optical << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  Eigen::Isometry3d T_WB = Eigen::Isometry3d::Identity();
+  T_WB.linear() = (Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()) *
+                   Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitX()))
+                      .toRotationMatrix();
+  T_WB.translation() = Eigen::Vector3d(-3.0, 4.0, 1.5);
+  const double psi = 2.1;
+  const Eigen::Matrix3d R_sim =
+      T_WB.linear() * Eigen::AngleAxisd(psi, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_flu_optical;
+  const Eigen::Vector3d p_sim = T_WB.translation() + T_WB.linear() * simLikeExtrinsics().p_BG_m;
+  const Eigen::Isometry3d T_WC = cameraPoseInWorld(T_WB, psi, simLikeExtrinsics());
+  int seen = 0;
+  for (const double x : {-8.0, -2.0, 3.0})
+    for (const double y : {-1.0, 4.0, 9.0})
+      for (const double z : {0.0, 1.1, 2.0}) {
+        const Eigen::Vector3d p_W(x, y, z);
+        const Eigen::Vector3d q = R_sim.transpose() * (p_W - p_sim);
+        const auto pixel = worldToPixel(p_W, T_WC, k);
+        ASSERT_EQ(pixel.has_value(), q.z() > 0.01) << p_W.transpose();
+        if (!pixel) continue;
+        ++seen;
+        EXPECT_NEAR(pixel->u_px, k.fx_px * q.x() / q.z() + k.cx_px, 1e-9);
+        EXPECT_NEAR(pixel->v_px, k.fy_px * q.y() / q.z() + k.cy_px, 1e-9);
+        EXPECT_NEAR(pixel->depth_m, q.z(), 1e-12);
+      }
+  EXPECT_GT(seen, 3);
+  EXPECT_LT(seen, 27);
+}
+
 TEST(CameraToWorld, GivenAPitchedDroneThenTheLevelFrameIgnoresThePitchAndKeepsTheHeading) {
   // The drone pitches 10 degrees nose down while yawed 90 degrees; the gimbal adds 90 more, so the
   // camera heads along -x. A regression fitted on a level camera says: 2.5 m ahead, 0.3 m left,

@@ -8,6 +8,9 @@
 // take a half-hidden person's place.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "aerotrack/estimation/target_task.hpp"
 #include "support/require.hpp"
 #include "target_task_test_util.hpp"
@@ -32,6 +35,13 @@ struct Scene {
   TargetTaskStats stats;
   int followed_last = -2;   ///< target_index of the last frame published as followed
   int followed_person = 0;  ///< frames published with the person (index 0) as followed
+  /// Frames handed back with nobody taken and a prediction of the person's torso (predicted_torso), the largest
+  /// distance of its centre from the person's true column, and the sizes it gave; frames that took someone
+  /// and still carried a prediction.
+  int predicted = 0;
+  double worst_predicted_u_px = 0.0;
+  double min_predicted_torso_px = 1e9, max_predicted_torso_px = 0.0;
+  int predicted_with_someone = 0;
 };
 
 constexpr double kLookAlikeY = 1.5;
@@ -89,6 +99,17 @@ Scene run(bool choose_by_estimate, Event event, double end_s = 4.0) {
       scene.followed_last = f->target_index;
       const bool is_person = !(swapped && hide_person) && f->target_index == 0;
       if (is_person) ++scene.followed_person;
+      const hal::DetectionFrame::PredictedTorso& p = f->predicted_torso;
+      if (p.torso_px > 0.0 && f->target_index >= 0) ++scene.predicted_with_someone;
+      if (p.torso_px > 0.0 && f->target_index < 0) {
+        ++scene.predicted;
+        const double true_u_px = 0.5 * kW - kFx * personY(t_s) / 5.0;
+        scene.worst_predicted_u_px = std::max(scene.worst_predicted_u_px, std::abs(p.u_px - true_u_px));
+        scene.min_predicted_torso_px = std::min(scene.min_predicted_torso_px, p.torso_px);
+        scene.max_predicted_torso_px = std::max(scene.max_predicted_torso_px, p.torso_px);
+        // The torso centre 1.1 m above the ground (the default), seen from a camera on the ground 5 m away.
+        EXPECT_NEAR(p.v_px, 0.5 * kH - kFx * 1.1 / 5.0, 3.0);
+      }
     }
   }
   scene.estimate = aerotrack::test::require(out.read(), "an estimate");
@@ -110,6 +131,21 @@ TEST(TargetTaskAssociation, GivenTheLockOnSwapsToALookAlike_WhenChoosingByTheEst
   EXPECT_EQ(by_lock_on.stats.reassigned, 0U);
   EXPECT_GE(by_lock_on.stats.rejected, 8U);
   EXPECT_EQ(by_lock_on.followed_person, 91);
+}
+
+TEST(TargetTaskAssociation,
+     GivenOnlyALookAlikeInView_WhenTheTrackTakesNobody_ThenEachVerdictSaysWhereThePersonShouldBeInTheImage) {
+  // The detector's crop looks where the live track predicts the person (issue 22, item 2): the verdicts that
+  // took nobody carry the prediction's torso in the frame's image; those that took the person carry none.
+  const Scene hidden = run(true, Event::kHide);
+  EXPECT_EQ(hidden.predicted, 30) << "every frame of the hiding (1.5 to 2.5 s at 30 Hz)";
+  EXPECT_EQ(hidden.predicted_with_someone, 0);
+  // The coasting track's own error (0.15 m at 5 m) is 10 px; the torso 0.5 m at 5 m is 33.7 px.
+  EXPECT_LT(hidden.worst_predicted_u_px, 12.0);
+  EXPECT_NEAR(hidden.min_predicted_torso_px, kFx * 0.5 / 5.0, 1.0);
+  EXPECT_NEAR(hidden.max_predicted_torso_px, kFx * 0.5 / 5.0, 1.0);
+  const Scene swapped = run(true, Event::kSwap);
+  EXPECT_EQ(swapped.predicted + swapped.predicted_with_someone, 0) << "the person taken in every frame";
 }
 
 TEST(TargetTaskAssociation,

@@ -153,6 +153,14 @@ struct DetectionFrame {
   /// person is open and the followed track holds someone that hypothesis does not explain, so the detector should
   /// show it everyone in the next frame, not the crop around whom it holds (issue 22, item 2; swap_check.hpp).
   bool whole_frame_wanted = false;
+  /// On the verdicts that took nobody (target_index -1) while the followed track is live: where the track predicts
+  /// the person's torso in this image -- its centre and its neck-to-hip length, pixels; torso_px 0: no prediction
+  /// (issue 22, item 2). The detector's next crop looks there, not around whom its own lock-on holds.
+  struct PredictedTorso {
+    double u_px = 0.0;
+    double v_px = 0.0;
+    double torso_px = 0.0;
+  } predicted_torso;
 };
 
 /// Vehicle state estimate from the flight controller or the simulator.

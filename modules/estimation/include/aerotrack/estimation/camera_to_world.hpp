@@ -11,6 +11,8 @@
 // simulator's optical frame (x right, y down, z forward) is C turned by opticalAxesInCamera().
 #pragma once
 
+#include <optional>
+
 #include <Eigen/Geometry>
 
 #include "aerotrack/estimation/gimbal_history.hpp"
@@ -70,6 +72,18 @@ rt::Expected<Eigen::Isometry3d> cameraPoseAt(rt::TimeNs stamp_ns, const hal::Odo
 /// person 0.8 m off (crowd, seed 2, 21.1 s), where the level camera's image gives the fitted reading.
 /// Lens distortion is not modelled (the intrinsics' distortion is ignored). Pure, allocation-free.
 Eigen::Matrix3d levelHomography(const Eigen::Isometry3d& T_WC, const hal::CameraIntrinsics& intrinsics);
+
+/// Where the camera at T_WC (C the FLU frame) with these intrinsics sees the world point p_W_m: the pixel (u, v)
+/// and the depth along the optical axis (metres); nothing for a point not in front of the camera (depth <= 0.01 m)
+/// or not finite. A pinhole without distortion, as levelHomography. The inverse of the ray a depth lookup casts
+/// through a pixel (TargetTask::rangeByDepth). Pure, allocation-free.
+struct PixelAndDepth {
+  double u_px = 0.0;
+  double v_px = 0.0;
+  double depth_m = 0.0;
+};
+std::optional<PixelAndDepth> worldToPixel(const Eigen::Vector3d& p_W_m, const Eigen::Isometry3d& T_WC,
+                                          const hal::CameraIntrinsics& intrinsics);
 
 /// cameraToWorld with T_WB and the gimbal angle interpolated from the histories at the image's
 /// capture time stamp_ns. Error (saying which history and why) if either lookup fails or p_C is

@@ -87,6 +87,12 @@ struct TargetTaskParams {
   /// new fits it while the followed track's person does not. frames 0: off (the default: measured in the image-mode
   /// crowd it undid the head-on swap of seed 9 but did not improve the crowd as a whole, docs/benchmarks.md).
   SwapCheckParams swap_check{.frames = 0};
+  /// Where a frame's verdict that took nobody says the live track predicts the person
+  /// (DetectionFrame::predicted_torso): their torso centre this high above the ground (z = 0; the estimate's own z is
+  /// the regression's ground-plane constant, as planning.person_sight_height_m says) and a torso this long (neck to
+  /// mid-hip), to size the crop.
+  double verdict_torso_height_m = 1.1;
+  double verdict_torso_m = 0.5;
   /// The distance from the depth camera where it sees the person (`depth_range:`; absent: off).
   DepthRangeParams depth_range;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
@@ -188,6 +194,8 @@ class TargetTask final : public rt::Task {
   /// c's measurement ranged along the line of sight through `pixel` (the photo's) by the depth image nearest the
   /// frame's time, if one sees the person where the regression (or the prior, for a bearing) roughly does; c learns
   /// what the depth camera said.
+  /// Where the live track predicts the person's torso in the frame's image (nothing: lost, no pose, out of view).
+  hal::DetectionFrame::PredictedTorso predictedTorso(const hal::DetectionFrame& frame) const;
   void rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel, const Eigen::Isometry3d& T_WC,
                     Candidate& c) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person

@@ -104,6 +104,7 @@ const char* toString(WholeFrameReason reason);
 struct TrackCounts {
   std::array<std::uint64_t, kWholeFrameReasons> runs{};  ///< By WholeFrameReason (kNone: the crop alone).
   std::uint64_t reseated = 0;                            ///< Verdicts that moved the lock to another person.
+  std::uint64_t to_prediction = 0;  ///< Verdicts that took nobody and moved the crop to the track's prediction.
 };
 
 class Detector {
@@ -121,9 +122,10 @@ class Detector {
 
   /// The target estimator's verdict on an earlier frame of track(): that frame as published (its stamp
   /// names it), target_index the person the estimator took (-1: nobody). Where the estimator took someone
-  /// else than the lock-on did, the lock moves to them; where it took nobody, the next frame is searched
-  /// whole, as it is where the verdict asks for it (whole_frame_wanted). A verdict on a frame this detector does not
-  /// remember (too old, or another's) is ignored.
+  /// else than the lock-on did, the lock moves to them; where it took nobody, the lock and the next crop move to
+  /// where its live track predicts the person (predicted_torso), and without a prediction the next frame is
+  /// searched whole, as it is where the verdict asks for it (whole_frame_wanted). A verdict on a frame this
+  /// detector does not remember (too old, or another's) is ignored.
   void judged(const hal::DetectionFrame& verdict);
 
   const PersonTracker& tracker() const { return tracker_; }
@@ -135,6 +137,8 @@ class Detector {
  private:
   explicit Detector(const DetectorParams& params) : params_(params), tracker_(params.tracker) {}
   rt::Expected<DetectorOutput> runModel(MoveNetModel& model, const cv::Mat& bgr, const InputTransform& transform);
+  /// The lock and the next crop go to a predicted torso in the image stamped stamp_ns.
+  void lookAt(rt::TimeNs stamp_ns, const hal::DetectionFrame::PredictedTorso& torso);
 
   DetectorParams params_;
   std::array<std::optional<MoveNetModel>, 3> models_;  ///< By knownModelNames() index.
