@@ -165,6 +165,22 @@ TEST(AppConfig, GivenSetOverridesThenTheyAreAppliedAndCheckedLikeTheFile) {
             "--set vehicles.max_speed_mps: " + kConfigDir + "/sim.yaml has no key vehicles");
 }
 
+TEST(AppConfig, GivenTheVerdictsTorso_ThenItIsReadCheckedAndWrittenBack) {
+  // Where a verdict that took nobody puts the live track's prediction in the image (issue 22, item 2).
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.verdict_torso_height_m", "1.3"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_EQ(c->estimation->task.verdict_torso_height_m, 1.3);
+  EXPECT_EQ(c->estimation->task.verdict_torso_m, 0.5);
+  const std::string yaml = toYaml(*c);
+  EXPECT_NE(yaml.find("verdict_torso_height_m: 1.3"), std::string::npos);
+  EXPECT_NE(yaml.find("verdict_torso_m: 0.5"), std::string::npos);
+  EXPECT_NE(yaml.find("ambiguity_radius_m: 0"), std::string::npos);
+  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.verdict_torso_m", "5"}});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("estimation.verdict_torso_m"), std::string::npos) << bad.error().message;
+}
+
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
   const std::string yaml = simYamlWith("  max_speed_mps: 6.0", "  max_speed_mps: 6.0\n  max_sped_mps: 2.0");
   EXPECT_EQ(errorOf(yaml), at(yaml, "max_sped_mps") + ": vehicle.max_sped_mps: unknown key");
