@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -233,24 +234,42 @@ TEST(DetectorOnPhotos, GivenPedestriansNearTheLockedOne_WhenTracking_ThenTheWhol
   std::printf("largest step of the locked torso: %.0f px\n", largest_step_px);
 }
 
-TEST(DetectorOnPhotos, GivenTheEstimatorsVerdict_WhenItTookAnotherPedestrian_ThenTheLockMovesToThem) {
-  Detector detector = makeDetector("multipose", /*whole_frame_when_crowded=*/true);
-  cv::VideoCapture video(kData + "vtest.avi");
-  ASSERT_TRUE(video.isOpened());
-  cv::Mat frame;
-  ASSERT_TRUE(video.read(frame));
-  const auto first = detector.track(frame, 0);
-  ASSERT_TRUE(first.has_value() && first->target.has_value());
-  ASSERT_GE(first->count, 2U);
-  // The estimator judged another pedestrian (the one farthest from the lock-on's choice) to be the person.
-  const auto torsoU = [&](std::size_t i) { return first->persons[i].torso.u_px; };
-  std::size_t other = *first->target;
-  for (std::size_t i = 0; i < first->count; ++i)
-    if (first->persons[i].torso.reliable &&
-        std::abs(torsoU(i) - torsoU(*first->target)) > std::abs(torsoU(other) - torsoU(*first->target)))
+/// The pedestrian of a locked frame whose reliable torso is farthest across the image from the lock-on's choice
+/// (the choice itself if there is none).
+std::size_t farthestFromTheLock(const DetectorOutput& out) {
+  const auto torsoU = [&](std::size_t i) { return out.persons[i].torso.u_px; };
+  std::size_t other = *out.target;
+  for (std::size_t i = 0; i < out.count; ++i)
+    if (out.persons[i].torso.reliable &&
+        std::abs(torsoU(i) - torsoU(*out.target)) > std::abs(torsoU(other) - torsoU(*out.target)))
       other = i;
-  ASSERT_NE(other, *first->target);
-  detector.judged(verdictOn(*first, 0, static_cast<int>(other)));
+  return other;
+}
+
+/// vtest.avi's street, its first frame tracked (locked, pedestrians around) by a detector that runs the whole
+/// frame where others are near the crop: the estimator's verdicts on that frame.
+class DetectorVerdicts : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(video.isOpened());
+    ASSERT_TRUE(video.read(frame));
+    auto out = detector.track(frame, 0);
+    ASSERT_TRUE(out.has_value() && out->target.has_value());
+    first = std::move(out.value());
+  }
+  Detector detector = makeDetector("multipose", /*whole_frame_when_crowded=*/true);
+  cv::VideoCapture video{kData + "vtest.avi"};
+  cv::Mat frame;
+  DetectorOutput first;
+};
+
+TEST_F(DetectorVerdicts, GivenTheEstimatorsVerdict_WhenItTookAnotherPedestrian_ThenTheLockMovesToThem) {
+  ASSERT_GE(first.count, 2U);
+  // The estimator judged another pedestrian (the one farthest from the lock-on's choice) to be the person.
+  const std::size_t other = farthestFromTheLock(first);
+  ASSERT_NE(other, *first.target);
+  const auto torsoU = [&](std::size_t i) { return first.persons[i].torso.u_px; };
+  detector.judged(verdictOn(first, 0, static_cast<int>(other)));
   EXPECT_EQ(detector.counts().reseated, 1U);
   ASSERT_TRUE(video.read(frame));
   const rt::TimeNs second_ns = rt::secondsToNs(0.1);
@@ -258,8 +277,8 @@ TEST(DetectorOnPhotos, GivenTheEstimatorsVerdict_WhenItTookAnotherPedestrian_The
   ASSERT_TRUE(second.has_value() && second->target.has_value());
   EXPECT_NEAR(second->persons[*second->target].torso.u_px, torsoU(other), 15.0);
   // A verdict on a frame it never saw, or an older one, changes nothing.
-  detector.judged(verdictOn(*first, rt::secondsToNs(0.05), static_cast<int>(*first->target)));
-  detector.judged(verdictOn(*first, 0, static_cast<int>(*first->target)));
+  detector.judged(verdictOn(first, rt::secondsToNs(0.05), static_cast<int>(*first.target)));
+  detector.judged(verdictOn(first, 0, static_cast<int>(*first.target)));
   EXPECT_EQ(detector.counts().reseated, 1U);
   // The estimator took nobody of the second frame: the third is searched whole, whatever else holds.
   detector.judged(verdictOn(*second, second_ns, -1));
@@ -281,26 +300,12 @@ TEST(DetectorOnPhotos, GivenTheEstimatorsVerdict_WhenItTookAnotherPedestrian_The
   EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kWanted)], 1U);
 }
 
-TEST(DetectorOnPhotos, GivenAVerdictThatTookNobody_WhenItPredictsThePerson_ThenTheNextCropLooksThereNotWholeFrame) {
-  Detector detector = makeDetector("multipose", /*whole_frame_when_crowded=*/true);
-  cv::VideoCapture video(kData + "vtest.avi");
-  ASSERT_TRUE(video.isOpened());
-  cv::Mat frame;
-  ASSERT_TRUE(video.read(frame));
-  const auto first = detector.track(frame, 0);
-  ASSERT_TRUE(first.has_value() && first->target.has_value());
-  ASSERT_GE(first->count, 2U);
-  // The estimator took nobody; its track predicts the person where another pedestrian of the frame stands (the
-  // reliable torso farthest across the image from the lock-on's choice).
-  const auto torsoU = [&](std::size_t i) { return first->persons[i].torso.u_px; };
-  std::size_t other = *first->target;
-  for (std::size_t i = 0; i < first->count; ++i)
-    if (first->persons[i].torso.reliable &&
-        std::abs(torsoU(i) - torsoU(*first->target)) > std::abs(torsoU(other) - torsoU(*first->target)))
-      other = i;
-  ASSERT_NE(other, *first->target);
-  hal::DetectionFrame verdict = verdictOn(*first, 0, -1);
-  const TorsoFeatures& there = first->persons[other].torso;
+TEST_F(DetectorVerdicts, GivenAVerdictThatTookNobody_WhenItPredictsThePerson_ThenTheNextCropLooksThereNotWholeFrame) {
+  // The estimator took nobody; its track predicts the person where another pedestrian of the frame stands.
+  const std::size_t other = farthestFromTheLock(first);
+  ASSERT_NE(other, *first.target);
+  hal::DetectionFrame verdict = verdictOn(first, 0, -1);
+  const TorsoFeatures& there = first.persons[other].torso;
   verdict.predicted_torso = {there.u_px + 4.0, there.v_px - 3.0, 1.1 * there.torso_px};  // a prediction, not exact
   detector.judged(verdict);
   EXPECT_EQ(detector.counts().to_prediction, 1U);
