@@ -208,10 +208,12 @@ void Detector::judged(const hal::DetectionFrame& verdict) {
   wanted_ = verdict.whole_frame_wanted;
   const int count = static_cast<int>(std::min(verdict.person_count, hal::kMaxPersons));
   const int taken = verdict.target_index >= 0 && verdict.target_index < count ? verdict.target_index : -1;
-  if (taken < 0 && verdict.predicted_torso.torso_px > 0.0) {
+  const hal::DetectionFrame::PredictedTorso& predicted = verdict.predicted_torso;
+  if (taken < 0 && predicted.torso_px > 0.0 && std::isfinite(predicted.torso_px) && std::isfinite(predicted.u_px) &&
+      std::isfinite(predicted.v_px)) {
     // The estimator took nobody and its live track says where the person should be: the next crop looks there.
     // The lock-on's crop may sit on whom the estimator refused, a look-alike beside the person (crowd seed 24).
-    lookAt(verdict.stamp_ns, verdict.predicted_torso);
+    lookAt(verdict.stamp_ns, predicted);
     return;
   }
   if (taken == mine->person) {

@@ -191,11 +191,11 @@ class TargetTask final : public rt::Task {
   Eigen::Vector3d localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
                            Eigen::Vector3d& p_C_m) const;
   double measurementStdM(const Eigen::Vector3d& p_C_m) const;
+  /// Where the live track predicts the person's torso in the frame's image (nothing: lost, no pose, out of view).
+  hal::DetectionFrame::PredictedTorso predictedTorso(const hal::DetectionFrame& frame) const;
   /// c's measurement ranged along the line of sight through `pixel` (the photo's) by the depth image nearest the
   /// frame's time, if one sees the person where the regression (or the prior, for a bearing) roughly does; c learns
   /// what the depth camera said.
-  /// Where the live track predicts the person's torso in the frame's image (nothing: lost, no pose, out of view).
-  hal::DetectionFrame::PredictedTorso predictedTorso(const hal::DetectionFrame& frame) const;
   void rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel, const Eigen::Isometry3d& T_WC,
                     Candidate& c) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
