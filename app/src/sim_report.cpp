@@ -49,6 +49,7 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
                         {"depth_ranged", s.depth_ranged},
                         {"depth_disagreed", s.depth_disagreed},
                         {"depth_unseen", s.depth_unseen}};
+  out["in_front"] = s.in_front;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

@@ -17,6 +17,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
+  params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -254,6 +255,10 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
     const std::optional<double> followed_cost = cost_of(d2, reference_);
     if (!followed_cost) continue;
+    if (inFrontOfTheFollowed(c, prior)) {
+      a.in_front = true;
+      continue;
+    }
     const double cost = *followed_cost;
     if (!looksLikeTheFollowed(c.look, frame.stamp_ns)) {
       a.look_refused = true;
@@ -317,6 +322,21 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (followed_ranged && !person_taken[static_cast<std::size_t>(i)] && distance(i))
       a.track[static_cast<std::size_t>(i)] = kNewTrack;
   return a;
+}
+
+bool TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const {
+  const int after = params_.in_front_after_ranged;
+  if (after <= 0 || ranged_streak_ < after || prior.lost || !c.measurement || !c.measurement->ranged || !c.unranged)
+    return false;
+  const std::optional<TargetEstimator::Innovation> innovation = estimator_.innovation(*c.measurement);
+  if (!innovation) return false;
+  // The innovation along the line of sight, against its own standard deviation: nearer (negative) by more than
+  // the gate's reach in one dimension. Across the line the regression's gate has judged them already.
+  Eigen::Vector3d line_W = Eigen::Vector3d::Zero();
+  line_W.head<2>() = c.measurement->bearing_W;
+  const double along_m = innovation->nu_m.dot(line_W);
+  const double variance_m2 = line_W.dot(innovation->S_m2 * line_W);
+  return variance_m2 > 0.0 && along_m < 0.0 && along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
 }
 
 bool TargetTask::ambiguous(const hal::DetectionFrame& frame, int followed, int count,
@@ -432,9 +452,14 @@ bool TargetTask::process(const Candidate& c) {
     const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
     if (!(d2 && *d2 <= params_.estimator.gate_chi2)) given = &*c.unranged;
   }
+  const bool was_lost = estimator_.estimate(given->stamp_ns).lost;
   const MeasurementVerdict verdict = estimator_.add(*given);
   if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted) {
     ++stats_.accepted;
+    // A start or a re-identification after a loss is the regression's; a fallback or a distance without the depth
+    // camera's is not the camera's either.
+    const bool agreed = verdict == MeasurementVerdict::kAccepted && !was_lost && ranged && given == &*c.measurement;
+    ranged_streak_ = agreed ? ranged_streak_ + 1 : 0;
     if (!c.torso.reliable) return true;  // a cut-off person's colour is not their whole torso's: not learnt
     // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
     // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).
@@ -554,6 +579,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     const bool whole_frame_wanted = checkSwap(frame, candidates, a);
     const int person = a.followed;
     if (a.ambiguous) ++stats_.ambiguous;
+    if (a.in_front) ++stats_.in_front;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
       look_refused_d2_sum_ = 0.0;

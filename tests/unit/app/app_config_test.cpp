@@ -181,6 +181,20 @@ TEST(AppConfig, GivenTheVerdictsTorso_ThenItIsReadCheckedAndWrittenBack) {
   EXPECT_NE(bad.error().message.find("estimation.verdict_torso_m"), std::string::npos) << bad.error().message;
 }
 
+TEST(AppConfig, GivenInFrontAfterRanged_ThenItIsReadCheckedAndWrittenBack) {
+  // Someone ranged in front of the followed person is not them (issue 22, item 2).
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_after_ranged", "7"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_EQ(c->estimation->task.in_front_after_ranged, 7);
+  EXPECT_NE(toYaml(*c).find("in_front_after_ranged: 7"), std::string::npos);
+  for (const char* bad_value : {"-1", "2.5", "many"}) {
+    const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_after_ranged", bad_value}});
+    ASSERT_FALSE(bad) << bad_value;
+    EXPECT_NE(bad.error().message.find("estimation.in_front_after_ranged"), std::string::npos) << bad.error().message;
+  }
+}
+
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {
   const std::string yaml = simYamlWith("  max_speed_mps: 6.0", "  max_speed_mps: 6.0\n  max_sped_mps: 2.0");
   EXPECT_EQ(errorOf(yaml), at(yaml, "max_sped_mps") + ": vehicle.max_sped_mps: unknown key");

@@ -82,10 +82,19 @@ struct TargetTaskParams {
   /// in the image: the network reports one made of both, or each in turn, and neither colour (a look-alike) nor
   /// the motion gate (both inside it) can tell which. 0: off.
   double ambiguity_radius_m = 0.0;
+  /// With choose_by_estimate and depth_range: once the followed track's last this many accepted measurements
+  /// were ranged by the depth camera as they were (the track's distance agrees with the depth camera's), a
+  /// person whose depth range lies nearer than the track predicts by more than its gate allows along the line
+  /// of sight is someone in front of the followed person, and is not given to the followed track. Without it the
+  /// regression's distance of that person, which the gate still took, was given instead (the fallback for a
+  /// track restarted with a wrong velocity, which this many agreeing ranges rule out): a crosser between the
+  /// drone and the person was taken (image-mode crowd seeds 44 and 53, 0.9-1.1 m nearer). 0: off.
+  int in_front_after_ranged = 0;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
-  /// new fits it while the followed track's person does not. frames 0: off (the default: measured in the image-mode
-  /// crowd it undid the head-on swap of seed 9 but did not improve the crowd as a whole, docs/benchmarks.md).
+  /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
+  /// drone.yaml turn it on with the detector's crop at the prediction and in_front_after_ranged: alone it did not
+  /// improve the image-mode crowd, together they spend a fifth of the time on others, docs/benchmarks.md).
   SwapCheckParams swap_check{.frames = 0};
   /// Where a frame's verdict that took nobody says the live track predicts the person
   /// (DetectionFrame::predicted_torso): their torso centre this high above the ground (z = 0; the estimate's own z is
@@ -115,6 +124,7 @@ struct TargetTaskStats {
   std::uint64_t reassigned = 0;       ///< Frames whose person the track's prediction chose over the lock-on's.
   std::uint64_t swapped_back = 0;     ///< Times the swap check gave the followed track back its kept hypothesis.
   std::uint64_t ambiguous = 0;        ///< Frames the followed track was given nobody: someone within reach.
+  std::uint64_t in_front = 0;         ///< Frames someone it would take was ranged in front of the followed person.
   std::uint64_t depth_ranged = 0;     ///< ... of the followed person's frames, ranged by the depth camera.
   std::uint64_t depth_disagreed = 0;  ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;     ///< ... for which no depth image near in time saw them (occluded, out of view).
@@ -170,6 +180,7 @@ class TargetTask final : public rt::Task {
     bool look_refused = false;                  ///< Someone fit the followed track but for the look gate...
     double look_refused_d2 = std::numeric_limits<double>::infinity();  ///< ... the nearest such distance's d2.
     bool ambiguous = false;  ///< The followed track was given nobody: someone stood too near (ambiguity_radius_m).
+    bool in_front = false;   ///< Someone its gate took was ranged in front of the person (in_front_after_ranged).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
@@ -178,6 +189,8 @@ class TargetTask final : public rt::Task {
   bool ambiguous(const hal::DetectionFrame& frame, int followed, int count,
                  const std::array<Candidate, hal::kMaxPersons>& candidates,
                  const std::array<bool, kMaxBystanderTracks>& track_taken) const;
+  /// Whether the candidate's depth range puts them in front of the followed person (in_front_after_ranged).
+  bool inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const;
   /// The swap check's evidence in this frame (SwapCheck); true while its kept hypothesis is open and the followed
   /// track holds someone it does not explain (the verdict then asks the detector for the whole frame). If confirmed,
   /// the followed track becomes the kept one and `a` is rewritten (its person the one who fit the kept track, whom the
@@ -224,6 +237,7 @@ class TargetTask final : public rt::Task {
   /// The followed person's own colour distances to reference_ (taken distances): running mean and mean square.
   double own_look_mean_ = 0.0, own_look_mean_sq_ = 0.0;
   int own_look_count_ = 0;
+  int ranged_streak_ = 0;  ///< The followed track's last accepted measurements in a row that were ranged as they were.
   /// Whether a colour is as near the learnt one as the followed person's own frames are (look_gate_sigmas).
   bool looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const;
   rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
