@@ -94,7 +94,7 @@ struct TargetTaskParams {
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
   /// drone.yaml turn it on with the detector's crop at the prediction and in_front_after_ranged: alone it did not
-  /// improve the image-mode crowd, together they spend a fifth of the time on others, docs/benchmarks.md).
+  /// improve the image-mode crowd; together they halve the time on others over 70 trials, docs/benchmarks.md).
   SwapCheckParams swap_check{.frames = 0};
   /// Where a frame's verdict that took nobody says the live track predicts the person
   /// (DetectionFrame::predicted_torso): their torso centre this high above the ground (z = 0; the estimate's own z is
