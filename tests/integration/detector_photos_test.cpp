@@ -327,5 +327,51 @@ TEST_F(DetectorVerdicts, GivenAVerdictThatTookNobody_WhenItPredictsThePerson_The
   EXPECT_EQ(detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kRefused)], 1U);
 }
 
+TEST(DetectorOnCropLost,
+     GivenALiveEstimatorsPrediction_WhenTheCropThereFindsNobody_ThenTheCropIsPublishedNotTheWholeFrame) {
+  // The estimator predicts the person in the image's top-left corner, where nobody walks: the crop cut there finds
+  // nobody the lock-on accepts.
+  cv::VideoCapture video(kData + "vtest.avi");
+  ASSERT_TRUE(video.isOpened());
+  for (const bool on_crop_lost : {true, false}) {
+    SCOPED_TRACE(on_crop_lost ? "on_crop_lost: true" : "on_crop_lost: false");
+    DetectorParams params;
+    params.model_dir = std::string(AEROTRACK_SOURCE_DIR) + "/models";
+    params.whole_frame.on_crop_lost = on_crop_lost;
+    Detector detector = aerotrack::test::require(Detector::create(params), "Detector::create");
+    const auto crop_lost = [&] {
+      return detector.counts().runs[static_cast<std::size_t>(WholeFrameReason::kCropLost)];
+    };
+    video.set(cv::CAP_PROP_POS_FRAMES, 0);
+    cv::Mat frame;
+    ASSERT_TRUE(video.read(frame));
+    const auto first = detector.track(frame, 0);
+    ASSERT_TRUE(first.has_value() && first->target.has_value());
+    hal::DetectionFrame verdict = verdictOn(first.value(), 0, -1);
+    verdict.predicted_torso = {40.0, 40.0, 30.0};
+    detector.judged(verdict);
+    ASSERT_TRUE(video.read(frame));
+    const auto second = detector.track(frame, rt::secondsToNs(0.1));
+    ASSERT_TRUE(second.has_value());
+    if (on_crop_lost) {  // the whole frame at once
+      EXPECT_FALSE(second->cropped);
+      EXPECT_EQ(crop_lost(), 1U);
+      continue;
+    }
+    // The crop's own result, for the estimator to judge: nobody chosen, at most the one person singlepose reports.
+    EXPECT_TRUE(second->cropped);
+    EXPECT_FALSE(second->target.has_value());
+    EXPECT_LE(second->count, 1U);
+    EXPECT_EQ(crop_lost(), 0U);
+    // The estimator's track lost (a verdict of nobody, no prediction): a crop that finds nobody means the whole frame.
+    detector.judged(verdictOn(second.value(), rt::secondsToNs(0.1), -1));
+    ASSERT_TRUE(video.read(frame));
+    const auto third = detector.track(frame, rt::secondsToNs(0.2));
+    ASSERT_TRUE(third.has_value());
+    EXPECT_FALSE(third->cropped);
+    EXPECT_EQ(crop_lost(), 1U);
+  }
+}
+
 }  // namespace
 }  // namespace aerotrack::perception

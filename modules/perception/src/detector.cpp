@@ -209,8 +209,10 @@ void Detector::judged(const hal::DetectionFrame& verdict) {
   const int count = static_cast<int>(std::min(verdict.person_count, hal::kMaxPersons));
   const int taken = verdict.target_index >= 0 && verdict.target_index < count ? verdict.target_index : -1;
   const hal::DetectionFrame::PredictedTorso& predicted = verdict.predicted_torso;
-  if (taken < 0 && predicted.torso_px > 0.0 && std::isfinite(predicted.torso_px) && std::isfinite(predicted.u_px) &&
-      std::isfinite(predicted.v_px)) {
+  const bool prediction = predicted.torso_px > 0.0 && std::isfinite(predicted.torso_px) &&
+                          std::isfinite(predicted.u_px) && std::isfinite(predicted.v_px);
+  estimator_live_ = taken >= 0 || prediction;
+  if (taken < 0 && prediction) {
     // The estimator took nobody and its live track says where the person should be: the next crop looks there.
     // The lock-on's crop may sit on whom the estimator refused, a look-alike beside the person (crowd seed 24).
     lookAt(verdict.stamp_ns, predicted);
@@ -303,7 +305,9 @@ rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stam
       if (!out) return out.error();
       out->cropped = true;
       choose(*out);
-      if (out->target) {
+      // Verdicts come only with follow_estimator (the app hands them over): the estimator judges the crop.
+      const bool judged_by_estimator = !params_.whole_frame.on_crop_lost && estimator_live_;
+      if (out->target || judged_by_estimator) {
         ++counts_.runs[static_cast<std::size_t>(WholeFrameReason::kNone)];
         remember(*out);
         return out;

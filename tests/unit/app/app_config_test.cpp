@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <fstream>
 #include <sstream>
+#include <string>
 
 #include "aerotrack/localization/localization_io.hpp"
 #include "app_config.hpp"
@@ -193,6 +194,17 @@ TEST(AppConfig, GivenInFrontAfterRanged_ThenItIsReadCheckedAndWrittenBack) {
     ASSERT_FALSE(bad) << bad_value;
     EXPECT_NE(bad.error().message.find("estimation.in_front_after_ranged"), std::string::npos) << bad.error().message;
   }
+}
+
+TEST(AppConfig, GivenWholeFrameOnCropLost_ThenItIsReadCheckedAndWrittenBack) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"perception.whole_frame.on_crop_lost", "false"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->perception);
+  EXPECT_FALSE(c->perception->whole_frame.on_crop_lost);
+  EXPECT_NE(toYaml(*c).find("on_crop_lost: false"), std::string::npos);
+  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"perception.whole_frame.on_crop_lost", "2"}});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("perception.whole_frame.on_crop_lost"), std::string::npos) << bad.error().message;
 }
 
 TEST(AppConfig, GivenUnknownKeyThenErrorNamesIt) {

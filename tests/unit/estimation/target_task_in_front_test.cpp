@@ -65,6 +65,8 @@ std::shared_ptr<hal::DepthFrame> renderDepth(rt::TimeNs t_ns, const std::array<E
 struct Scene {
   int crosser_given = 0;       ///< frames whose followed person was the crosser
   int person_given_after = 0;  ///< frames after the crossing whose followed person was the person
+  /// While the person was hidden: the frames whose estimate tracked someone else within 0.3 m of the crosser.
+  int crosser_tracked = 0;
   TargetEstimate estimate;
   TargetTaskStats stats;
 };
@@ -98,6 +100,13 @@ Scene run(int in_front_after_ranged, double crossing_s) {
     frame.target_index = 0;
     detections.try_push(frame);
     task.step(t_ns + 1);
+    if (const auto e = out.read(); hidden && e) {
+      for (std::size_t k = 0; k < e->other_count; ++k)
+        if ((e->others[k].p_W_m.head<2>() - Eigen::Vector2d(kCrosserXM, crosser_y_m)).norm() < 0.3) {
+          ++scene.crosser_tracked;
+          break;
+        }
+    }
     const auto f = followed.read();
     if (!f || f->sequence != frame.sequence || f->target_index < 0) continue;
     if (hidden) ++scene.crosser_given;
@@ -121,6 +130,10 @@ TEST(TargetTaskInFront, GivenACrosserRangedInFrontOfTheStandingPerson_ThenTheFol
   ASSERT_TRUE(kept.estimate.initialised && !kept.estimate.lost);
   EXPECT_NEAR(kept.estimate.p_WT_m.x(), kPersonXM, 0.1);
   EXPECT_NEAR(kept.estimate.p_WT_m.y(), 0.0, 0.1);
+  // Someone ranged in front of the person is someone else: from the second such frame on they are on a track of
+  // their own (at their depth-ranged place), competing for the frames after.
+  EXPECT_EQ(taken.crosser_tracked, 0);
+  EXPECT_GE(kept.crosser_tracked, static_cast<int>(kept.stats.in_front) - 1);
   // Most of the person's own frames were ranged by the depth camera.
   EXPECT_GT(kept.stats.depth_ranged, kept.stats.detections / 2);
 }

@@ -88,7 +88,8 @@ struct TargetTaskParams {
   /// of sight is someone in front of the followed person, and is not given to the followed track. Without it the
   /// regression's distance of that person, which the gate still took, was given instead (the fallback for a
   /// track restarted with a wrong velocity, which this many agreeing ranges rule out): a crosser between the
-  /// drone and the person was taken (image-mode crowd seeds 44 and 53, 0.9-1.1 m nearer). 0: off.
+  /// drone and the person was taken (image-mode crowd seeds 44 and 53, 0.9-1.1 m nearer). Someone so refused starts
+  /// a bystander track: they are someone else, and compete on it for the frames after (crowd seed 40). 0: off.
   int in_front_after_ranged = 0;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone

@@ -47,6 +47,12 @@ struct WholeFrameParams {
   double near_crop_sides = -1.0;
   /// At least this often (a newcomer walking towards the crop is noticed before they are in it; 0: never; 1 tried).
   double every_s = 0.0;
+  /// When the crop finds nobody the lock-on accepts: true, the whole frame at once (kCropLost); false, while the
+  /// estimator's newest verdict (follow_estimator) says its track is live, the crop's own result is published
+  /// instead, for the estimator to judge, and its verdict sends the next crop to where it predicts the person. The
+  /// whole frame shows everyone the estimator might take for the person: after an occlusion, a look-alike beside the
+  /// hidden person (traced: image-mode crowd seed 41). Measured level in the image-mode crowd (docs/benchmarks.md).
+  bool on_crop_lost = true;
 };
 
 struct DetectorParams {
@@ -152,6 +158,8 @@ class Detector {
   bool refused_ = false;
   /// The newest verdict asked for the whole frame.
   bool wanted_ = false;
+  /// The newest verdict took someone or predicted where the person is: the estimator's track is live.
+  bool estimator_live_ = false;
   rt::TimeNs last_whole_ns_ = 0;
   rt::TimeNs newest_verdict_ns_ = -1;
   /// The lock-on's choice on the latest frames (stamp, person; -1 nobody), oldest overwritten first.
