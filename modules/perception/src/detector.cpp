@@ -226,8 +226,9 @@ void Detector::judged(const hal::DetectionFrame& verdict) {
     refused_ = true;
     return;
   }
-  // The estimator took someone else: continue from them. The frame a lock-on disagreed on is a whole-frame one
-  // (a crop's frame is published only when the lock-on took its one person), so it shows who is near them.
+  // The estimator took someone else: continue from them. The frame a lock-on disagreed on is usually a whole-frame
+  // one, which shows who is near them; with whole_frame.on_crop_lost false it may be a crop the lock-on chose nobody
+  // in, whose one person is then all there is to look at.
   const auto& keypoints = verdict.persons[static_cast<std::size_t>(taken)].keypoints;
   tracker_.reseat(verdict.stamp_ns, torsoFeatures(keypoints, width_px_, height_px_, params_.torso));
   last_target_keypoints_ = keypoints;
