@@ -205,6 +205,17 @@ nlohmann::json lossEvents(const hal::sim::SimMetrics& m) {
   return out;
 }
 
+nlohmann::json switchEvents(const hal::sim::SimMetrics& m) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const hal::sim::IdentitySwitch& e : m.switchEvents())
+    out.push_back({{"t_s", e.t_s},
+                   {"from", e.from_id},
+                   {"to", e.to_id},
+                   {"separation_m", e.separation_m},
+                   {"look_alike", e.look_alike}});
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
@@ -238,6 +249,8 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"identity_switches", m.followedFrames() > 0 ? nlohmann::json(m.identitySwitches()) : nlohmann::json(nullptr)},
       {"identity_switches_nearest",
        m.followedFrames() > 0 ? nlohmann::json(m.identitySwitchesNearest()) : nlohmann::json(nullptr)},
+      // The first kMaxSwitchEvents switches: when, between whom, how far apart the two were, a look-alike or not.
+      {"identity_switch_events", switchEvents(m)},
       {"time_on_wrong_person_s",
        m.followedFrames() > 0 ? nlohmann::json(m.timeOnWrongPersonS()) : nlohmann::json(nullptr)},
       {"person_top_speed_mps", m.personTopSpeedMps()},

@@ -75,6 +75,10 @@ void SimMetrics::recordFollowed(double t_s, int person_id, int nearest_id) {
   last_real_person_id_ = person_id;
 }
 
+void SimMetrics::noteSwitch(const IdentitySwitch& event) {
+  if (switch_events_.size() < kMaxSwitchEvents) switch_events_.push_back(event);
+}
+
 double SimMetrics::maxDistanceM() const {
   return success_.max_distance_m > 0.0 ? success_.max_distance_m
                                        : success_.final_distance_factor * success_.tracking_distance_m;

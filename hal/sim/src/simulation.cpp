@@ -510,8 +510,24 @@ void Simulation::recordFollowed(const DetectionFrame& frame) {
     metrics_.recordFollowed(t_s, -1);
     return;
   }
-  const DetectionMatch m = match(frame.sequence, frame.persons[static_cast<std::size_t>(frame.target_index)],
-                                 metrics_.lastFollowedPersonId());
+  const int before = metrics_.lastFollowedPersonId();
+  const DetectionMatch m = match(frame.sequence, frame.persons[static_cast<std::size_t>(frame.target_index)], before);
+  if (before >= 0 && m.kept >= 0 && m.kept != before) {
+    const TimeNs exposed_ns = exposures_[frame.sequence % exposures_.size()].stamp_ns;
+    const auto lookAlike = [&](int id) {
+      return id >= 1 && scenario_.bystanders.people[static_cast<std::size_t>(id - 1)].look_alike;
+    };
+    IdentitySwitch event;
+    event.t_s = t_s;
+    event.from_id = before;
+    event.to_id = m.kept;
+    event.separation_m = (personStateAt(static_cast<std::size_t>(m.kept), exposed_ns).p_W_m -
+                          personStateAt(static_cast<std::size_t>(before), exposed_ns).p_W_m)
+                             .head<2>()
+                             .norm();
+    event.look_alike = lookAlike(before) || lookAlike(m.kept);
+    metrics_.noteSwitch(event);
+  }
   metrics_.recordFollowed(t_s, m.kept, m.nearest);
 }
 

@@ -328,6 +328,24 @@ TEST(Bystanders, EachReportedDetectionIsMatchedToItsOwnPersonAndFollowingABystan
   followed.target_index = last.target_index;
   sim->recordFollowed(followed);
   EXPECT_EQ(sim->metrics().identitySwitches(), 2);
+  // Each switch is described: between whom, how far apart they stood, whether a look-alike was one of them.
+  const int other = sim->matchDetection(last.sequence, last.persons[last.target_index == 0 ? 1U : 0U]);
+  ASSERT_GE(other, 1);
+  const std::vector<IdentitySwitch>& events = sim->metrics().switchEvents();
+  ASSERT_EQ(events.size(), 2U);
+  EXPECT_EQ(events[0].from_id, 0);
+  EXPECT_EQ(events[0].to_id, other);
+  EXPECT_EQ(events[1].from_id, other);
+  EXPECT_EQ(events[1].to_id, 0);
+  const double apart_m = (sim->personStateAt(static_cast<std::size_t>(other), last.stamp_ns).p_W_m -
+                          sim->personStateAt(0, last.stamp_ns).p_W_m)
+                             .head<2>()
+                             .norm();
+  EXPECT_GT(apart_m, 1.0);  // standing metres apart
+  for (const IdentitySwitch& e : events) {
+    EXPECT_NEAR(e.separation_m, apart_m, 1e-9);
+    EXPECT_EQ(e.look_alike, other == 3);  // the third listed wears the target's clothes
+  }
 }
 
 TEST(Bystanders, GivenTwoOverlappingPeople_WhenADetectionFitsBoth_ThenTheOneMatchedBeforeIsKept) {

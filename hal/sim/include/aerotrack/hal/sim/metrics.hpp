@@ -66,6 +66,18 @@ struct MetricsSample {
 /// The person id recordFollowed() takes when there is no followed detection, or it matches nobody.
 inline constexpr int kNoPerson = -1;
 
+/// One identity switch of the followed detection (SimMetrics::identitySwitches), with what the world looked like
+/// then: which kind of crossing it was, for the docs' tables of what is left (issue 22, item 2).
+struct IdentitySwitch {
+  double t_s = 0.0;           ///< The detection frame's exposure, seconds since the start.
+  int from_id = kNoPerson;    ///< Whom the followed detection was before (0 the target, k >= 1 bystander k)...
+  int to_id = kNoPerson;      ///< ... and is now.
+  double separation_m = 0.0;  ///< The two persons' horizontal distance apart at that exposure.
+  bool look_alike = false;    ///< A bystander of the two wears the target's clothes.
+};
+/// The switches a run keeps (the count goes on past them: SimMetrics::identitySwitches).
+inline constexpr std::size_t kMaxSwitchEvents = 64;
+
 class SimMetrics {
  public:
   explicit SimMetrics(const ScenarioSpec& spec = {}) : drone_radius_m_(spec.drone.radius_m), success_(spec.success) {}
@@ -82,6 +94,11 @@ class SimMetrics {
   /// Both count switches: identitySwitches person_id's, identitySwitchesNearest nearest_id's.
   void recordFollowed(double t_s, int person_id, int nearest_id);
   void recordFollowed(double t_s, int person_id) { recordFollowed(t_s, person_id, person_id); }
+  /// Describes the switch the next recordFollowed() counts (called just before it, with the same ids); the first
+  /// kMaxSwitchEvents are kept.
+  void noteSwitch(const IdentitySwitch& event);
+  /// The switches described so far, in time order.
+  const std::vector<IdentitySwitch>& switchEvents() const { return switch_events_; }
 
   /// The verdict at the end of the run; final distance is the last sample's.
   bool success() const;
@@ -153,6 +170,7 @@ class SimMetrics {
   double person_top_speed_mps_ = 0.0, walking_s_ = 0.0, walking_distance_m_ = 0.0;
   std::vector<LossEvent> losses_;
   std::vector<TrackSample> track_;
+  std::vector<IdentitySwitch> switch_events_;
 };
 
 }  // namespace aerotrack::hal::sim
