@@ -205,6 +205,10 @@ nlohmann::json lossEvents(const hal::sim::SimMetrics& m) {
   return out;
 }
 
+nlohmann::json finiteOrNull(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
 nlohmann::json switchEvents(const hal::sim::SimMetrics& m) {
   nlohmann::json out = nlohmann::json::array();
   for (const hal::sim::IdentitySwitch& e : m.switchEvents())
@@ -228,8 +232,7 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
       {"success", reason.empty()},
       {"failure_reason", reason.empty() ? nlohmann::json(nullptr) : nlohmann::json(reason)},
       {"collisions", m.collisions()},
-      {"min_clearance_m",
-       std::isfinite(m.minClearanceM()) ? nlohmann::json(m.minClearanceM()) : nlohmann::json(nullptr)},
+      {"min_clearance_m", finiteOrNull(m.minClearanceM())},
       {"visible_ratio", m.visibleRatio()},
       {"losses", m.losses().size()},
       {"longest_loss_s", m.longestLossS()},
@@ -251,6 +254,9 @@ nlohmann::json simSummary(const hal::sim::Simulation& sim, const RunInfo& run) {
        m.followedFrames() > 0 ? nlohmann::json(m.identitySwitchesNearest()) : nlohmann::json(nullptr)},
       // The first kMaxSwitchEvents switches: when, between whom, how far apart the two were, a look-alike or not.
       {"identity_switch_events", switchEvents(m)},
+      // How close others came to the person (null: nobody of that kind in the world).
+      {"closest_approach_m",
+       {{"bystander", finiteOrNull(m.closestBystanderM())}, {"look_alike", finiteOrNull(m.closestLookAlikeM())}}},
       {"time_on_wrong_person_s",
        m.followedFrames() > 0 ? nlohmann::json(m.timeOnWrongPersonS()) : nlohmann::json(nullptr)},
       {"person_top_speed_mps", m.personTopSpeedMps()},

@@ -36,6 +36,8 @@ void SimMetrics::record(const MetricsSample& sample) {
   if (!sample.tracking) return;
 
   tracked_s_ += dt_s;
+  closest_bystander_m_ = std::min(closest_bystander_m_, sample.nearest_bystander_m);
+  closest_look_alike_m_ = std::min(closest_look_alike_m_, sample.nearest_look_alike_m);
   if (visible) visible_s_ += dt_s;
   if (sample.sight == Sight::kOutOfImage) out_of_image_s_ += dt_s;
   if (sample.sight == Sight::kOccluded) occluded_s_ += dt_s;

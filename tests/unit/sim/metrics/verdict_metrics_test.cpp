@@ -2,6 +2,7 @@
 // (issue 20 items 1 and 5) against synthetic runs whose answers are known by construction.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -40,6 +41,22 @@ SimMetrics runWithLoss(double hidden_s) {
   const int first = 250, end = 250 + static_cast<int>(std::lround(hidden_s / kDtS));
   for (int i = 0; i < 1000; ++i) m.record(verdictSample(i, i >= first && i < end ? Sight::kOccluded : Sight::kVisible));
   return m;
+}
+
+TEST(ClosestApproach, GivenBystandersComingNearerAndFartherThenTheClosestWhileTrackingIsKept) {
+  SimMetrics m(verdictSpec());
+  EXPECT_FALSE(std::isfinite(m.closestBystanderM()));  // nobody yet
+  EXPECT_FALSE(std::isfinite(m.closestLookAlikeM()));
+  for (int i = 0; i < 100; ++i) {
+    MetricsSample s = verdictSample(i, Sight::kVisible);
+    s.tracking = i >= 10;                                   // before the person starts, nothing counts
+    s.nearest_bystander_m = 0.2 + std::abs(i - 50) * 0.05;  // nearest at i = 50: 0.2
+    if (i < 10) s.nearest_bystander_m = 0.01;               // someone at their start beside the person: not counted
+    if (i >= 60) s.nearest_look_alike_m = 3.0 - 0.01 * i;   // nearest at the end: 2.01
+    m.record(s);
+  }
+  EXPECT_DOUBLE_EQ(m.closestBystanderM(), 0.2);
+  EXPECT_NEAR(m.closestLookAlikeM(), 2.01, 1e-12);
 }
 
 TEST(FollowedAllTheWay, GivenLossOf2_9sThenFollowedAndOf3_1sThenNot) {

@@ -61,6 +61,10 @@ struct MetricsSample {
   double clearance_m = std::numeric_limits<double>::infinity();  ///< Drone centre to the nearest obstacle.
   Sight sight = Sight::kVisible;
   bool tracking = false;  ///< The person has started walking: losses and distances count from then on.
+  /// The person to the nearest bystander, and to the nearest look-alike (in the person's clothes), horizontally,
+  /// metres; infinity without one. The crowd's worlds differ by seed: how close someone came tells them apart.
+  double nearest_bystander_m = std::numeric_limits<double>::infinity();
+  double nearest_look_alike_m = std::numeric_limits<double>::infinity();
 };
 
 /// The person id recordFollowed() takes when there is no followed detection, or it matches nobody.
@@ -127,6 +131,10 @@ class SimMetrics {
   /// recordFollowed() calls so far (0: the run reported no identities; the metrics mean nothing).
   long long followedFrames() const { return followed_frames_; }
 
+  /// The closest any bystander, and any look-alike, came to the person while tracking (MetricsSample), metres;
+  /// infinity without one.
+  double closestBystanderM() const { return closest_bystander_m_; }
+  double closestLookAlikeM() const { return closest_look_alike_m_; }
   /// The person's fastest speed over the run, m/s.
   double personTopSpeedMps() const { return person_top_speed_mps_; }
   /// The person's mean speed while on the path (start delay to the end of the path, pauses
@@ -171,6 +179,8 @@ class SimMetrics {
   std::vector<LossEvent> losses_;
   std::vector<TrackSample> track_;
   std::vector<IdentitySwitch> switch_events_;
+  double closest_bystander_m_ = std::numeric_limits<double>::infinity();
+  double closest_look_alike_m_ = std::numeric_limits<double>::infinity();
 };
 
 }  // namespace aerotrack::hal::sim
