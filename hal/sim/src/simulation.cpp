@@ -263,8 +263,8 @@ void Simulation::sampleDueSensors() {
     sample.clearance_m = obstacles_.distance(truth_.drone.p_W_m);
     for (std::size_t id = 1; id < bodies_.size(); ++id)
       sample.clearance_m = std::min(sample.clearance_m, distanceTo(bodies_[id], truth_.drone.p_W_m));
-    for (std::size_t id = 1; id < personCount(); ++id) {
-      const double apart_m = (personStateAt(id, now_ns_).p_W_m - truth_.person.p_W_m).head<2>().norm();
+    for (std::size_t id = 1; id < bodies_.size(); ++id) {  // the bodies stand where the people are now (above)
+      const double apart_m = (bodies_[id].center_W_m - truth_.person.p_W_m.head<2>()).norm();
       sample.nearest_bystander_m = std::min(sample.nearest_bystander_m, apart_m);
       if (scenario_.bystanders.people[id - 1].look_alike)
         sample.nearest_look_alike_m = std::min(sample.nearest_look_alike_m, apart_m);
