@@ -119,8 +119,8 @@ rt::Expected<SuiteSpec> benchCells(const ParsedArgs& args) {
   SuiteCell cell;
   cell.scenario = absoluteScenario(args.values.at("scenario"));
   cell.mode = args.valueOr("mode", "proposed");
-  if (cell.mode != "proposed" && cell.mode != "baseline")
-    return rt::Error{"--mode: expected proposed or baseline, got '" + cell.mode + "'"};
+  if (cell.mode != "proposed" && cell.mode != "baseline" && cell.mode != "truth_flight")
+    return rt::Error{"--mode: expected proposed, baseline or truth_flight, got '" + cell.mode + "'"};
   cell.camera = args.valueOr("camera", "");
   if (!cell.camera.empty() && cell.camera != "keypoints" && cell.camera != "image")
     return rt::Error{"--camera: expected keypoints or image, got '" + cell.camera + "'"};

@@ -23,8 +23,8 @@
 namespace aerotrack::app {
 int simCommand(const ParsedArgs& args) {
   const std::string mode = args.valueOr("mode", "proposed");
-  if (mode != "proposed" && mode != "baseline")
-    return failCommand("sim", "--mode: expected proposed or baseline, got '" + mode + "'");
+  if (mode != "proposed" && mode != "baseline" && mode != "truth_flight")
+    return failCommand("sim", "--mode: expected proposed, baseline or truth_flight, got '" + mode + "'");
   const auto seed = parseInt("seed", args.valueOr("seed", "1"), 0, INT64_MAX);
   if (!seed) return failCommand("sim", seed.error().message);
   std::optional<double> speed;
@@ -39,6 +39,7 @@ int simCommand(const ParsedArgs& args) {
   if (!config) return failCommand("sim", config.error().message);
   if (!config->hal.usesSim()) return failCommand("sim", config->source + ": hal: no device uses the sim backend");
   config->baseline_mode = mode == "baseline";
+  if (mode == "truth_flight") System::flyFromTruth(config->tasks);
   config->record_dir = args.valueOr("record", "");
   config->mcap_path = args.valueOr("mcap", "");
   config->mcap_compression = args.valueOr("mcap-compression", "zstd");
@@ -75,7 +76,8 @@ int simCommand(const ParsedArgs& args) {
 
   RunInfo info;
   info.executor = realtime ? "realtime" : "lockstep";
-  info.controller = (*system)->planningTask() == nullptr ? "baseline_follow (truth-fed stand-in)"
+  info.controller = mode == "truth_flight"                ? "truth_flight (flown from the truth; perception and estimation as proposed)"
+                    : (*system)->planningTask() == nullptr ? "baseline_follow (truth-fed stand-in)"
                     : config->baseline_mode ? "baseline (Fast-Tracker 1.0: fixed camera, no occlusion term)"
                                             : "proposed";
   const rt::TimeNs end_ns = start_ns + rt::secondsToNs(trial->duration_s);

@@ -62,7 +62,7 @@ SuiteSpec parseSuiteRoot(const rt::ConfigNode& root) {
       for (double v : c.getDoubleList("speeds", 0, 0.05, 20.0)) speeds.emplace_back(v);
       if (speeds.empty()) c.fail("speeds", "expected at least one speed (or leave the key out)");
     }
-    const std::vector<std::string> modes = c.getEnumList("modes", {"proposed", "baseline"});
+    const std::vector<std::string> modes = c.getEnumList("modes", {"proposed", "baseline", "truth_flight"});
     cell.camera = c.has("camera") ? c.getEnum("camera", {"keypoints", "image"}) : "keypoints";
     cell.config = c.getStringOr("config", "");
     c.finish();

@@ -2,8 +2,10 @@
 #include "system.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
+#include <string_view>
 
 #include "aerotrack/gimbal_control/gimbal_control_task.hpp"
 #include "aerotrack/trajectory_server/trajectory_server_task.hpp"
@@ -181,6 +183,19 @@ std::vector<std::string> System::knownTasks() {
   std::vector<std::string> names;
   for (const TaskKind& kind : taskKinds()) names.emplace_back(kind.name);
   return names;
+}
+
+void System::flyFromTruth(std::vector<rt::TaskSpec>& tasks) {
+  static constexpr std::array<std::string_view, 7> kFlight = {
+      "planning", "gimbal_control", "supervisor", "trajectory_server", "mapping", "camera_strip", "baseline_follow"};
+  std::erase_if(tasks, [](const rt::TaskSpec& spec) { return std::ranges::find(kFlight, spec.name) != kFlight.end(); });
+  // At the trajectory server's rate and priority: it stands in for the setpoint stream.
+  rt::TaskSpec follow;
+  follow.name = "baseline_follow";
+  follow.rate_hz = 100.0;
+  follow.budget_ms = 0.5;
+  follow.priority = 80;
+  tasks.push_back(follow);
 }
 
 System::TaskResult System::makeSimFollower(System& s, bool command_vehicle) {

@@ -123,6 +123,14 @@ class System {
   /// Names of the tasks the task table may use (the registry's rows, in order), for messages and tests.
   static std::vector<std::string> knownTasks();
 
+  /// `--mode truth_flight` (simulator only): the table's flight tasks (planning, gimbal control, supervisor,
+  /// trajectory server, and the mapping and camera strip that serve them) replaced by the truth-fed
+  /// baseline_follow, which flies the drone and aims the gimbal at the true person. Perception and estimation
+  /// run as the table has them, but nothing they decide moves the camera: two configurations of the detector or
+  /// the association see the same images, so their identity results compare trial by trial (a paired measure;
+  /// in closed loop a different association flies another path, and every later frame differs).
+  static void flyFromTruth(std::vector<rt::TaskSpec>& tasks);
+
   using TaskResult = rt::Expected<std::unique_ptr<rt::Task>>;
 
  private:
