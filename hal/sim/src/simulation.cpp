@@ -140,7 +140,10 @@ PersonState Simulation::personAt(TimeNs t_ns) const {
 
 PersonState Simulation::personStateAt(std::size_t id, TimeNs t_ns) const {
   if (id == 0) return personAt(t_ns);
-  return bystanders_[id - 1].state(rt::nsToSeconds(t_ns - start_ns_) - bystander_delay_s_[id - 1]);
+  // Their generated walk, side-stepping the target where it would run into them (give_way.hpp).
+  const double t_s = rt::nsToSeconds(t_ns - start_ns_);
+  return withOffset(bystanders_[id - 1].state(t_s - bystander_delay_s_[id - 1]),
+                    scenario_.bystanders.people[id - 1].give_way, t_s);
 }
 
 const AppearanceSignature& Simulation::personAppearance(std::size_t id) const {

@@ -349,12 +349,13 @@ TEST(Bystanders, EachReportedDetectionIsMatchedToItsOwnPersonAndFollowingABystan
 }
 
 TEST(Bystanders, GivenTwoOverlappingPeople_WhenADetectionFitsBoth_ThenTheOneMatchedBeforeIsKept) {
-  // A bystander stands 0.3 m behind the target, 0.1 m aside, both facing the hovering drone (6 m away): a
-  // detection of the target fits the bystander within half a torso too. The nearest match names the target;
-  // one kept from before (CLEAR MOT) names whoever was matched before while the detection still fits them.
+  // A bystander stands 0.5 m behind the target, 0.2 m aside (their bodies all but touching: no nearer, give_way.hpp),
+  // both facing the hovering drone (6 m away): a detection of the target fits the bystander within half a torso too.
+  // The nearest match names the target; one kept from before (CLEAR MOT) names whoever was matched before while the
+  // detection still fits them.
   auto sim = crowdSim(crowdYaml(R"(bystanders:
   people:
-    - {path: [{p_m: [6.3, 0.1]}]}
+    - {path: [{p_m: [6.5, 0.2]}]}
 )",
                                 false, 6.0));
   std::vector<DetectionFrame> frames;

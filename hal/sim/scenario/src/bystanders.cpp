@@ -512,12 +512,10 @@ BystandersSpec parseBystanders(const rt::ConfigNode& n, const std::vector<Box>& 
   return s;
 }
 
-rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spec, const PersonParams& target_params,
-                                                       const std::vector<PathPoint>& target_path,
-                                                       double target_start_delay_s,
-                                                       const Eigen::Vector2d& drone_start_m, bool mirrored,
-                                                       const std::vector<Box>& boxes,
-                                                       const std::vector<Cylinder>& cylinders, std::uint64_t seed) {
+rt::Expected<BystandersInstance> instantiateBystanders(
+    const BystandersSpec& spec, const PersonParams& target_params, const std::vector<PathPoint>& target_path,
+    double target_start_delay_s, const Eigen::Vector2d& drone_start_m, bool mirrored, const std::vector<Box>& boxes,
+    const std::vector<Cylinder>& cylinders, std::uint64_t seed, double duration_s) {
   auto rng = bystanderRng(seed);
   BystandersInstance inst;
   const Clothing random_target = randomClothing(rng);
@@ -591,9 +589,15 @@ rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spe
       inst.people.push_back(makeBystander(ctx, std::move(path.value()), delay_s, false, std::nullopt, origin));
     }
   }
-  for (const Bystander& b : inst.people) {
-    if (auto check = WalkingPerson::create(b.params, b.path); !check)
-      return rt::Error{b.origin + ": " + check.error().message};
+  GiveWayParams give_way;
+  give_way.min_distance_m = 2.0 * kPersonBodyRadiusM;
+  give_way.horizon_s = std::max(duration_s, give_way.sample_s);
+  for (Bystander& b : inst.people) {
+    auto walker = WalkingPerson::create(b.params, b.path);
+    if (!walker) return rt::Error{b.origin + ": " + walker.error().message};
+    auto steps = GiveWay::compute(*target, target_start_delay_s, *walker, b.start_delay_s, *world, give_way);
+    if (!steps) return rt::Error{b.origin + ": " + steps.error().message};
+    b.give_way = std::move(steps.value());
   }
   return inst;
 }

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "aerotrack/hal/sim/geometry.hpp"
+#include "aerotrack/hal/sim/give_way.hpp"
 #include "aerotrack/hal/sim/walking_person.hpp"
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/rt/expected.hpp"
@@ -175,6 +176,8 @@ struct Bystander {
   AppearanceSignature appearance{};
   bool look_alike = false;
   std::string origin;  ///< Which entry made them ("people[2]", "crossings[0]", ...), for errors and reports.
+  /// Their side-steps around the followed person (give_way.hpp): add to the walk of `path` (withOffset).
+  GiveWay give_way;
 };
 
 /// The concrete people of one instance besides the target.
@@ -192,13 +195,15 @@ BystandersSpec parseBystanders(const rt::ConfigNode& node, const std::vector<Box
 /// Generates the bystanders for one seed around the target (its params, instantiated path and start
 /// delay), keeping generated paths out of the obstacles, and random walks and groups also
 /// kDroneStartKeepOutM away from the drone's start (so nobody walks into the drone before it takes
-/// off). mirrored: the instance was mirrored about y = 0 (listed paths and regions follow). Error if
+/// off). mirrored: the instance was mirrored about y = 0 (listed paths and regions follow). Each one's
+/// side-steps around the target (Bystander::give_way) are sampled over the trial's first duration_s. Error if
 /// a generator cannot place what it was asked to.
 rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spec, const PersonParams& target_params,
                                                        const std::vector<PathPoint>& target_path,
                                                        double target_start_delay_s,
                                                        const Eigen::Vector2d& drone_start_m, bool mirrored,
                                                        const std::vector<Box>& boxes,
-                                                       const std::vector<Cylinder>& cylinders, std::uint64_t seed);
+                                                       const std::vector<Cylinder>& cylinders, std::uint64_t seed,
+                                                       double duration_s);
 
 }  // namespace aerotrack::hal::sim
