@@ -10,7 +10,11 @@ track looked at, and the crowd's worlds sorted"). Reads every trial's summary.js
 The fields are summary.json's `identity_switch_events` and `closest_approach_m` (docs/command-line.md).
 KEYPOINT_FOLDER, if given, supplies closest_approach_m for trials that lack it (the walkers do not react to the
 drone: a seed's world is the same in either camera mode), matched by seed.
-usage: crowd_switches.py FOLDER [KEYPOINT_FOLDER]
+--against OTHER compares FOLDER with another bench seed by seed (the pair is meaningful where the two saw the
+same flights: `--mode truth_flight`, docs/modules/closed-loop.md): the seeds that only one of them kept free of
+switches, and the exact two-sided McNemar test on those discordant seeds (a binomial test at one half), which a
+comparison of two rates cannot give.
+usage: crowd_switches.py FOLDER [KEYPOINT_FOLDER] [--against OTHER]
 """
 import json
 import math
@@ -61,9 +65,40 @@ def kind(event):
     return f"{who}, {reach}"
 
 
+def mcnemar_exact(only_a, only_b):
+    """Two-sided exact McNemar p-value: twice the smaller binomial tail at one half, at most 1."""
+    n = only_a + only_b
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, i) for i in range(min(only_a, only_b) + 1)) / 2 ** n
+    return min(1.0, 2 * tail)
+
+
+def paired(a_root, a, b_root, b):
+    shared = sorted(seed for seed in set(a) & set(b)
+                    if isinstance(a[seed].get("identity_switches"), int)
+                    and isinstance(b[seed].get("identity_switches"), int))
+    if not shared:
+        sys.exit(f"crowd_switches.py: {a_root} and {b_root} share no seed that reports identity_switches")
+    clean = lambda s: s["identity_switches"] == 0  # noqa: E731
+    only_a = [seed for seed in shared if clean(a[seed]) and not clean(b[seed])]
+    only_b = [seed for seed in shared if clean(b[seed]) and not clean(a[seed])]
+    print(f"paired on {len(shared)} seeds: without a switch {sum(clean(a[x]) for x in shared)} here, "
+          f"{sum(clean(b[x]) for x in shared)} against; only here: {len(only_a)} (seeds "
+          f"{', '.join(map(str, only_a)) or '-'}), only against: {len(only_b)} (seeds "
+          f"{', '.join(map(str, only_b)) or '-'}); exact McNemar p = {mcnemar_exact(len(only_a), len(only_b)):.3f}")
+
+
 def main(argv):
+    against = None
+    if "--against" in argv:
+        k = argv.index("--against")
+        if k + 1 >= len(argv):
+            sys.exit("usage: crowd_switches.py FOLDER [KEYPOINT_FOLDER] [--against OTHER]")
+        against = argv[k + 1]
+        argv = argv[:k] + argv[k + 2:]
     if len(argv) not in (2, 3):
-        sys.exit("usage: crowd_switches.py FOLDER [KEYPOINT_FOLDER]")
+        sys.exit("usage: crowd_switches.py FOLDER [KEYPOINT_FOLDER] [--against OTHER]")
     image = trials(argv[1])
     worlds = trials(argv[2]) if len(argv) == 3 else {}
     with_identity = {seed: s for seed, s in image.items() if isinstance(s.get("identity_switches"), int)}
@@ -99,6 +134,8 @@ def main(argv):
         low, high = wilson(k, len(group))
         print(f"  the look-alike's closest approach {label}: {k}/{len(group)} without a switch "
               f"[{low:.2f}, {high:.2f}]")
+    if against is not None:
+        paired(argv[1], image, against, trials(against))
 
 
 if __name__ == "__main__":

@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
 # scripts/crowd_switches.py on a made-up bench folder whose answers are known: four trials, two with a switch (one
 # to the look-alike 0.3 m from the person, one to another bystander 1.4 m away), the look-alike within 0.5 m of
-# the person in two of the worlds; a summary.json that is not JSON is one line naming it.
+# the person in two of the worlds; --against a second bench whose four trials are all free of switches (seeds 2
+# and 3 discordant: exact McNemar p = 2 x 1/4); a summary.json that is not JSON is one line naming it.
 # usage: crowd_switches.sh SCRIPT
 # Prints "crowd_switches ok" on success; otherwise the output that differed, and exits 1.
 set -u
 script=$1
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-trial() {  # seed switches events look_alike_closest
-  mkdir -p "$work/bench/trial-$1"
+trial() {  # seed switches events look_alike_closest [folder]
+  local folder=${5:-bench}
+  mkdir -p "$work/$folder/trial-$1"
   printf '{"seed": %s, "identity_switches": %s, "identity_switch_events": %s, "closest_approach_m": {"bystander": 0.2, "look_alike": %s}}\n' \
-    "$1" "$2" "$3" "$4" >"$work/bench/trial-$1/summary.json"
+    "$1" "$2" "$3" "$4" >"$work/$folder/trial-$1/summary.json"
 }
 trial 1 0 '[]' 0.4
 trial 2 1 '[{"t_s": 20.0, "from": 0, "to": 3, "separation_m": 0.3, "look_alike": true}]' 0.3
@@ -25,6 +27,13 @@ expected='2/4 trials without an identity switch, Wilson 95 % [0.15, 0.85]
   the look-alike'"'"'s closest approach > 0.5 m: 1/2 without a switch [0.09, 0.91]'
 if [ "$out" != "$expected" ]; then
   printf 'unexpected output:\n%s\n' "$out"
+  exit 1
+fi
+for seed in 1 2 3 4; do trial $seed 0 '[]' 1.0 other; done
+out=$(/usr/bin/python3 "$script" "$work/bench" --against "$work/other" 2>&1 | tail -n 1)
+expected='paired on 4 seeds: without a switch 2 here, 4 against; only here: 0 (seeds -), only against: 2 (seeds 2, 3); exact McNemar p = 0.500'
+if [ "$out" != "$expected" ]; then
+  printf 'unexpected paired output:\n%s\n' "$out"
   exit 1
 fi
 echo 'not json' >"$work/bench/trial-4/summary.json"
