@@ -18,6 +18,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
   params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
+  params.in_front_both_ways = node.getBoolOr("in_front_both_ways", params.in_front_both_ways);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -336,13 +337,15 @@ bool TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& 
     return false;
   const std::optional<TargetEstimator::Innovation> innovation = estimator_.innovation(*c.measurement);
   if (!innovation) return false;
-  // The innovation along the line of sight, against its own standard deviation: nearer (negative) by more than
-  // the gate's reach in one dimension. Across the line the regression's gate has judged them already.
+  // The innovation along the line of sight, against its own standard deviation: nearer (negative; or, both ways,
+  // farther) by more than the gate's reach in one dimension. Across the line the regression's gate has judged
+  // them already.
   Eigen::Vector3d line_W = Eigen::Vector3d::Zero();
   line_W.head<2>() = c.measurement->bearing_W;
   const double along_m = innovation->nu_m.dot(line_W);
   const double variance_m2 = line_W.dot(innovation->S_m2 * line_W);
-  return variance_m2 > 0.0 && along_m < 0.0 && along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
+  return variance_m2 > 0.0 && (along_m < 0.0 || params_.in_front_both_ways) &&
+         along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
 }
 
 bool TargetTask::ambiguous(const hal::DetectionFrame& frame, int followed, int count,

@@ -196,6 +196,17 @@ TEST(AppConfig, GivenInFrontAfterRanged_ThenItIsReadCheckedAndWrittenBack) {
   }
 }
 
+TEST(AppConfig, GivenInFrontBothWays_ThenItIsReadCheckedAndWrittenBack) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_both_ways", "true"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_TRUE(c->estimation->task.in_front_both_ways);
+  EXPECT_NE(toYaml(*c).find("in_front_both_ways: true"), std::string::npos);
+  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_both_ways", "sometimes"}});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("estimation.in_front_both_ways"), std::string::npos) << bad.error().message;
+}
+
 TEST(AppConfig, GivenWholeFrameOnCropLost_ThenItIsReadCheckedAndWrittenBack) {
   const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"perception.whole_frame.on_crop_lost", "false"}});
   ASSERT_TRUE(c) << c.error().message;

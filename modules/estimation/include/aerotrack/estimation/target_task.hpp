@@ -91,6 +91,11 @@ struct TargetTaskParams {
   /// drone and the person was taken (image-mode crowd seeds 44 and 53, 0.9-1.1 m nearer). Someone so refused starts
   /// a bystander track: they are someone else, and compete on it for the frames after (crowd seed 40). 0: off.
   int in_front_after_ranged = 0;
+  /// With in_front_after_ranged: someone ranged farther than the track predicts, by more than the gate allows
+  /// along the line of sight, is someone else too -- behind the person and beside them in the image, where the
+  /// depth camera sees past the person's body to theirs (a look-alike passing at arm's length behind the person:
+  /// traced, image-mode crowd seed 3, ranged 0.32 m farther at d2 59 and given at the regression's distance).
+  bool in_front_both_ways = false;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
