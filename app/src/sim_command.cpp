@@ -76,7 +76,8 @@ int simCommand(const ParsedArgs& args) {
 
   RunInfo info;
   info.executor = realtime ? "realtime" : "lockstep";
-  info.controller = mode == "truth_flight"                ? "truth_flight (flown from the truth; perception and estimation as proposed)"
+  info.controller = mode == "truth_flight"
+                        ? "truth_flight (flown from the truth; perception and estimation as proposed)"
                     : (*system)->planningTask() == nullptr ? "baseline_follow (truth-fed stand-in)"
                     : config->baseline_mode ? "baseline (Fast-Tracker 1.0: fixed camera, no occlusion term)"
                                             : "proposed";

@@ -372,9 +372,9 @@ rt::Expected<ScenarioInstance> instantiate(const ScenarioSpec& spec, std::uint64
   auto person = WalkingPerson::create(s.person, s.path);
   if (!person) return rt::Error{spec.source + ": person: " + person.error().message};
   inst.duration_s = std::min(s.max_duration_s, s.person_start_delay_s + person->durationS() + s.end_margin_s);
-  auto bystanders = instantiateBystanders(s.bystanders, s.person, s.path, s.person_start_delay_s,
-                                          s.drone.start_m.head<2>(), inst.mirrored, s.boxes, s.cylinders, seed,
-                                          inst.duration_s);
+  auto bystanders =
+      instantiateBystanders(s.bystanders, s.person, s.path, s.person_start_delay_s, s.drone.start_m.head<2>(),
+                            inst.mirrored, s.boxes, s.cylinders, seed, inst.duration_s);
   if (!bystanders) return rt::Error{spec.source + ": " + bystanders.error().message};
   inst.bystanders = std::move(bystanders.value());
   return inst;

@@ -198,12 +198,9 @@ BystandersSpec parseBystanders(const rt::ConfigNode& node, const std::vector<Box
 /// off). mirrored: the instance was mirrored about y = 0 (listed paths and regions follow). Each one's
 /// side-steps around the target (Bystander::give_way) are sampled over the trial's first duration_s. Error if
 /// a generator cannot place what it was asked to.
-rt::Expected<BystandersInstance> instantiateBystanders(const BystandersSpec& spec, const PersonParams& target_params,
-                                                       const std::vector<PathPoint>& target_path,
-                                                       double target_start_delay_s,
-                                                       const Eigen::Vector2d& drone_start_m, bool mirrored,
-                                                       const std::vector<Box>& boxes,
-                                                       const std::vector<Cylinder>& cylinders, std::uint64_t seed,
-                                                       double duration_s);
+rt::Expected<BystandersInstance> instantiateBystanders(
+    const BystandersSpec& spec, const PersonParams& target_params, const std::vector<PathPoint>& target_path,
+    double target_start_delay_s, const Eigen::Vector2d& drone_start_m, bool mirrored, const std::vector<Box>& boxes,
+    const std::vector<Cylinder>& cylinders, std::uint64_t seed, double duration_s);
 
 }  // namespace aerotrack::hal::sim
