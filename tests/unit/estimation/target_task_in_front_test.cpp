@@ -73,12 +73,19 @@ struct Scene {
   TargetTaskStats stats;
 };
 
-Scene run(int in_front_after_ranged, double crossing_s) {
+/// The pinhole regression, the depth camera's ranges, and the rule for someone else along the line of sight.
+TargetTaskParams rangedParams(int in_front_after_ranged, bool both_ways) {
   TargetTaskParams params;
   params.localization = test::pinholeLocalization();
   params.in_front_after_ranged = in_front_after_ranged;
+  params.in_front_both_ways = both_ways;
   params.depth_range.enabled = true;
   params.depth_range.body_offset_m = kBodyRadiusM;
+  return params;
+}
+
+Scene run(int in_front_after_ranged, double crossing_s) {
+  const TargetTaskParams params = rangedParams(in_front_after_ranged, false);
   rt::LatestSlot<hal::DetectionFrame> followed;
   rt::SharedSlot<hal::DepthFrame> depth;
   test::TaskRig rig(params);
@@ -157,12 +164,7 @@ BehindScene runBehind(bool both_ways) {
   constexpr double kWalkerXM = kPersonXM + 0.6;
   constexpr double kWalkerSpeedMps = 0.6;
   constexpr double kCrossingS = 2.5;
-  TargetTaskParams params;
-  params.localization = test::pinholeLocalization();
-  params.in_front_after_ranged = 5;
-  params.in_front_both_ways = both_ways;
-  params.depth_range.enabled = true;
-  params.depth_range.body_offset_m = kBodyRadiusM;
+  const TargetTaskParams params = rangedParams(5, both_ways);
   rt::LatestSlot<hal::DetectionFrame> followed;
   rt::SharedSlot<hal::DepthFrame> depth;
   test::TaskRig rig(params);
