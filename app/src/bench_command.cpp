@@ -119,8 +119,7 @@ rt::Expected<SuiteSpec> benchCells(const ParsedArgs& args) {
   SuiteCell cell;
   cell.scenario = absoluteScenario(args.values.at("scenario"));
   cell.mode = args.valueOr("mode", "proposed");
-  if (cell.mode != "proposed" && cell.mode != "baseline" && cell.mode != "truth_flight")
-    return rt::Error{"--mode: expected proposed, baseline or truth_flight, got '" + cell.mode + "'"};
+  if (const std::string bad = badModeError(cell.mode); !bad.empty()) return rt::Error{bad};
   cell.camera = args.valueOr("camera", "");
   if (!cell.camera.empty() && cell.camera != "keypoints" && cell.camera != "image")
     return rt::Error{"--camera: expected keypoints or image, got '" + cell.camera + "'"};

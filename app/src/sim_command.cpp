@@ -18,13 +18,13 @@
 #include "run_executors.hpp"
 #include "signals.hpp"
 #include "sim_report.hpp"
+#include "suite.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
 int simCommand(const ParsedArgs& args) {
   const std::string mode = args.valueOr("mode", "proposed");
-  if (mode != "proposed" && mode != "baseline" && mode != "truth_flight")
-    return failCommand("sim", "--mode: expected proposed, baseline or truth_flight, got '" + mode + "'");
+  if (const std::string bad = badModeError(mode); !bad.empty()) return failCommand("sim", bad);
   const auto seed = parseInt("seed", args.valueOr("seed", "1"), 0, INT64_MAX);
   if (!seed) return failCommand("sim", seed.error().message);
   std::optional<double> speed;

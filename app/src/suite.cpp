@@ -15,6 +15,15 @@
 #include "paths.hpp"
 
 namespace aerotrack::app {
+
+std::string badModeError(const std::string& mode) {
+  const std::vector<std::string> modes = simModes();
+  if (std::find(modes.begin(), modes.end(), mode) != modes.end()) return "";
+  std::string expected;
+  for (std::size_t i = 0; i < modes.size(); ++i)
+    expected += (i == 0 ? "" : i + 1 == modes.size() ? " or " : ", ") + modes[i];
+  return "--mode: expected " + expected + ", got '" + mode + "'";
+}
 namespace {
 
 std::string suiteSpeedText(double speed_mps) {
@@ -62,7 +71,7 @@ SuiteSpec parseSuiteRoot(const rt::ConfigNode& root) {
       for (double v : c.getDoubleList("speeds", 0, 0.05, 20.0)) speeds.emplace_back(v);
       if (speeds.empty()) c.fail("speeds", "expected at least one speed (or leave the key out)");
     }
-    const std::vector<std::string> modes = c.getEnumList("modes", {"proposed", "baseline", "truth_flight"});
+    const std::vector<std::string> modes = c.getEnumList("modes", simModes());
     cell.camera = c.has("camera") ? c.getEnum("camera", {"keypoints", "image"}) : "keypoints";
     cell.config = c.getStringOr("config", "");
     c.finish();

@@ -18,6 +18,13 @@
 
 namespace aerotrack::app {
 
+/// The modes a simulated trial flies: `sim --mode`, `bench --mode` and a suite cell's `modes` accept these.
+inline std::vector<std::string> simModes() {
+  return {"proposed", "baseline", "truth_flight"};
+}
+/// Empty if `mode` is one of simModes(); else the one-line error "--mode: expected ..., got '<mode>'".
+std::string badModeError(const std::string& mode);
+
 /// One cell of the matrix, expanded: every trial of it runs `aerotrack sim` with these options.
 struct SuiteCell {
   std::string scenario;             ///< Name in config/scenarios/ or a YAML file.
