@@ -252,7 +252,9 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
     out << YAML::Key << "ambiguity_radius_m" << YAML::Value << e.task.ambiguity_radius_m;
     out << YAML::Key << "in_front_after_ranged" << YAML::Value << e.task.in_front_after_ranged;
-    out << YAML::Key << "in_front_both_ways" << YAML::Value << e.task.in_front_both_ways;
+    out << YAML::Key << "in_front_test" << YAML::Value
+        << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");
+    out << YAML::Key << "hidden_behind_m" << YAML::Value << e.task.hidden_behind_m;
     out << YAML::Key << "verdict_torso_height_m" << YAML::Value << e.task.verdict_torso_height_m;
     out << YAML::Key << "verdict_torso_m" << YAML::Value << e.task.verdict_torso_m;
     const estimation::SwapCheckParams& w = e.task.swap_check;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "aerotrack/estimation/assignment.hpp"
+
 namespace aerotrack::estimation {
 
 void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params) {
@@ -18,7 +20,11 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
   params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
-  params.in_front_both_ways = node.getBoolOr("in_front_both_ways", params.in_front_both_ways);
+  if (node.has("in_front_test"))
+    params.in_front_test = node.getEnum("in_front_test", {"nearer", "gate"}) == "gate"
+                               ? TargetTaskParams::InFrontTest::kGate
+                               : TargetTaskParams::InFrontTest::kNearer;
+  params.hidden_behind_m = node.getDoubleOr("hidden_behind_m", params.hidden_behind_m, 0.0, 5.0);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -216,18 +222,12 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   // gone since: the re-identification after an occlusion). The followed track's pairs also pass the colour the
   // task has learnt, a bystander's the colour learnt for their track; the cost is the lock-on's form (gate
   // fraction plus weighted colour fraction) for every track alike. While the followed person is lost, a bystander track
-  // never seen beside them may be them, and does not compete. The cheapest distance pairs first (global nearest
-  // neighbour, greedy); then, if nobody went to the followed track, a bearing -- unless it fits better a bystander
-  // track that no one in the frame explains (a bearing fits anyone on its line of sight). Nobody for the followed
-  // track: it coasts (never the lock-on's choice, whose bystander the estimator's restart rule would hand the
-  // track to).
-  struct Pair {
-    int person;
-    int track;  // kFollowed or a bystander track
-    double cost;
-  };
-  std::array<Pair, hal::kMaxPersons*(kMaxBystanderTracks + 1)> pairs{};
-  std::size_t pair_count = 0;
+  // never seen beside them may be them, and does not compete. The cheapest assignment of distances to tracks (global
+  // nearest neighbour, solved exactly: assignment.hpp); then, if nobody went to the followed track, a bearing -- unless
+  // it fits better a bystander track that no one in the frame explains (a bearing fits anyone on its line of sight).
+  // Nobody for the followed track: it coasts (never the lock-on's choice, whose bystander the estimator's restart rule
+  // would hand the track to). Column 0 of the costs is the followed track, column 1 + j bystander track j.
+  AssignmentCosts costs;
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};
   std::array<bool, hal::kMaxPersons> in_front{};  // ranged in front of the followed person: someone else
@@ -252,11 +252,16 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
       if (!competes(j)) continue;
       if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, c.judged()), bystanders_.look(j)))
-        pairs[pair_count++] = {i, static_cast<int>(j), *cost};
+        costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
     }
     const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
     const std::optional<double> followed_cost = cost_of(d2, reference_);
     if (!followed_cost) continue;
+    if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
+      a.behind_bystander = true;
+      in_front[static_cast<std::size_t>(i)] = true;
+      continue;
+    }
     if (inFrontOfTheFollowed(c, prior)) {
       a.in_front = true;
       in_front[static_cast<std::size_t>(i)] = true;
@@ -272,25 +277,26 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       bearing_cost[static_cast<std::size_t>(i)] = cost;
       bearing_d2[static_cast<std::size_t>(i)] = *d2;
     } else {
-      pairs[pair_count++] = {i, kFollowed, cost};
+      costs.set(static_cast<std::size_t>(i), 0, cost);
     }
   }
-  std::sort(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(pair_count),
-            [](const Pair& x, const Pair& y) { return x.cost < y.cost; });
+  // A person left without a track costs as much as the dearest pair the gates allow (at both gates' edges), so
+  // that nobody who could take a free track is left out: of the assignments that pair the most people, the
+  // cheapest.
+  const AssignmentResult assigned =
+      cheapestAssignment(costs, static_cast<std::size_t>(count), 1 + bystanders_.capacity(), 1.0 + t.appearance_weight);
   std::array<bool, kMaxBystanderTracks> track_taken{};
   std::array<bool, hal::kMaxPersons> person_taken{};
-  for (std::size_t k = 0; k < pair_count; ++k) {
-    const Pair& p = pairs[k];
-    if (person_taken[static_cast<std::size_t>(p.person)]) continue;
-    if (p.track == kFollowed) {
-      if (a.followed >= 0) continue;
-      a.followed = p.person;
+  for (int i = 0; i < count; ++i) {
+    const int column = assigned.column[static_cast<std::size_t>(i)];
+    if (column == AssignmentResult::kNone) continue;
+    if (column == 0) {
+      a.followed = i;
     } else {
-      if (track_taken[static_cast<std::size_t>(p.track)]) continue;
-      track_taken[static_cast<std::size_t>(p.track)] = true;
-      a.track[static_cast<std::size_t>(p.person)] = p.track;
+      track_taken[static_cast<std::size_t>(column - 1)] = true;
+      a.track[static_cast<std::size_t>(i)] = column - 1;
     }
-    person_taken[static_cast<std::size_t>(p.person)] = true;
+    person_taken[static_cast<std::size_t>(i)] = true;
   }
   double best_bearing_cost = std::numeric_limits<double>::infinity();
   int best_bearing = -1;
@@ -335,17 +341,41 @@ bool TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& 
   const int after = params_.in_front_after_ranged;
   if (after <= 0 || ranged_streak_ < after || prior.lost || !c.measurement || !c.measurement->ranged || !c.unranged)
     return false;
+  if (params_.in_front_test == TargetTaskParams::InFrontTest::kGate) {
+    const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
+    return d2 && *d2 > params_.estimator.gate_chi2;
+  }
   const std::optional<TargetEstimator::Innovation> innovation = estimator_.innovation(*c.measurement);
   if (!innovation) return false;
-  // The innovation along the line of sight, against its own standard deviation: nearer (negative; or, both ways,
-  // farther) by more than the gate's reach in one dimension. Across the line the regression's gate has judged
-  // them already.
+  // The innovation along the line of sight, against its own standard deviation: nearer (negative) by more than the
+  // gate's reach in one dimension. Across the line the regression's gate has judged them already.
   Eigen::Vector3d line_W = Eigen::Vector3d::Zero();
   line_W.head<2>() = c.measurement->bearing_W;
   const double along_m = innovation->nu_m.dot(line_W);
   const double variance_m2 = line_W.dot(innovation->S_m2 * line_W);
-  return variance_m2 > 0.0 && (along_m < 0.0 || params_.in_front_both_ways) &&
-         along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
+  return variance_m2 > 0.0 && along_m < 0.0 && along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
+}
+
+bool TargetTask::hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
+                                        const Eigen::Vector3d& p_WC_m, rt::TimeNs t_ns) const {
+  const double body_m = params_.hidden_behind_m;
+  if (!(body_m > 0.0) || prior.lost) return false;
+  // The line of sight from the camera to the followed person's prediction, on the ground plane.
+  const Eigen::Vector2d camera_m = p_WC_m.head<2>();
+  const Eigen::Vector2d line_m = prior.p_WT_m.head<2>() - camera_m;
+  const double range_m = line_m.norm();
+  if (!(range_m > body_m)) return false;
+  const Eigen::Vector2d toward = line_m / range_m;
+  for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
+    if (costs.at(static_cast<std::size_t>(person), 1 + j) == AssignmentCosts::kNotAllowed) continue;
+    const std::optional<Eigen::Vector3d> p_m = bystanders_.position(j, t_ns);
+    if (!p_m) continue;
+    const Eigen::Vector2d from_camera_m = p_m->head<2>() - camera_m;
+    const double along_m = from_camera_m.dot(toward);
+    const double across_m = std::abs(from_camera_m.x() * toward.y() - from_camera_m.y() * toward.x());
+    if (along_m > 0.0 && along_m < range_m - body_m && across_m < body_m) return true;
+  }
+  return false;
 }
 
 bool TargetTask::ambiguous(const hal::DetectionFrame& frame, int followed, int count,
@@ -589,6 +619,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     const int person = a.followed;
     if (a.ambiguous) ++stats_.ambiguous;
     if (a.in_front) ++stats_.in_front;
+    if (a.behind_bystander) ++stats_.behind_bystander;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
       look_refused_d2_sum_ = 0.0;

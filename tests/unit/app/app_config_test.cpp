@@ -207,15 +207,28 @@ TEST(AppConfig, GivenTheSimConfig_ThenEveryPhotoHasADepthImageWithinTheOffset) {
   EXPECT_GE(c->estimation->task.depth_range.max_offset_s, 1.0 / hal::sim::DepthCameraSpec{}.rate_hz);
 }
 
-TEST(AppConfig, GivenInFrontBothWays_ThenItIsReadCheckedAndWrittenBack) {
-  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_both_ways", "true"}});
+TEST(AppConfig, GivenInFrontTest_ThenItIsReadCheckedAndWrittenBack) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_test", "nearer"}});
   ASSERT_TRUE(c) << c.error().message;
   ASSERT_TRUE(c->estimation);
-  EXPECT_TRUE(c->estimation->task.in_front_both_ways);
-  EXPECT_NE(toYaml(*c).find("in_front_both_ways: true"), std::string::npos);
-  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_both_ways", "sometimes"}});
+  EXPECT_EQ(c->estimation->task.in_front_test, estimation::TargetTaskParams::InFrontTest::kNearer);
+  EXPECT_NE(toYaml(*c).find("in_front_test: nearer"), std::string::npos);
+  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_test", "sometimes"}});
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("estimation.in_front_both_ways"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find("estimation.in_front_test"), std::string::npos) << bad.error().message;
+}
+
+TEST(AppConfig, GivenHiddenBehind_ThenItIsReadCheckedAndWrittenBack) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.hidden_behind_m", "0.75"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_DOUBLE_EQ(c->estimation->task.hidden_behind_m, 0.75);
+  EXPECT_NE(toYaml(*c).find("hidden_behind_m: 0.75"), std::string::npos);
+  for (const char* bad_value : {"-0.1", "wide"}) {
+    const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.hidden_behind_m", bad_value}});
+    ASSERT_FALSE(bad) << bad_value;
+    EXPECT_NE(bad.error().message.find("estimation.hidden_behind_m"), std::string::npos) << bad.error().message;
+  }
 }
 
 TEST(AppConfig, GivenWholeFrameOnCropLost_ThenItIsReadCheckedAndWrittenBack) {

@@ -4,7 +4,7 @@
 // them at the person's distance (traced in the image-mode crowd, seeds 44 and 53: 3.17 m against the person's
 // 3.17 m, the crosser at 2.25 m). The gate takes that distance. The depth camera, rendered here from the two
 // bodies, ranges the crosser 1.5 m nearer: far outside the gate, and without the rule the regression's distance
-// is given instead (the fallback for a track restarted with a wrong velocity). in_front_both_ways: a walker passes
+// is given instead (the fallback for a track restarted with a wrong velocity). in_front_test: gate: a walker passes
 // 0.6 m behind the person, and where they step out beside the person's body the crop shows them, torso read at the
 // person's distance (traced, crowd seed 3: a look-alike ranged 0.32 m farther, given at the regression's distance).
 #include <gtest/gtest.h>
@@ -74,11 +74,11 @@ struct Scene {
 };
 
 /// The pinhole regression, the depth camera's ranges, and the rule for someone else along the line of sight.
-TargetTaskParams rangedParams(int in_front_after_ranged, bool both_ways) {
+TargetTaskParams rangedParams(int in_front_after_ranged, bool on_the_gate) {
   TargetTaskParams params;
   params.localization = test::pinholeLocalization();
   params.in_front_after_ranged = in_front_after_ranged;
-  params.in_front_both_ways = both_ways;
+  params.in_front_test = on_the_gate ? TargetTaskParams::InFrontTest::kGate : TargetTaskParams::InFrontTest::kNearer;
   params.depth_range.enabled = true;
   params.depth_range.body_offset_m = kBodyRadiusM;
   return params;
@@ -160,11 +160,11 @@ struct BehindScene {
 /// walker's torso is beside the person's body in the image (0.3-0.45 m aside at the person's distance: the depth
 /// camera's ray through it passes the person and ends on the walker) the crop shows the walker, torso read at the
 /// person's distance; elsewhere the person.
-BehindScene runBehind(bool both_ways) {
+BehindScene runBehind(bool on_the_gate) {
   constexpr double kWalkerXM = kPersonXM + 0.6;
   constexpr double kWalkerSpeedMps = 0.6;
   constexpr double kCrossingS = 2.5;
-  const TargetTaskParams params = rangedParams(5, both_ways);
+  const TargetTaskParams params = rangedParams(5, on_the_gate);
   rt::LatestSlot<hal::DetectionFrame> followed;
   rt::SharedSlot<hal::DepthFrame> depth;
   test::TaskRig rig(params);
@@ -197,14 +197,14 @@ BehindScene runBehind(bool both_ways) {
   return scene;
 }
 
-TEST(TargetTaskInFront, GivenAWalkerRangedBehindThePersonBesideThem_WhenBothWays_ThenTheFollowedTrackDoesNotTakeThem) {
+TEST(TargetTaskInFront, GivenAWalkerRangedBehindThePersonBesideThem_WhenJudgedOnTheGate_ThenTheTrackDoesNotTakeThem) {
   const BehindScene taken = runBehind(false);
   const BehindScene kept = runBehind(true);
   ASSERT_GT(kept.walker_shown, 5);  // on both sides of the person, a few frames each
   // Nearer only: the walker's depth range fails the gate, and the regression's distance of them is given, every time.
   EXPECT_EQ(taken.walker_given, taken.walker_shown);
   EXPECT_EQ(taken.stats.in_front, 0U);
-  // Both ways: never; each such frame is counted, and the person is taken in every one of their frames.
+  // On the gate: never; each such frame is counted, and the person is taken in every one of their frames.
   EXPECT_EQ(kept.walker_given, 0);
   EXPECT_EQ(kept.stats.in_front, static_cast<std::size_t>(kept.walker_shown));
   EXPECT_EQ(kept.person_given, kept.person_frames);

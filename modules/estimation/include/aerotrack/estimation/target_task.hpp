@@ -22,6 +22,7 @@
 #include <limits>
 #include <optional>
 
+#include "aerotrack/estimation/assignment.hpp"
 #include "aerotrack/estimation/bystander_tracks.hpp"
 #include "aerotrack/estimation/camera_to_world.hpp"
 #include "aerotrack/estimation/depth_range.hpp"
@@ -91,11 +92,24 @@ struct TargetTaskParams {
   /// drone and the person was taken (image-mode crowd seeds 44 and 53, 0.9-1.1 m nearer). Someone so refused starts
   /// a bystander track: they are someone else, and compete on it for the frames after (crowd seed 40). 0: off.
   int in_front_after_ranged = 0;
-  /// With in_front_after_ranged: someone ranged farther than the track predicts, by more than the gate allows
-  /// along the line of sight, is someone else too -- behind the person and beside them in the image, where the
-  /// depth camera sees past the person's body to theirs (a look-alike passing at arm's length behind the person:
-  /// traced, image-mode crowd seed 3, ranged 0.32 m farther at d2 59 and given at the regression's distance).
-  bool in_front_both_ways = false;
+  /// With in_front_after_ranged, whom the depth camera shows to be someone else (`in_front_test:`):
+  ///  - kNearer: someone ranged nearer than the track predicts by more than the gate allows along the line of sight;
+  ///  - kGate: someone whose ranged measurement the track's gate refuses, whichever way: nearer, farther (behind
+  ///    the person and beside them in the image, where the depth camera sees past the person's body to theirs:
+  ///    traced, image-mode crowd seed 3, ranged 0.32 m farther at d2 59 and given at the regression's distance), or
+  ///    nearer and aside together (seed 41: d2 18.9, the regression's 12.8 taken; seed 46: 0.31 m nearer at d2
+  ///    17.7, a look-alike who then took the track for 4.8 s). Its squared Mahalanobis distance is at least the
+  ///    line of sight's part of it, so it refuses everyone kNearer does.
+  enum class InFrontTest { kNearer, kGate };
+  InFrontTest in_front_test = InFrontTest::kNearer;
+  /// With choose_by_estimate: someone on a bystander track who stands between the camera and the followed
+  /// person's prediction -- nearer along the line of sight by more than this, their centre within this of the line
+  /// -- hides the person, and whoever fits that bystander's track is not given to the followed track (they are the
+  /// one in front). The person's body and theirs, two body radii: nearer, they would overlap. Without it, a
+  /// look-alike stepping between the drone and the person, alone in the crop, fit the coasting followed track's
+  /// grown gate as well as their own young track (colour learnt from few frames) and was taken (traced: image-mode
+  /// crowd seed 46, 0.6 m in front, d2 5.7 to the followed track, for 4.8 s). 0: off.
+  double hidden_behind_m = 0.0;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
@@ -121,19 +135,20 @@ inline constexpr std::size_t kMaxBystanderTracks = kMaxOtherPeople;
 void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params);
 
 struct TargetTaskStats {
-  std::uint64_t detections = 0;       ///< Frames with the followed person.
-  std::uint64_t unreliable = 0;       ///< ... whose torso was not reliable.
-  std::uint64_t bearings = 0;         ///< ... of which the estimator used a bearing (bearing_fallback).
-  std::uint64_t no_pose = 0;          ///< ... whose capture time the histories did not cover.
-  std::uint64_t accepted = 0;         ///< Measurements the estimator used (or started from).
-  std::uint64_t rejected = 0;         ///< Measurements the estimator refused.
-  std::uint64_t reassigned = 0;       ///< Frames whose person the track's prediction chose over the lock-on's.
-  std::uint64_t swapped_back = 0;     ///< Times the swap check gave the followed track back its kept hypothesis.
-  std::uint64_t ambiguous = 0;        ///< Frames the followed track was given nobody: someone within reach.
-  std::uint64_t in_front = 0;         ///< Frames someone it would take was ranged in front of the followed person.
-  std::uint64_t depth_ranged = 0;     ///< ... of the followed person's frames, ranged by the depth camera.
-  std::uint64_t depth_disagreed = 0;  ///< ... whose depth range the regression's disagreed with (not used).
-  std::uint64_t depth_unseen = 0;     ///< ... for which no depth image near in time saw them (occluded, out of view).
+  std::uint64_t detections = 0;        ///< Frames with the followed person.
+  std::uint64_t unreliable = 0;        ///< ... whose torso was not reliable.
+  std::uint64_t bearings = 0;          ///< ... of which the estimator used a bearing (bearing_fallback).
+  std::uint64_t no_pose = 0;           ///< ... whose capture time the histories did not cover.
+  std::uint64_t accepted = 0;          ///< Measurements the estimator used (or started from).
+  std::uint64_t rejected = 0;          ///< Measurements the estimator refused.
+  std::uint64_t reassigned = 0;        ///< Frames whose person the track's prediction chose over the lock-on's.
+  std::uint64_t swapped_back = 0;      ///< Times the swap check gave the followed track back its kept hypothesis.
+  std::uint64_t ambiguous = 0;         ///< Frames the followed track was given nobody: someone within reach.
+  std::uint64_t in_front = 0;          ///< Frames someone it would take was ranged in front of the followed person.
+  std::uint64_t behind_bystander = 0;  ///< Frames someone it would take fit a bystander in front of the person.
+  std::uint64_t depth_ranged = 0;      ///< ... of the followed person's frames, ranged by the depth camera.
+  std::uint64_t depth_disagreed = 0;   ///< ... whose depth range the regression's disagreed with (not used).
+  std::uint64_t depth_unseen = 0;      ///< ... for which no depth image near in time saw them (occluded, out of view).
 };
 
 class TargetTask final : public rt::Task {
@@ -177,7 +192,6 @@ class TargetTask final : public rt::Task {
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
   /// (the capture time's pose; unknown: no measurement).
   Candidate candidate(const hal::DetectionFrame& frame, int index, const std::optional<Eigen::Isometry3d>& T_WC) const;
-  static constexpr int kFollowed = -1;
   static constexpr int kNoTrack = -1;
   static constexpr int kNewTrack = -2;
   struct Association {
@@ -187,6 +201,7 @@ class TargetTask final : public rt::Task {
     double look_refused_d2 = std::numeric_limits<double>::infinity();  ///< ... the nearest such distance's d2.
     bool ambiguous = false;  ///< The followed track was given nobody: someone stood too near (ambiguity_radius_m).
     bool in_front = false;   ///< Someone its gate took was ranged in front of the person (in_front_after_ranged).
+    bool behind_bystander = false;  ///< Someone its gate took fit a bystander in front of the person (hidden_behind_m).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
@@ -197,6 +212,10 @@ class TargetTask final : public rt::Task {
                  const std::array<bool, kMaxBystanderTracks>& track_taken) const;
   /// Whether the candidate's depth range puts them in front of the followed person (in_front_after_ranged).
   bool inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const;
+  /// Whether `person` fits (an allowed pair in `costs`) a bystander track standing in front of the followed
+  /// person's prediction, seen from the camera at p_WC_m (hidden_behind_m).
+  bool hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
+                              const Eigen::Vector3d& p_WC_m, rt::TimeNs t_ns) const;
   /// The swap check's evidence in this frame (SwapCheck); true while its kept hypothesis is open and the followed
   /// track holds someone it does not explain (the verdict then asks the detector for the whole frame). If confirmed,
   /// the followed track becomes the kept one and `a` is rewritten (its person the one who fit the kept track, whom the
