@@ -255,6 +255,8 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "in_front_test" << YAML::Value
         << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");
     out << YAML::Key << "hidden_behind_m" << YAML::Value << e.task.hidden_behind_m;
+    out << YAML::Key << "young_look_samples" << YAML::Value << e.task.young_look_samples;
+    out << YAML::Key << "depth_vets_bearings" << YAML::Value << e.task.depth_vets_bearings;
     out << YAML::Key << "verdict_torso_height_m" << YAML::Value << e.task.verdict_torso_height_m;
     out << YAML::Key << "verdict_torso_m" << YAML::Value << e.task.verdict_torso_m;
     const estimation::SwapCheckParams& w = e.task.swap_check;

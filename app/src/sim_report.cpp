@@ -51,6 +51,7 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
                         {"depth_unseen", s.depth_unseen}};
   out["in_front"] = s.in_front;
   out["behind_bystander"] = s.behind_bystander;
+  out["seen_through"] = s.seen_through;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

@@ -1,6 +1,7 @@
 // Tracks of the other people in view: see bystander_tracks.hpp.
 #include "aerotrack/estimation/bystander_tracks.hpp"
 
+#include <algorithm>
 #include <limits>
 
 namespace aerotrack::estimation {
@@ -11,7 +12,7 @@ rt::Expected<BystanderTracks> BystanderTracks::create(const TargetEstimatorParam
   for (std::size_t i = 0; i < capacity; ++i) {
     auto filter = TargetEstimator::create(params);
     if (!filter) return filter.error();
-    tracks.push_back(Track{std::move(filter.value()), false, false, 0, perception::Appearance{}});
+    tracks.push_back(Track{std::move(filter.value()), false, false, 0, perception::Appearance{}, 0});
   }
   return BystanderTracks(std::move(tracks));
 }
@@ -29,8 +30,11 @@ MeasurementVerdict BystanderTracks::update(std::size_t i, const TargetMeasuremen
                                            const perception::Appearance& look, double rate, bool with_followed) {
   const MeasurementVerdict verdict = tracks_[i].filter.add(m);
   if (verdict != MeasurementVerdict::kAccepted) return verdict;
-  if (with_followed) tracks_[i].seen_with_followed = true;
-  perception::blendAppearance(tracks_[i].look, look, rate);
+  Track& t = tracks_[i];
+  if (with_followed) t.seen_with_followed = true;
+  if (!look.valid) return verdict;
+  ++t.look_samples;
+  perception::blendAppearance(t.look, look, std::max(rate, 1.0 / t.look_samples));
   return verdict;
 }
 
@@ -54,6 +58,7 @@ std::size_t BystanderTracks::start(const TargetMeasurement& m, const perception:
   t.seen_with_followed = with_followed;
   t.started_ns = m.stamp_ns;
   t.look = look;
+  t.look_samples = look.valid ? 1 : 0;
   (void)t.filter.add(m);  // the first measurement starts the filter
   return slot;
 }
@@ -63,6 +68,7 @@ void BystanderTracks::drop(std::size_t i) {
   tracks_[i].used = false;
   tracks_[i].seen_with_followed = false;
   tracks_[i].look = perception::Appearance{};
+  tracks_[i].look_samples = 0;
 }
 
 std::size_t BystanderTracks::liveCount(rt::TimeNs t_ns) const {

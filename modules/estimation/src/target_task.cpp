@@ -25,6 +25,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
                                ? TargetTaskParams::InFrontTest::kGate
                                : TargetTaskParams::InFrontTest::kNearer;
   params.hidden_behind_m = node.getDoubleOr("hidden_behind_m", params.hidden_behind_m, 0.0, 5.0);
+  params.young_look_samples = node.getIntOr("young_look_samples", params.young_look_samples, 0, 1000);
+  params.depth_vets_bearings = node.getBoolOr("depth_vets_bearings", params.depth_vets_bearings);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -220,11 +222,13 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   // Every (person, track) pair within the track's gate -- the estimator's own test against the state it would
   // update: live, the prediction; lost, the prediction with its grown covariance (where the person can have
   // gone since: the re-identification after an occlusion). The followed track's pairs also pass the colour the
-  // task has learnt, a bystander's the colour learnt for their track; the cost is the lock-on's form (gate
+  // task has learnt, a bystander's the colour learnt for their track (a young track's that may be a look-alike's,
+  // no farther than the followed person's: young_look_samples); the cost is the lock-on's form (gate
   // fraction plus weighted colour fraction) for every track alike. While the followed person is lost, a bystander track
   // never seen beside them may be them, and does not compete. The cheapest assignment of distances to tracks (global
   // nearest neighbour, solved exactly: assignment.hpp); then, if nobody went to the followed track, a bearing -- unless
-  // it fits better a bystander track that no one in the frame explains (a bearing fits anyone on its line of sight).
+  // it fits better a bystander track that no one in the frame explains (a bearing fits anyone on its line of sight),
+  // or the depth camera sees through where the person would be on it (depth_vets_bearings).
   // Nobody for the followed track: it coasts (never the lock-on's choice, whose bystander the estimator's restart rule
   // would hand the track to). Column 0 of the costs is the followed track, column 1 + j bystander track j.
   AssignmentCosts costs;
@@ -239,27 +243,36 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const Candidate& c = candidates[static_cast<std::size_t>(i)];
     if (!c.measurement) continue;
     const bool bearing = c.measurement->bearingOnly();
-    // The lock-on's cost against a track's prediction and colour; nothing outside either gate.
-    const auto cost_of = [&](std::optional<double> d2, const perception::Appearance& colour) -> std::optional<double> {
-      if (!d2 || !(*d2 <= gate)) return std::nullopt;
-      double appearance = 0.0;
-      if (colour.valid && c.look.valid) {
-        appearance = perception::appearanceDistance(colour, c.look);
-        if (appearance > t.max_appearance_distance) return std::nullopt;
-      }
-      return *d2 / gate + t.appearance_weight * appearance / t.max_appearance_distance;
+    // The colour distance to a track's colour (none: no colour to judge by).
+    const auto appearance_to = [&](const perception::Appearance& colour) -> std::optional<double> {
+      if (!colour.valid || !c.look.valid) return std::nullopt;
+      return perception::appearanceDistance(colour, c.look);
     };
+    // The lock-on's cost against a track's prediction and colour; nothing outside either gate.
+    const auto cost_of = [&](std::optional<double> d2, std::optional<double> appearance) -> std::optional<double> {
+      if (!d2 || !(*d2 <= gate)) return std::nullopt;
+      if (appearance && *appearance > t.max_appearance_distance) return std::nullopt;
+      return *d2 / gate + t.appearance_weight * appearance.value_or(0.0) / t.max_appearance_distance;
+    };
+    const std::optional<double> to_followed = appearance_to(reference_);
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
       if (!competes(j)) continue;
-      if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, c.judged()), bystanders_.look(j)))
+      std::optional<double> appearance = appearance_to(bystanders_.look(j));
+      if (appearance && to_followed && lookAlikeYoungTrack(j)) appearance = std::min(*appearance, *to_followed);
+      if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, c.judged()), appearance))
         costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
     }
     const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
-    const std::optional<double> followed_cost = cost_of(d2, reference_);
+    const std::optional<double> followed_cost = cost_of(d2, to_followed);
     if (!followed_cost) continue;
     if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
+      continue;
+    }
+    if (bearing && params_.depth_vets_bearings && c.depth &&
+        (*c.depth == DepthRangeStatus::kNoSurface || (*c.depth == DepthRangeStatus::kFound && c.depth_disagreed))) {
+      a.seen_through = true;  // the depth camera sees past (or something before) where the person would be
       continue;
     }
     if (inFrontOfTheFollowed(c, prior)) {
@@ -335,6 +348,14 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if ((followed_ranged || in_front[k]) && !person_taken[k] && distance(i)) a.track[k] = kNewTrack;
   }
   return a;
+}
+
+bool TargetTask::lookAlikeYoungTrack(std::size_t j) const {
+  // Young: its colour, from a few crowded crops, may be off by more than the person's own distances; like the
+  // person: within the colour gate of theirs (someone dressed otherwise is still told apart by colour).
+  const perception::Appearance& look = bystanders_.look(j);
+  return bystanders_.lookSamples(j) < params_.young_look_samples && look.valid && reference_.valid &&
+         perception::appearanceDistance(reference_, look) <= params_.tracker.max_appearance_distance;
 }
 
 bool TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const {
@@ -620,6 +641,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (a.ambiguous) ++stats_.ambiguous;
     if (a.in_front) ++stats_.in_front;
     if (a.behind_bystander) ++stats_.behind_bystander;
+    if (a.seen_through) ++stats_.seen_through;
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
       look_refused_d2_sum_ = 0.0;

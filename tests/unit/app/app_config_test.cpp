@@ -231,6 +231,36 @@ TEST(AppConfig, GivenHiddenBehind_ThenItIsReadCheckedAndWrittenBack) {
   }
 }
 
+TEST(AppConfig, GivenYoungLookSamples_ThenItIsReadCheckedAndWrittenBack) {
+  const auto shipped = loadAppConfig(kConfigDir + "/sim.yaml");
+  ASSERT_TRUE(shipped && shipped->estimation) << (shipped ? "" : shipped.error().message);
+  EXPECT_EQ(shipped->estimation->task.young_look_samples, 0);
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.young_look_samples", "10"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_EQ(c->estimation->task.young_look_samples, 10);
+  EXPECT_NE(toYaml(*c).find("young_look_samples: 10"), std::string::npos);
+  for (const char* bad_value : {"-1", "1.5", "few"}) {
+    const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.young_look_samples", bad_value}});
+    ASSERT_FALSE(bad) << bad_value;
+    EXPECT_NE(bad.error().message.find("estimation.young_look_samples"), std::string::npos) << bad.error().message;
+  }
+}
+
+TEST(AppConfig, GivenDepthVetsBearings_ThenItIsReadCheckedAndWrittenBack) {
+  const auto shipped = loadAppConfig(kConfigDir + "/sim.yaml");
+  ASSERT_TRUE(shipped && shipped->estimation) << (shipped ? "" : shipped.error().message);
+  EXPECT_TRUE(shipped->estimation->task.depth_vets_bearings);
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.depth_vets_bearings", "false"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_FALSE(c->estimation->task.depth_vets_bearings);
+  EXPECT_NE(toYaml(*c).find("depth_vets_bearings: false"), std::string::npos);
+  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.depth_vets_bearings", "sometimes"}});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("estimation.depth_vets_bearings"), std::string::npos) << bad.error().message;
+}
+
 TEST(AppConfig, GivenWholeFrameOnCropLost_ThenItIsReadCheckedAndWrittenBack) {
   const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"perception.whole_frame.on_crop_lost", "false"}});
   ASSERT_TRUE(c) << c.error().message;

@@ -67,5 +67,39 @@ TEST(BystanderTracks, GivenOneWalkerLiveAndOneLost_ThenTheEstimateCarriesTheLive
   EXPECT_EQ(estimate.other_count, 0U);
 }
 
+perception::Appearance inBin(std::size_t bin) {
+  perception::Appearance a;
+  a.histogram[bin] = 1.0F;  // the first region's bins: one colour
+  a.valid = true;
+  return a;
+}
+
+TEST(BystanderTracks, GivenAYoungTrack_ThenItsColourIsTheMeanOfItsFramesAndThenABlendAtTheRate) {
+  // A young track's colour is not its first crop's (in a crowd, parts of others): the mean of its frames while
+  // there are fewer than 1/rate, then a running blend, checked against both written out by hand.
+  constexpr double kRate = 0.1;
+  BystanderTracks tracks = aerotrack::test::require(BystanderTracks::create(TargetEstimatorParams{}, 1), "tracks");
+  const std::size_t i = tracks.start(at(0.0, 5.0, 0.0), inBin(0), false);
+  EXPECT_EQ(tracks.lookSamples(i), 1);
+  // Frames 2 and 3 in bin 1, and one with no colour (not counted).
+  tracks.update(i, at(0.1, 5.0, 0.0), inBin(1), kRate, false);
+  tracks.update(i, at(0.2, 5.0, 0.0), perception::Appearance{}, kRate, false);
+  tracks.update(i, at(0.3, 5.0, 0.0), inBin(1), kRate, false);
+  EXPECT_EQ(tracks.lookSamples(i), 3);
+  EXPECT_NEAR(tracks.look(i).histogram[0], 1.0 / 3.0, 1e-6);
+  EXPECT_NEAR(tracks.look(i).histogram[1], 2.0 / 3.0, 1e-6);
+  // Seven more in bin 2: the mean of ten; then two in bin 0, blended at the rate.
+  for (int k = 0; k < 7; ++k) tracks.update(i, at(0.4 + 0.1 * k, 5.0, 0.0), inBin(2), kRate, false);
+  EXPECT_NEAR(tracks.look(i).histogram[2], 0.7, 1e-6);
+  for (int k = 0; k < 2; ++k) tracks.update(i, at(1.1 + 0.1 * k, 5.0, 0.0), inBin(0), kRate, false);
+  EXPECT_EQ(tracks.lookSamples(i), 12);
+  const double kept = (1.0 - kRate) * (1.0 - kRate);
+  EXPECT_NEAR(tracks.look(i).histogram[0], kept * 0.1 + (1.0 - kept), 1e-6);
+  EXPECT_NEAR(tracks.look(i).histogram[1], kept * 0.2, 1e-6);
+  EXPECT_NEAR(tracks.look(i).histogram[2], kept * 0.7, 1e-6);
+  tracks.drop(i);
+  EXPECT_EQ(tracks.lookSamples(i), 0);
+}
+
 }  // namespace
 }  // namespace aerotrack::estimation

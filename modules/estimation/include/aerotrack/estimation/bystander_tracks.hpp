@@ -9,6 +9,11 @@
 // A track also remembers whether it was updated in a frame where the followed person was measured
 // too: such a person is someone else, whatever their colour or position later (the re-identification
 // after a loss may take over only a track never seen beside the followed person).
+//
+// A track's colour is the mean of its first frames until there are 1/rate of them, then a running blend at
+// `rate` (as the followed person's colour spread is learnt): blended at `rate` from the first frame, a young
+// track's colour was its first crop's, which in a crowd holds parts of the people beside them (traced: crowd
+// seed 80, the look-alike's own next frames 0.23-0.37 from their three-frame colour).
 #pragma once
 
 #include <cstddef>
@@ -34,14 +39,17 @@ class BystanderTracks {
   std::optional<Eigen::Vector3d> position(std::size_t i, rt::TimeNs t_ns) const;
   /// The squared Mahalanobis distance of m from live track i's prediction (TargetEstimator::mahalanobisSq).
   std::optional<double> mahalanobisSq(std::size_t i, const TargetMeasurement& m) const;
-  /// Updates live track i with m (its own gate applies) and blends `look` into its colour at `rate`;
-  /// `with_followed`: the followed person was measured in the same frame.
+  /// Updates live track i with m (its own gate applies) and blends `look` into its colour at `rate` (at
+  /// 1/n for its n-th colour while that is larger); `with_followed`: the followed person was measured in the
+  /// same frame.
   MeasurementVerdict update(std::size_t i, const TargetMeasurement& m, const perception::Appearance& look, double rate,
                             bool with_followed);
   /// Starts a track at m, of colour `look`, in a free slot (or the one measured longest ago); returns its index.
   std::size_t start(const TargetMeasurement& m, const perception::Appearance& look, bool with_followed);
   /// The torso colour learnt for track i (invalid if none was seen).
   const perception::Appearance& look(std::size_t i) const { return tracks_[i].look; }
+  /// How many frames track i's colour was learnt from.
+  int lookSamples(std::size_t i) const { return tracks_[i].look_samples; }
   /// Track i was measured in a frame where the followed person was too.
   bool seenWithFollowed(std::size_t i) const { return tracks_[i].seen_with_followed; }
   /// When track i was started (the capture time of its first measurement).
@@ -60,6 +68,7 @@ class BystanderTracks {
     bool seen_with_followed = false;
     rt::TimeNs started_ns = 0;
     perception::Appearance look;
+    int look_samples = 0;
   };
   explicit BystanderTracks(std::vector<Track> tracks) : tracks_(std::move(tracks)) {}
   std::vector<Track> tracks_;
