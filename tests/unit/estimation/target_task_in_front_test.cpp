@@ -10,14 +10,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <limits>
-#include <memory>
-
-#include <opencv2/core.hpp>
 
 #include "aerotrack/estimation/target_task.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "support/require.hpp"
+#include "target_task_depth_util.hpp"
 #include "target_task_test_util.hpp"
 
 namespace aerotrack::estimation {
@@ -37,31 +34,6 @@ constexpr double kDurationS = 5.0;
 /// that far towards the drone, and the gate lets them.
 double crosserY(double t_s, double crossing_s) {
   return -kCrosserSpeedMps * (t_s - crossing_s);
-}
-
-/// A depth camera at the drone's origin looking along W x (160 x 120, 90 degrees): each pixel's range along the
-/// optical axis to the nearest of the upright bodies (circles in x-y of radius kBodyRadiusM), 0 where it sees none.
-std::shared_ptr<hal::DepthFrame> renderDepth(rt::TimeNs t_ns, const std::array<Eigen::Vector2d, 2>& bodies_m) {
-  auto frame = std::make_shared<hal::DepthFrame>();
-  frame->stamp_ns = t_ns;
-  frame->intrinsics = {160, 120, 80.0, 80.0, 80.0, 60.0, {}};
-  // Optical x right, y down, z forward, in the body's x forward, y left, z up.
-  frame->T_BC.linear() << 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0;
-  frame->depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(0.0F));
-  for (int u = 0; u < 160; ++u) {
-    // The ray's horizontal part per metre of optical depth: x forward 1, y left -(u - cx) / fx (rows share it).
-    const Eigen::Vector2d d(1.0, -(u + 0.5 - 80.0) / 80.0);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector2d& c : bodies_m) {
-      // |t d - c|^2 = r^2: the smaller root.
-      const double a = d.squaredNorm();
-      const double b = -2.0 * d.dot(c);
-      const double disc = b * b - 4.0 * a * (c.squaredNorm() - kBodyRadiusM * kBodyRadiusM);
-      if (disc >= 0.0) nearest = std::min(nearest, (-b - std::sqrt(disc)) / (2.0 * a));
-    }
-    if (std::isfinite(nearest)) frame->depth_m.col(u).setTo(cv::Scalar(static_cast<float>(nearest)));
-  }
-  return frame;
 }
 
 struct Scene {
@@ -99,7 +71,8 @@ Scene run(int in_front_after_ranged, double crossing_s) {
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     test::pushHover(odometry, gimbal, t_ns);
     const double crosser_y_m = crosserY(t_s, crossing_s);
-    depth.write(renderDepth(t_ns, {Eigen::Vector2d(kPersonXM, 0.0), Eigen::Vector2d(kCrosserXM, crosser_y_m)}));
+    depth.write(test::renderBodiesDepth(
+        t_ns, {Eigen::Vector2d(kPersonXM, 0.0), Eigen::Vector2d(kCrosserXM, crosser_y_m)}, kBodyRadiusM));
     // The crosser hides the person where their bodies overlap in the image (at the person's distance).
     const bool hidden = std::abs(crosser_y_m * kPersonXM / kCrosserXM) < 2.0 * kBodyRadiusM;
     hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
@@ -178,7 +151,8 @@ BehindScene runBehind(bool on_the_gate) {
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     test::pushHover(odometry, gimbal, t_ns);
     const double walker_y_m = kWalkerSpeedMps * (t_s - kCrossingS);
-    depth.write(renderDepth(t_ns, {Eigen::Vector2d(kPersonXM, 0.0), Eigen::Vector2d(kWalkerXM, walker_y_m)}));
+    depth.write(test::renderBodiesDepth(t_ns, {Eigen::Vector2d(kPersonXM, 0.0), Eigen::Vector2d(kWalkerXM, walker_y_m)},
+                                        kBodyRadiusM));
     const double aside_m = std::abs(walker_y_m * kPersonXM / kWalkerXM);  // their column, at the person's distance
     const bool walker = aside_m >= 0.3 && aside_m <= 0.45;
     hal::DetectionFrame frame = test::emptyFrame(i, t_ns);

@@ -9,15 +9,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <limits>
-#include <memory>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "aerotrack/estimation/target_task.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "support/require.hpp"
+#include "target_task_depth_util.hpp"
 #include "target_task_test_util.hpp"
 
 namespace aerotrack::estimation {
@@ -34,30 +31,6 @@ constexpr double kBehindAsideM = 0.4;       ///< ... whose line of sight passes 
 constexpr int kMissedFrames = 15;           ///< the network misses the person this long
 constexpr double kNetworkNoiseStdM = 0.01;  // config/localization_image.yaml: 0.27 m at 5 m
 constexpr double kNetworkNoiseStdPerM = 0.05;
-
-/// A depth camera at the drone's origin looking along W x (160 x 120, 90 degrees): each pixel's range along the
-/// optical axis to the nearest upright body (circles in x-y of radius kBodyRadiusM), else to a wall at kWallXM.
-std::shared_ptr<hal::DepthFrame> renderDepth(rt::TimeNs t_ns, const std::vector<Eigen::Vector2d>& bodies_m) {
-  auto frame = std::make_shared<hal::DepthFrame>();
-  frame->stamp_ns = t_ns;
-  frame->intrinsics = {160, 120, 80.0, 80.0, 80.0, 60.0, {}};
-  // Optical x right, y down, z forward, in the body's x forward, y left, z up.
-  frame->T_BC.linear() << 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0;
-  frame->depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(static_cast<float>(kWallXM)));
-  for (int u = 0; u < 160; ++u) {
-    // The ray's horizontal part per metre of optical depth: x forward 1, y left -(u - cx) / fx (rows share it).
-    const Eigen::Vector2d d(1.0, -(u + 0.5 - 80.0) / 80.0);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector2d& c : bodies_m) {
-      const double a = d.squaredNorm();  // |t d - c|^2 = r^2: the smaller root
-      const double b = -2.0 * d.dot(c);
-      const double disc = b * b - 4.0 * a * (c.squaredNorm() - kBodyRadiusM * kBodyRadiusM);
-      if (disc >= 0.0) nearest = std::min(nearest, (-b - std::sqrt(disc)) / (2.0 * a));
-    }
-    if (std::isfinite(nearest)) frame->depth_m.col(u).setTo(cv::Scalar(static_cast<float>(nearest)));
-  }
-  return frame;
-}
 
 struct Scene {
   int other_given = 0;         ///< missed frames whose followed person was the other one
@@ -95,7 +68,7 @@ Scene run(bool depth_vets_bearings, bool in_front) {
     const bool after = i > lock_frames + kMissedFrames;
     std::vector<Eigen::Vector2d> bodies{person_m};
     if (missed || !in_front) bodies.push_back(other_m);
-    depth.write(renderDepth(t_ns, bodies));
+    depth.write(test::renderBodiesDepth(t_ns, bodies, kBodyRadiusM, kWallXM));
     hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
     frame.person_count = 1;
     if (missed) {  // the other one, cut off at the waist: a bearing (drawn at the person's distance, on their line)

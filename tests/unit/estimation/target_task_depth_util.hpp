@@ -1,0 +1,46 @@
+// Shared by the target task's tests that range people with the depth camera: a depth image rendered from upright
+// bodies, seen from the drone hovering at the origin (target_task_test_util.hpp's pose).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "aerotrack/hal/types.hpp"
+#include "aerotrack/rt/time.hpp"
+
+namespace aerotrack::estimation::test {
+
+/// A depth camera at the drone's origin looking along W x (160 x 120, 90 degrees): each pixel's range along the
+/// optical axis to the nearest of the upright bodies (circles in x-y of radius body_radius_m), else background_m
+/// (0: no data, as a stereo camera gives where it sees nothing).
+inline std::shared_ptr<hal::DepthFrame> renderBodiesDepth(rt::TimeNs t_ns, const std::vector<Eigen::Vector2d>& bodies_m,
+                                                          double body_radius_m, double background_m = 0.0) {
+  auto frame = std::make_shared<hal::DepthFrame>();
+  frame->stamp_ns = t_ns;
+  frame->intrinsics = {160, 120, 80.0, 80.0, 80.0, 60.0, {}};
+  // Optical x right, y down, z forward, in the body's x forward, y left, z up.
+  frame->T_BC.linear() << 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0;
+  frame->depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(static_cast<float>(background_m)));
+  for (int u = 0; u < 160; ++u) {
+    // The ray's horizontal part per metre of optical depth: x forward 1, y left -(u - cx) / fx (rows share it).
+    const Eigen::Vector2d d(1.0, -(u + 0.5 - 80.0) / 80.0);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector2d& c : bodies_m) {
+      // |t d - c|^2 = r^2: the smaller root.
+      const double a = d.squaredNorm();
+      const double b = -2.0 * d.dot(c);
+      const double disc = b * b - 4.0 * a * (c.squaredNorm() - body_radius_m * body_radius_m);
+      if (disc >= 0.0) nearest = std::min(nearest, (-b - std::sqrt(disc)) / (2.0 * a));
+    }
+    if (std::isfinite(nearest)) frame->depth_m.col(u).setTo(cv::Scalar(static_cast<float>(nearest)));
+  }
+  return frame;
+}
+
+}  // namespace aerotrack::estimation::test
