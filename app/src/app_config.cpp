@@ -256,6 +256,9 @@ std::string toYaml(const AppConfig& c) {
         << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");
     out << YAML::Key << "hidden_behind_m" << YAML::Value << e.task.hidden_behind_m;
     out << YAML::Key << "young_look_samples" << YAML::Value << e.task.young_look_samples;
+    out << YAML::Key << "assignment_cost" << YAML::Value
+        << (e.task.assignment_cost == estimation::TargetTaskParams::AssignmentCost::kLikelihood ? "likelihood"
+                                                                                                : "gate_fraction");
     out << YAML::Key << "depth_vets_bearings" << YAML::Value << e.task.depth_vets_bearings;
     out << YAML::Key << "verdict_torso_height_m" << YAML::Value << e.task.verdict_torso_height_m;
     out << YAML::Key << "verdict_torso_m" << YAML::Value << e.task.verdict_torso_m;

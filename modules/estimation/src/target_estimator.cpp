@@ -299,11 +299,19 @@ MeasurementVerdict TargetEstimator::step(State& state, const TargetMeasurement& 
 }
 
 std::optional<double> TargetEstimator::mahalanobisSq(const TargetMeasurement& m) const {
+  const std::optional<Fit> f = fit(m);
+  if (!f) return std::nullopt;
+  return f->d2;
+}
+
+std::optional<TargetEstimator::Fit> TargetEstimator::fit(const TargetMeasurement& m) const {
   const std::optional<Innovation> i = innovation(m);
   if (!i) return std::nullopt;
   const Eigen::LLT<Matrix3d> llt(i->S_m2);
   if (llt.info() != Eigen::Success) return std::nullopt;
-  return i->nu_m.dot(llt.solve(i->nu_m));
+  // ln|S| = 2 sum ln L_kk of S = L L^T, from the factor the distance needs anyway.
+  const Matrix3d L = llt.matrixL();
+  return Fit{i->nu_m.dot(llt.solve(i->nu_m)), 2.0 * L.diagonal().array().log().sum()};
 }
 
 std::optional<TargetEstimator::Innovation> TargetEstimator::innovation(const TargetMeasurement& m) const {

@@ -26,6 +26,10 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
                                : TargetTaskParams::InFrontTest::kNearer;
   params.hidden_behind_m = node.getDoubleOr("hidden_behind_m", params.hidden_behind_m, 0.0, 5.0);
   params.young_look_samples = node.getIntOr("young_look_samples", params.young_look_samples, 0, 1000);
+  if (node.has("assignment_cost"))
+    params.assignment_cost = node.getEnum("assignment_cost", {"gate_fraction", "likelihood"}) == "likelihood"
+                                 ? TargetTaskParams::AssignmentCost::kLikelihood
+                                 : TargetTaskParams::AssignmentCost::kGateFraction;
   params.depth_vets_bearings = node.getBoolOr("depth_vets_bearings", params.depth_vets_bearings);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
@@ -223,14 +227,15 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   // update: live, the prediction; lost, the prediction with its grown covariance (where the person can have
   // gone since: the re-identification after an occlusion). The followed track's pairs also pass the colour the
   // task has learnt, a bystander's the colour learnt for their track (a young track's that may be a look-alike's,
-  // no farther than the followed person's: young_look_samples); the cost is the lock-on's form (gate
-  // fraction plus weighted colour fraction) for every track alike. While the followed person is lost, a bystander track
-  // never seen beside them may be them, and does not compete. The cheapest assignment of distances to tracks (global
-  // nearest neighbour, solved exactly: assignment.hpp); then, if nobody went to the followed track, a bearing -- unless
-  // it fits better a bystander track that no one in the frame explains (a bearing fits anyone on its line of sight),
-  // or the depth camera sees through where the person would be on it (depth_vets_bearings).
-  // Nobody for the followed track: it coasts (never the lock-on's choice, whose bystander the estimator's restart rule
-  // would hand the track to). Column 0 of the costs is the followed track, column 1 + j bystander track j.
+  // no farther than the followed person's: young_look_samples); the cost (assignment_cost) is the lock-on's form
+  // (gate fraction plus weighted colour fraction), or that plus ln|S| (the likelihood), for every track alike. While
+  // the followed person is lost, a bystander track never seen beside them may be them, and does not compete. The
+  // cheapest assignment of distances to tracks (global nearest neighbour, solved exactly: assignment.hpp); then, if
+  // nobody went to the followed track, a bearing -- unless it fits better a bystander track that no one in the frame
+  // explains (a bearing fits anyone on its line of sight), or the depth camera sees through where the person would be
+  // on it (depth_vets_bearings). Nobody for the followed track: it coasts (never the lock-on's choice, whose bystander
+  // the estimator's restart rule would hand the track to). Column 0 of the costs is the followed track, column 1 + j
+  // bystander track j.
   AssignmentCosts costs;
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};
@@ -239,6 +244,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   const double gate = params_.estimator.gate_chi2;
   const perception::TrackerParams& t = params_.tracker;
   const auto competes = [&](std::size_t j) { return !prior.lost || bystanders_.seenWithFollowed(j); };
+  const bool likelihood = params_.assignment_cost == TargetTaskParams::AssignmentCost::kLikelihood;
+  // The dearest pair allowed (likelihood costs have no fixed bound: ln|S| is any real).
+  double dearest = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < count; ++i) {
     const Candidate& c = candidates[static_cast<std::size_t>(i)];
     if (!c.measurement) continue;
@@ -248,23 +256,29 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       if (!colour.valid || !c.look.valid) return std::nullopt;
       return perception::appearanceDistance(colour, c.look);
     };
-    // The lock-on's cost against a track's prediction and colour; nothing outside either gate.
-    const auto cost_of = [&](std::optional<double> d2, std::optional<double> appearance) -> std::optional<double> {
-      if (!d2 || !(*d2 <= gate)) return std::nullopt;
+    // The cost against a track's prediction and colour (assignment_cost); nothing outside either gate.
+    const auto cost_of = [&](std::optional<TargetEstimator::Fit> fit,
+                             std::optional<double> appearance) -> std::optional<double> {
+      if (!fit || !(fit->d2 <= gate)) return std::nullopt;
       if (appearance && *appearance > t.max_appearance_distance) return std::nullopt;
-      return *d2 / gate + t.appearance_weight * appearance.value_or(0.0) / t.max_appearance_distance;
+      const double fraction =
+          fit->d2 / gate + t.appearance_weight * appearance.value_or(0.0) / t.max_appearance_distance;
+      return likelihood ? gate * fraction + fit->log_det_S : fraction;
     };
     const std::optional<double> to_followed = appearance_to(reference_);
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
       if (!competes(j)) continue;
       std::optional<double> appearance = appearance_to(bystanders_.look(j));
       if (appearance && to_followed && lookAlikeYoungTrack(j)) appearance = std::min(*appearance, *to_followed);
-      if (const auto cost = cost_of(bystanders_.mahalanobisSq(j, c.judged()), appearance))
+      if (const auto cost = cost_of(bystanders_.fit(j, c.judged()), appearance)) {
         costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
+        dearest = std::max(dearest, *cost);
+      }
     }
-    const std::optional<double> d2 = estimator_.mahalanobisSq(c.judged());
-    const std::optional<double> followed_cost = cost_of(d2, to_followed);
+    const std::optional<TargetEstimator::Fit> fit = estimator_.fit(c.judged());
+    const std::optional<double> followed_cost = cost_of(fit, to_followed);
     if (!followed_cost) continue;
+    const double d2 = fit->d2;
     if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
@@ -283,21 +297,24 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const double cost = *followed_cost;
     if (!looksLikeTheFollowed(c.look, frame.stamp_ns)) {
       a.look_refused = true;
-      if (!bearing) a.look_refused_d2 = std::min(a.look_refused_d2, *d2);
+      if (!bearing) a.look_refused_d2 = std::min(a.look_refused_d2, d2);
       continue;
     }
     if (bearing) {
       bearing_cost[static_cast<std::size_t>(i)] = cost;
-      bearing_d2[static_cast<std::size_t>(i)] = *d2;
+      bearing_d2[static_cast<std::size_t>(i)] = d2;
     } else {
       costs.set(static_cast<std::size_t>(i), 0, cost);
+      dearest = std::max(dearest, cost);
     }
   }
-  // A person left without a track costs as much as the dearest pair the gates allow (at both gates' edges), so
-  // that nobody who could take a free track is left out: of the assignments that pair the most people, the
-  // cheapest.
+  // A person left without a track costs as much as the dearest pair the gates allow (gate fraction: at both gates'
+  // edges; likelihood, unbounded: one unit of d2 above the dearest pair of this frame, as an equal cost would tie
+  // with leaving them out), so that nobody who could take a free track is left out: of the assignments that pair
+  // the most people, the cheapest.
+  const double miss_cost = !likelihood ? 1.0 + t.appearance_weight : std::isfinite(dearest) ? dearest + 1.0 : 0.0;
   const AssignmentResult assigned =
-      cheapestAssignment(costs, static_cast<std::size_t>(count), 1 + bystanders_.capacity(), 1.0 + t.appearance_weight);
+      cheapestAssignment(costs, static_cast<std::size_t>(count), 1 + bystanders_.capacity(), miss_cost);
   std::array<bool, kMaxBystanderTracks> track_taken{};
   std::array<bool, hal::kMaxPersons> person_taken{};
   for (int i = 0; i < count; ++i) {

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "aerotrack/hal/sim/scenario.hpp"
 #include "aerotrack/localization/localization_io.hpp"
@@ -245,6 +246,21 @@ TEST(AppConfig, GivenYoungLookSamples_ThenItIsReadCheckedAndWrittenBack) {
     ASSERT_FALSE(bad) << bad_value;
     EXPECT_NE(bad.error().message.find("estimation.young_look_samples"), std::string::npos) << bad.error().message;
   }
+}
+
+TEST(AppConfig, GivenAssignmentCost_ThenItIsReadCheckedAndWrittenBack) {
+  for (const auto& [name, cost] :
+       {std::pair{"likelihood", estimation::TargetTaskParams::AssignmentCost::kLikelihood},
+        std::pair{"gate_fraction", estimation::TargetTaskParams::AssignmentCost::kGateFraction}}) {
+    const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.assignment_cost", name}});
+    ASSERT_TRUE(c) << c.error().message;
+    ASSERT_TRUE(c->estimation);
+    EXPECT_EQ(c->estimation->task.assignment_cost, cost);
+    EXPECT_NE(toYaml(*c).find(std::string("assignment_cost: ") + name), std::string::npos);
+  }
+  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.assignment_cost", "cheapest"}});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("estimation.assignment_cost"), std::string::npos) << bad.error().message;
 }
 
 TEST(AppConfig, GivenDepthVetsBearings_ThenItIsReadCheckedAndWrittenBack) {

@@ -243,6 +243,37 @@ TEST(TargetEstimator, GivenMeasurementsAtGrowingOffsets_ThenTheirMahalanobisDist
   EXPECT_FALSE(estimator->mahalanobisSq(bad).has_value());
 }
 
+TEST(TargetEstimator, GivenAMeasurement_ThenItsFitIsTheGaussianLogLikelihoodOfTheInnovation) {
+  // fit() is d2 and ln|S| from one Cholesky factor; against the innovation's covariance written out: its
+  // determinant (Eigen's LU, another method) and the density of a 3-D Gaussian, -2 ln N(nu; 0, S) - 3 ln 2 pi.
+  std::mt19937_64 rng(5);
+  auto estimator = TargetEstimator::create({});
+  ASSERT_TRUE(estimator);
+  for (int k = 0; k < 30; ++k) estimator->add(measure(straight, k, rng));
+  for (const int k : {30, 45}) {  // just after the newest measurement, and coasted half a second: S wider
+    TargetMeasurement m = measure(straight, k, rng);
+    m.p_WT_m += Eigen::Vector3d(0.3, -0.2, 0.05);
+    const auto fit = estimator->fit(m);
+    const auto innovation = estimator->innovation(m);
+    ASSERT_TRUE(fit && innovation);
+    const Eigen::Matrix3d& S = innovation->S_m2;
+    const double d2 = innovation->nu_m.dot(S.inverse() * innovation->nu_m);
+    EXPECT_NEAR(fit->d2, d2, 1e-9 * (1.0 + d2));
+    EXPECT_NEAR(fit->d2, *estimator->mahalanobisSq(m), 1e-12);
+    EXPECT_NEAR(fit->log_det_S, std::log(S.determinant()), 1e-9);
+    const double density = std::exp(-0.5 * d2) / std::sqrt(std::pow(2.0 * std::numbers::pi, 3) * S.determinant());
+    EXPECT_NEAR(fit->d2 + fit->log_det_S, -2.0 * std::log(density) - 3.0 * std::log(2.0 * std::numbers::pi), 1e-9);
+  }
+  // The coasted prediction is wider: its ln|S| is larger (the charge the association's likelihood cost adds).
+  const auto near = estimator->fit(measure(straight, 30, rng));
+  const auto coasted = estimator->fit(measure(straight, 45, rng));
+  ASSERT_TRUE(near && coasted);
+  EXPECT_GT(coasted->log_det_S, near->log_det_S + 0.5);
+  TargetMeasurement bad = measure(straight, 30, rng);
+  bad.p_WT_m.y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(estimator->fit(bad).has_value());
+}
+
 TEST(TargetEstimator, GivenRepeatedConsistentRejectionsThenTheFilterRestarts) {
   // Given a track, then the measurements move 3 m away and stay there (the track was wrong).
   TargetEstimatorParams params;

@@ -39,6 +39,8 @@ class BystanderTracks {
   std::optional<Eigen::Vector3d> position(std::size_t i, rt::TimeNs t_ns) const;
   /// The squared Mahalanobis distance of m from live track i's prediction (TargetEstimator::mahalanobisSq).
   std::optional<double> mahalanobisSq(std::size_t i, const TargetMeasurement& m) const;
+  /// The same with ln|S| (TargetEstimator::fit).
+  std::optional<TargetEstimator::Fit> fit(std::size_t i, const TargetMeasurement& m) const;
   /// Updates live track i with m (its own gate applies) and blends `look` into its colour at `rate` (at
   /// 1/n for its n-th colour while that is larger); `with_followed`: the followed person was measured in the
   /// same frame.

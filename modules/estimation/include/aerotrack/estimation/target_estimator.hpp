@@ -171,6 +171,16 @@ class TargetEstimator {
   };
   std::optional<Innovation> innovation(const TargetMeasurement& measurement) const;
 
+  /// mahalanobisSq with the log-determinant of the innovation's covariance (S in m^2): d2 + ln|S| is twice the
+  /// measurement's negative log-likelihood under this track, up to a constant -- the generalised distance of
+  /// global-nearest-neighbour assignment (Blackman and Popoli, Sect. 6.4), which compares tracks of unlike
+  /// covariance fairly: d2 alone favours the wider one. Nothing where mahalanobisSq gives nothing.
+  struct Fit {
+    double d2 = 0.0;
+    double log_det_S = 0.0;
+  };
+  std::optional<Fit> fit(const TargetMeasurement& measurement) const;
+
   /// Forgets everything (the buffer keeps its memory).
   void reset();
 

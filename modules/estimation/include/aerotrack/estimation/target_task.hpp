@@ -122,6 +122,16 @@ struct TargetTaskParams {
   /// anyone near; judged by where they are, the comparison needs the likelihood (the covariance's size), which the
   /// gate-fraction cost does not carry (docs/modules/localization-estimation.md).
   int young_look_samples = 0;
+  /// With choose_by_estimate, the cost of giving a person to a track (`assignment_cost:`):
+  ///  - kGateFraction: the lock-on's form, d2 / gate_chi2 plus appearance_weight times the colour distance over
+  ///    max_appearance_distance, alike for every track;
+  ///  - kLikelihood: the same in units of d2 (times gate_chi2) plus ln|S| of the track's innovation covariance:
+  ///    twice the negative log-likelihood of where they stand (TargetEstimator::fit). A track of wide covariance
+  ///    (young, or coasting) fits anyone near at a small d2, and under kGateFraction takes the measurement of
+  ///    someone a tight track predicts as well (crowd seed 85 with young_look_samples: d2 0.94 against 1.16, the
+  ///    young track 1.3 m away from the person); ln|S| charges it for its reach.
+  enum class AssignmentCost { kGateFraction, kLikelihood };
+  AssignmentCost assignment_cost = AssignmentCost::kGateFraction;
   /// With depth_range: a bearing (bearing_fallback) whose line of sight the depth camera sees through where the
   /// followed track predicts the person -- free space up to a surface farther than max_ratio times the predicted
   /// range, or no surface within max_range_m, or a surface nearer than that range by the same factor (someone in
