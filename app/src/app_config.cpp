@@ -252,6 +252,8 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
     out << YAML::Key << "ambiguity_radius_m" << YAML::Value << e.task.ambiguity_radius_m;
     out << YAML::Key << "in_front_after_ranged" << YAML::Value << e.task.in_front_after_ranged;
+    out << YAML::Key << "in_front_streak_spans_unseen" << YAML::Value << e.task.in_front_streak_spans_unseen;
+    out << YAML::Key << "in_front_gate_chi2" << YAML::Value << e.task.in_front_gate_chi2;
     out << YAML::Key << "in_front_test" << YAML::Value
         << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");
     out << YAML::Key << "hidden_behind_m" << YAML::Value << e.task.hidden_behind_m;

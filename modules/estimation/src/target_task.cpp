@@ -20,6 +20,9 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
   params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
+  params.in_front_streak_spans_unseen =
+      node.getBoolOr("in_front_streak_spans_unseen", params.in_front_streak_spans_unseen);
+  params.in_front_gate_chi2 = node.getDoubleOr("in_front_gate_chi2", params.in_front_gate_chi2, 0.0, 1000.0);
   if (node.has("in_front_test"))
     params.in_front_test = node.getEnum("in_front_test", {"nearer", "gate"}) == "gate"
                                ? TargetTaskParams::InFrontTest::kGate
@@ -381,7 +384,8 @@ bool TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& 
     return false;
   if (params_.in_front_test == TargetTaskParams::InFrontTest::kGate) {
     const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
-    return d2 && *d2 > params_.estimator.gate_chi2;
+    const double gate = params_.in_front_gate_chi2 > 0.0 ? params_.in_front_gate_chi2 : params_.estimator.gate_chi2;
+    return d2 && *d2 > gate;
   }
   const std::optional<TargetEstimator::Innovation> innovation = estimator_.innovation(*c.measurement);
   if (!innovation) return false;
@@ -536,7 +540,13 @@ bool TargetTask::process(const Candidate& c) {
     // A start or a re-identification after a loss is the regression's; a fallback or a distance without the depth
     // camera's is not the camera's either.
     const bool agreed = verdict == MeasurementVerdict::kAccepted && !was_lost && ranged && given == &*c.measurement;
-    ranged_streak_ = agreed ? ranged_streak_ + 1 : 0;
+    // Not seen by the depth camera (in_front_streak_spans_unseen): no word on the track's distance either way.
+    const bool unseen = verdict == MeasurementVerdict::kAccepted && !was_lost && !ranged && !c.depth_disagreed &&
+                        c.depth != DepthRangeStatus::kFound;
+    if (agreed)
+      ++ranged_streak_;
+    else if (!(unseen && params_.in_front_streak_spans_unseen))
+      ranged_streak_ = 0;
     if (!c.torso.reliable) return true;  // a cut-off person's colour is not their whole torso's: not learnt
     // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
     // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).

@@ -219,6 +219,24 @@ TEST(AppConfig, GivenInFrontTest_ThenItIsReadCheckedAndWrittenBack) {
   EXPECT_NE(bad.error().message.find("estimation.in_front_test"), std::string::npos) << bad.error().message;
 }
 
+TEST(AppConfig, GivenTheInFrontStreakAndBound_ThenTheyAreReadCheckedAndWrittenBack) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_streak_spans_unseen", "true"},
+                                                          {"estimation.in_front_gate_chi2", "5.5"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_TRUE(c->estimation->task.in_front_streak_spans_unseen);
+  EXPECT_DOUBLE_EQ(c->estimation->task.in_front_gate_chi2, 5.5);
+  EXPECT_NE(toYaml(*c).find("in_front_streak_spans_unseen: true"), std::string::npos);
+  EXPECT_NE(toYaml(*c).find("in_front_gate_chi2: 5.5"), std::string::npos);
+  for (const auto& [key, bad_value] :
+       {std::pair{"estimation.in_front_streak_spans_unseen", "sometimes"},
+        std::pair{"estimation.in_front_gate_chi2", "-1"}, std::pair{"estimation.in_front_gate_chi2", "tight"}}) {
+    const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{key, bad_value}});
+    ASSERT_FALSE(bad) << key << " " << bad_value;
+    EXPECT_NE(bad.error().message.find(key), std::string::npos) << bad.error().message;
+  }
+}
+
 TEST(AppConfig, GivenHiddenBehind_ThenItIsReadCheckedAndWrittenBack) {
   const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.hidden_behind_m", "0.75"}});
   ASSERT_TRUE(c) << c.error().message;

@@ -56,8 +56,15 @@ TargetTaskParams rangedParams(int in_front_after_ranged, bool on_the_gate) {
   return params;
 }
 
-Scene run(int in_front_after_ranged, double crossing_s) {
-  const TargetTaskParams params = rangedParams(in_front_after_ranged, false);
+/// The depth camera sees nothing in [gap_from_s, gap_to_s) (the person outside its narrower view).
+struct DepthGap {
+  double from_s = 0.0;
+  double to_s = 0.0;
+};
+
+Scene run(int in_front_after_ranged, double crossing_s, DepthGap gap = {}, bool spans_unseen = false) {
+  TargetTaskParams params = rangedParams(in_front_after_ranged, false);
+  params.in_front_streak_spans_unseen = spans_unseen;
   rt::LatestSlot<hal::DetectionFrame> followed;
   rt::SharedSlot<hal::DepthFrame> depth;
   test::TaskRig rig(params);
@@ -71,8 +78,9 @@ Scene run(int in_front_after_ranged, double crossing_s) {
     const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     test::pushHover(odometry, gimbal, t_ns);
     const double crosser_y_m = crosserY(t_s, crossing_s);
-    depth.write(test::renderBodiesDepth(
-        t_ns, {Eigen::Vector2d(kPersonXM, 0.0), Eigen::Vector2d(kCrosserXM, crosser_y_m)}, kBodyRadiusM));
+    if (t_s < gap.from_s || t_s >= gap.to_s)
+      depth.write(test::renderBodiesDepth(
+          t_ns, {Eigen::Vector2d(kPersonXM, 0.0), Eigen::Vector2d(kCrosserXM, crosser_y_m)}, kBodyRadiusM));
     // The crosser hides the person where their bodies overlap in the image (at the person's distance).
     const bool hidden = std::abs(crosser_y_m * kPersonXM / kCrosserXM) < 2.0 * kBodyRadiusM;
     hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
@@ -133,11 +141,10 @@ struct BehindScene {
 /// walker's torso is beside the person's body in the image (0.3-0.45 m aside at the person's distance: the depth
 /// camera's ray through it passes the person and ends on the walker) the crop shows the walker, torso read at the
 /// person's distance; elsewhere the person.
-BehindScene runBehind(bool on_the_gate) {
+BehindScene runBehind(const TargetTaskParams& params) {
   constexpr double kWalkerXM = kPersonXM + 0.6;
   constexpr double kWalkerSpeedMps = 0.6;
   constexpr double kCrossingS = 2.5;
-  const TargetTaskParams params = rangedParams(5, on_the_gate);
   rt::LatestSlot<hal::DetectionFrame> followed;
   rt::SharedSlot<hal::DepthFrame> depth;
   test::TaskRig rig(params);
@@ -172,8 +179,8 @@ BehindScene runBehind(bool on_the_gate) {
 }
 
 TEST(TargetTaskInFront, GivenAWalkerRangedBehindThePersonBesideThem_WhenJudgedOnTheGate_ThenTheTrackDoesNotTakeThem) {
-  const BehindScene taken = runBehind(false);
-  const BehindScene kept = runBehind(true);
+  const BehindScene taken = runBehind(rangedParams(5, false));
+  const BehindScene kept = runBehind(rangedParams(5, true));
   ASSERT_GT(kept.walker_shown, 5);  // on both sides of the person, a few frames each
   // Nearer only: the walker's depth range fails the gate, and the regression's distance of them is given, every time.
   EXPECT_EQ(taken.walker_given, taken.walker_shown);
@@ -185,6 +192,45 @@ TEST(TargetTaskInFront, GivenAWalkerRangedBehindThePersonBesideThem_WhenJudgedOn
   ASSERT_TRUE(kept.estimate.initialised && !kept.estimate.lost);
   EXPECT_NEAR(kept.estimate.p_WT_m.x(), kPersonXM, 0.1);
   EXPECT_NEAR(kept.estimate.p_WT_m.y(), 0.0, 0.1);
+}
+
+TEST(TargetTaskInFront, GivenAWalkerBehindInsideTheGate_WhenTheBoundIsTheOwnRangesSpread_ThenTheTrackDoesNotTakeThem) {
+  // A looser depth camera's noise model (0.2 m along the line of sight, 0.4 m across at 5 m): the walker 0.6 m
+  // behind is ranged inside the gate's 16.3, and is given. The bound in_front_gate_chi2 = 5 (above the person's own
+  // ranged d2 here, which the test checks: every one of their frames is still given) refuses them.
+  TargetTaskParams loose = rangedParams(5, true);
+  loose.depth_range.range_std_m = 0.2;
+  loose.depth_range.cross_std_per_m = 0.08;
+  TargetTaskParams bound = loose;
+  bound.in_front_gate_chi2 = 5.0;
+  const BehindScene taken = runBehind(loose);
+  const BehindScene kept = runBehind(bound);
+  ASSERT_GT(taken.walker_shown, 5);
+  EXPECT_EQ(taken.walker_given, taken.walker_shown);
+  EXPECT_EQ(taken.stats.in_front, 0U);
+  EXPECT_EQ(kept.walker_given, 0);
+  EXPECT_EQ(kept.stats.in_front, static_cast<std::size_t>(kept.walker_shown));
+  EXPECT_EQ(kept.person_given, kept.person_frames);
+  ASSERT_TRUE(kept.estimate.initialised && !kept.estimate.lost);
+  EXPECT_NEAR(kept.estimate.p_WT_m.x(), kPersonXM, 0.1);
+  EXPECT_NEAR(kept.estimate.p_WT_m.y(), 0.0, 0.1);
+}
+
+TEST(TargetTaskInFront, GivenTheDepthCameraBlindBeforeACrossing_WhenTheStreakSpansIt_ThenTheRuleStaysArmed) {
+  // Ranged for 1.5 s, then the depth camera sees nothing until just before the crosser hides the person (the person
+  // outside its view): the regression's measurements are taken meanwhile. Ending the streak, they leave the rule
+  // unarmed when the crosser comes, and the crosser is given; spanning them (the depth camera said nothing against
+  // the track), it holds, and the crosser is not.
+  constexpr double kCrossingS = 3.0;
+  const DepthGap gap{1.5, kCrossingS - 0.3};
+  const Scene ended = run(5, kCrossingS, gap, false);
+  const Scene spanned = run(5, kCrossingS, gap, true);
+  EXPECT_GT(ended.crosser_given, 0);
+  EXPECT_EQ(spanned.crosser_given, 0);
+  EXPECT_GE(spanned.stats.in_front, 5U);
+  EXPECT_EQ(spanned.person_given_after, static_cast<int>(std::round((kDurationS - kCrossingS - 0.5) * kRateHz)));
+  ASSERT_TRUE(spanned.estimate.initialised && !spanned.estimate.lost);
+  EXPECT_NEAR(spanned.estimate.p_WT_m.x(), kPersonXM, 0.1);
 }
 
 TEST(TargetTaskInFront, GivenTooFewRangesYet_ThenTheRegressionsDistanceIsStillGiven) {
