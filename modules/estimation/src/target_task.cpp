@@ -271,9 +271,11 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const std::optional<double> to_followed = appearance_to(reference_);
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
       if (!competes(j)) continue;
+      const std::optional<TargetEstimator::Fit> fit_j = bystanders_.fit(j, c.judged());
+      if (!fit_j || !(fit_j->d2 <= gate)) continue;  // outside the gate: no colour to compare (a free slot too)
       std::optional<double> appearance = appearance_to(bystanders_.look(j));
       if (appearance && to_followed && lookAlikeYoungTrack(j)) appearance = std::min(*appearance, *to_followed);
-      if (const auto cost = cost_of(bystanders_.fit(j, c.judged()), appearance)) {
+      if (const auto cost = cost_of(fit_j, appearance)) {
         costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
         dearest = std::max(dearest, *cost);
       }
