@@ -29,15 +29,22 @@ port=$(free_port)
 "$bin" sim --scenario "$scenario" --realtime --live "$port" --out "$work/live" > "$work/live.log" 2>&1 &
 pid=$!
 pids+=("$pid")
-watched=$(node "$check" "127.0.0.1:$port" 2.5 /tf /person/estimate /supervisor /gimbal_camera/detections /planning/plan /setpoint) \
-  || fail "$watched"
+# On the loopback only, checked while the run is on (the watch below lasts until the run ends).
+for _ in $(seq 100); do
+  [[ $(ss -Hltn "sport = :$port" | grep -c .) -ge 1 ]] && break
+  sleep 0.1
+done
 [[ $(ss -Hltn "sport = :$port" | grep -c .) -eq 1 && $(ss -Hltn "sport = :$port" | grep -c '127.0.0.1') -eq 1 ]] \
   || fail "--live $port does not listen on the loopback only: $(ss -Hltn "sport = :$port")"
+watched=$(node "$check" "127.0.0.1:$port" 20 /tf /person/estimate /supervisor /gimbal_camera/detections /planning/plan /setpoint) \
+  || fail "$watched"
 wait "$pid" || fail "sim --live failed: $(tail -1 "$work/live.log")"
 grep -q "^live view on ws://127.0.0.1:$port: 1 clients, [1-9][0-9]* messages sent" "$work/live.log" \
   || fail "no live view line: $(grep 'live view' "$work/live.log")"
 
-# A port in use, a bad address, no --realtime: one line each, exit status 1.
+# A port in use, a bad address, no --realtime: one line each, exit status 1. A port of its own: the run above
+# closed its connection first, so its port may wait in TIME_WAIT.
+port=$(free_port)
 /usr/bin/python3 -c 'import socket, sys, time; s = socket.socket(); s.bind(("127.0.0.1", int(sys.argv[1]))); s.listen(); time.sleep(20)' "$port" &
 pids+=($!)
 sleep 0.3

@@ -2,8 +2,10 @@
 // (issue 24 item 3): connects to ws://HOST:PORT with the foxglove.websocket.v1 subprotocol (retrying
 // while the server starts), checks the server's info and its advertised channels (each protobuf
 // schema a FileDescriptorSet that protobufjs loads), subscribes to TOPICS, and decodes every message
-// it receives for SECONDS with its channel's schema. One line out: what it received, or the first
-// disagreement (status 1).
+// it receives with its channel's schema, for SECONDS or until the server closes (the run is over), whichever
+// comes first: a loaded machine may start planning late in a short run (CI, 2026-12-06: no plan in a fixed
+// 2.5 s window under ASan), so the check watches the whole run. One line out: what it received, or the
+// first disagreement (status 1).
 // usage: node check_live.js HOST:PORT SECONDS TOPIC [TOPIC...]
 "use strict";
 const { FoxgloveClient } = require("@foxglove/ws-protocol");
@@ -23,14 +25,16 @@ function connect(triesLeft) {
   const ws = new WebSocket(`ws://${address}`, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]);
   ws.binaryType = "arraybuffer";
   ws.on("error", () => {});
-  ws.on("close", () => {
-    if (!opened && triesLeft > 0) setTimeout(() => connect(triesLeft - 1), 200);
-    else if (!opened) fail(`${address}: no server`);
-  });
   let opened = false;
+  let finish;
+  ws.on("close", () => {
+    if (opened) finish();
+    else if (triesLeft > 0) setTimeout(() => connect(triesLeft - 1), 200);
+    else fail(`${address}: no server`);
+  });
   ws.on("open", () => {
     opened = true;
-    run(ws);
+    finish = run(ws);
   });
 }
 
@@ -69,7 +73,10 @@ function run(ws) {
     }
     ++counts[d.topic];
   });
-  setTimeout(() => {
+  let finished = false;
+  const finish = () => {
+    if (finished) return;
+    finished = true;
     client.close();
     if (serverName !== "aerotrack") fail(`server info: name ${serverName}`);
     const silent = topics.filter((t) => counts[t] === 0);
@@ -77,7 +84,9 @@ function run(ws) {
     const total = Object.values(counts).reduce((a, b) => a + b, 0);
     console.log(`live check: ${total} messages on ${topics.length} topics, all decoded: ${JSON.stringify(counts)}`);
     process.exit(0);
-  }, seconds * 1000);
+  };
+  setTimeout(finish, seconds * 1000);
+  return finish;
 }
 
 connect(50);
