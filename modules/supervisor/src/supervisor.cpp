@@ -150,8 +150,12 @@ void Supervisor::enter(Mode mode, Reason reason, rt::TimeNs now_ns) {
 bool Supervisor::failsafe(const SupervisorInputs& in, Reason& reason) {
   const double since_start_s = rt::nsToSeconds(in.now_ns - start_ns_);
   const bool grace = since_start_s < params_.startup_grace_s;
+  // In the grace no stream is stale, whether it was never heard or heard once at start and not since: a
+  // slow start (System::build under a sanitizer took 0.57 s, so the sim's first gimbal state, stamped at
+  // start, was 0.57 s old at the supervisor's first step) is not a dead sensor (docs/testing.md History).
   auto stale = [&](rt::TimeNs stamp_ns, double timeout_s) {
-    if (stamp_ns < 0) return !grace;
+    if (grace) return false;
+    if (stamp_ns < 0) return true;
     return rt::nsToSeconds(in.now_ns - stamp_ns) > timeout_s;
   };
   // Overruns: counted from the start of a window that restarts every overrun_window_s (checked before
