@@ -76,7 +76,7 @@ struct SupervisorParams {
   int max_planner_failures = 20;     ///< Failed planning cycles in a row while tracking: degraded; >= 1.
   int overrun_storm = 50;            ///< Deadline overruns within overrun_window_s: failsafe; >= 1.
   double overrun_window_s = 1.0;     ///< > 0.
-  double startup_grace_s = 2.0;      ///< No stream is judged stale this long after start (silent, or heard once and not since); >= 0.
+  double startup_grace_s = 2.0;      ///< No stream is stale this long after start (silent or heard once); >= 0.
 };
 
 rt::Status validate(const SupervisorParams& params);
