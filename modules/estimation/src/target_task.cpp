@@ -23,6 +23,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.in_front_streak_spans_unseen =
       node.getBoolOr("in_front_streak_spans_unseen", params.in_front_streak_spans_unseen);
   params.in_front_gate_chi2 = node.getDoubleOr("in_front_gate_chi2", params.in_front_gate_chi2, 0.0, 1000.0);
+  params.in_front_doubtful_starts_track =
+      node.getBoolOr("in_front_doubtful_starts_track", params.in_front_doubtful_starts_track);
   if (node.has("in_front_test"))
     params.in_front_test = node.getEnum("in_front_test", {"nearer", "gate"}) == "gate"
                                ? TargetTaskParams::InFrontTest::kGate
@@ -243,6 +245,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};
   std::array<bool, hal::kMaxPersons> in_front{};  // ranged in front of the followed person: someone else
+  std::array<bool, hal::kMaxPersons> doubtful{};  // ... refused by in_front_gate_chi2 only: maybe the person
   bearing_cost.fill(std::numeric_limits<double>::infinity());
   const double gate = params_.estimator.gate_chi2;
   const perception::TrackerParams& t = params_.tracker;
@@ -294,9 +297,10 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       a.seen_through = true;  // the depth camera sees past (or something before) where the person would be
       continue;
     }
-    if (inFrontOfTheFollowed(c, prior)) {
+    if (const InFront verdict = inFrontOfTheFollowed(c, prior); verdict != InFront::kNo) {
       a.in_front = true;
       in_front[static_cast<std::size_t>(i)] = true;
+      doubtful[static_cast<std::size_t>(i)] = verdict == InFront::kDoubtful && !params_.in_front_doubtful_starts_track;
       continue;
     }
     const double cost = *followed_cost;
@@ -362,12 +366,13 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   // them would then take the person's measurements from their own track. Someone the depth camera ranged in front
   // of the followed person is someone else alone too: on their own track they compete for the next frames, where
   // their range may come nearer the person's prediction (traced: crowd seed 40, a look-alike refused in front two
-  // frames in a row, then ranged 0.85 m nearer than the person at d2 14.2, inside the gate, and taken).
+  // frames in a row, then ranged 0.85 m nearer than the person at d2 14.2, inside the gate, and taken) -- unless
+  // only the tighter bound refused them (in_front_doubtful_starts_track false): they may be the person.
   const bool followed_ranged = a.followed >= 0 && distance(a.followed);
   if (a.followed >= 0) person_taken[static_cast<std::size_t>(a.followed)] = true;
   for (int i = 0; i < count; ++i) {
     const auto k = static_cast<std::size_t>(i);
-    if ((followed_ranged || in_front[k]) && !person_taken[k] && distance(i)) a.track[k] = kNewTrack;
+    if ((followed_ranged || (in_front[k] && !doubtful[k])) && !person_taken[k] && distance(i)) a.track[k] = kNewTrack;
   }
   return a;
 }
@@ -380,24 +385,28 @@ bool TargetTask::lookAlikeYoungTrack(std::size_t j) const {
          perception::appearanceDistance(reference_, look) <= params_.tracker.max_appearance_distance;
 }
 
-bool TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const {
+TargetTask::InFront TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const {
   const int after = params_.in_front_after_ranged;
   if (after <= 0 || ranged_streak_ < after || prior.lost || !c.measurement || !c.measurement->ranged || !c.unranged)
-    return false;
+    return InFront::kNo;
   if (params_.in_front_test == TargetTaskParams::InFrontTest::kGate) {
     const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
-    const double gate = params_.in_front_gate_chi2 > 0.0 ? params_.in_front_gate_chi2 : params_.estimator.gate_chi2;
-    return d2 && *d2 > gate;
+    const double gate = params_.estimator.gate_chi2;
+    const double bound = params_.in_front_gate_chi2 > 0.0 ? params_.in_front_gate_chi2 : gate;
+    if (!(d2 && *d2 > bound)) return InFront::kNo;
+    return *d2 > gate ? InFront::kBeyondGate : InFront::kDoubtful;
   }
   const std::optional<TargetEstimator::Innovation> innovation = estimator_.innovation(*c.measurement);
-  if (!innovation) return false;
+  if (!innovation) return InFront::kNo;
   // The innovation along the line of sight, against its own standard deviation: nearer (negative) by more than the
   // gate's reach in one dimension. Across the line the regression's gate has judged them already.
   Eigen::Vector3d line_W = Eigen::Vector3d::Zero();
   line_W.head<2>() = c.measurement->bearing_W;
   const double along_m = innovation->nu_m.dot(line_W);
   const double variance_m2 = line_W.dot(innovation->S_m2 * line_W);
-  return variance_m2 > 0.0 && along_m < 0.0 && along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
+  const bool nearer =
+      variance_m2 > 0.0 && along_m < 0.0 && along_m * along_m > params_.estimator.gate_chi2 * variance_m2;
+  return nearer ? InFront::kBeyondGate : InFront::kNo;
 }
 
 bool TargetTask::hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
