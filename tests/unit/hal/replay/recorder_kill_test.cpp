@@ -33,7 +33,14 @@ TEST(Recorder, AKilledRecorderLeavesADatasetThatReplaysStrictly) {
       if (t % (100 * rt::kNsPerMillisecond) == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // Killed once its writer has written a few hundred rows (a fixed 300 ms was not enough under ASan on a busy
+  // 2-core CI machine: nothing was written yet), or after 30 s whatever it wrote.
+  const std::filesystem::path odometry_csv = std::filesystem::path(dir) / "odometry.csv";
+  for (int waited_ms = 0; waited_ms < 30000; waited_ms += 10) {
+    std::error_code error;
+    if (std::filesystem::file_size(odometry_csv, error) > 8192 && !error) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
   ASSERT_EQ(::kill(child, SIGKILL), 0);
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);
