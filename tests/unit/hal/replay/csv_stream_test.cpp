@@ -133,7 +133,13 @@ TEST(CsvStream, ARecorderKilledMidWriteLeavesAStreamReadableUpToItsLastCompleteR
       if (!writer->write(t, {0.001 * static_cast<double>(t), 1.0 / 3.0})) ::_exit(3);
     }
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // Killed once it has written well over 100 records (16 KiB), not after a fixed time: a busy machine may not
+  // run the child at all for a while (the killed recorder's test failed so in CI, docs/testing.md History).
+  for (int waited_ms = 0; waited_ms < 30000; waited_ms += 5) {
+    std::error_code error;
+    if (std::filesystem::file_size(path, error) > 16384 && !error) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
   ASSERT_EQ(::kill(child, SIGKILL), 0);
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);
