@@ -1,5 +1,6 @@
 // Shared by the target task's tests that range people with the depth camera: a depth image rendered from upright
-// bodies, seen from the drone hovering at the origin (target_task_test_util.hpp's pose).
+// bodies, seen from the drone hovering at the origin (target_task_test_util.hpp's pose), and a task rig that ranges
+// with it.
 #pragma once
 
 #include <algorithm>
@@ -12,7 +13,9 @@
 #include <opencv2/core.hpp>
 
 #include "aerotrack/hal/types.hpp"
+#include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/time.hpp"
+#include "target_task_test_util.hpp"
 
 namespace aerotrack::estimation::test {
 
@@ -42,5 +45,16 @@ inline std::shared_ptr<hal::DepthFrame> renderBodiesDepth(rt::TimeNs t_ns, const
   }
   return frame;
 }
+
+/// A target task that ranges from the depth frames written to `depth` and publishes whom it follows to `followed`.
+struct RangedRig {
+  explicit RangedRig(const TargetTaskParams& params) : rig(params) {
+    rig.task.publishFollowedTo(followed);
+    rig.task.rangeFrom(depth);
+  }
+  rt::LatestSlot<hal::DetectionFrame> followed;
+  rt::SharedSlot<hal::DepthFrame> depth;
+  TaskRig rig;
+};
 
 }  // namespace aerotrack::estimation::test

@@ -65,12 +65,10 @@ struct DepthGap {
 Scene run(int in_front_after_ranged, double crossing_s, DepthGap gap = {}, bool spans_unseen = false) {
   TargetTaskParams params = rangedParams(in_front_after_ranged, false);
   params.in_front_streak_spans_unseen = spans_unseen;
-  rt::LatestSlot<hal::DetectionFrame> followed;
-  rt::SharedSlot<hal::DepthFrame> depth;
-  test::TaskRig rig(params);
-  auto& [detections, odometry, gimbal, out, task] = rig;
-  task.publishFollowedTo(followed);
-  task.rangeFrom(depth);
+  test::RangedRig ranged(params);
+  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
+  auto& followed = ranged.followed;
+  auto& depth = ranged.depth;
   Scene scene;
   const int frames = static_cast<int>(kDurationS * kRateHz);
   for (int i = 0; i <= frames; ++i) {
@@ -145,12 +143,10 @@ BehindScene runBehind(const TargetTaskParams& params) {
   constexpr double kWalkerXM = kPersonXM + 0.6;
   constexpr double kWalkerSpeedMps = 0.6;
   constexpr double kCrossingS = 2.5;
-  rt::LatestSlot<hal::DetectionFrame> followed;
-  rt::SharedSlot<hal::DepthFrame> depth;
-  test::TaskRig rig(params);
-  auto& [detections, odometry, gimbal, out, task] = rig;
-  task.publishFollowedTo(followed);
-  task.rangeFrom(depth);
+  test::RangedRig ranged(params);
+  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
+  auto& followed = ranged.followed;
+  auto& depth = ranged.depth;
   BehindScene scene;
   const int frames = static_cast<int>(kDurationS * kRateHz);
   for (int i = 0; i <= frames; ++i) {
@@ -253,12 +249,10 @@ WeaveScene runWeave(bool doubtful_starts_track) {
   TargetTaskParams params = rangedParams(5, true);
   params.in_front_gate_chi2 = 0.8;
   params.in_front_doubtful_starts_track = doubtful_starts_track;
-  rt::LatestSlot<hal::DetectionFrame> followed;
-  rt::SharedSlot<hal::DepthFrame> depth;
-  test::TaskRig rig(params);
-  auto& [detections, odometry, gimbal, out, task] = rig;
-  task.publishFollowedTo(followed);
-  task.rangeFrom(depth);
+  test::RangedRig ranged(params);
+  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
+  auto& followed = ranged.followed;
+  auto& depth = ranged.depth;
   WeaveScene scene;
   const int frames = static_cast<int>(kDurationS * kRateHz);
   for (int i = 0; i <= frames; ++i) {
