@@ -52,6 +52,7 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   out["in_front"] = s.in_front;
   out["behind_bystander"] = s.behind_bystander;
   out["seen_through"] = s.seen_through;
+  out["reid_deferred"] = s.reid_deferred;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

@@ -36,6 +36,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
                                  ? TargetTaskParams::AssignmentCost::kLikelihood
                                  : TargetTaskParams::AssignmentCost::kGateFraction;
   params.depth_vets_bearings = node.getBoolOr("depth_vets_bearings", params.depth_vets_bearings);
+  params.reid_confirm_frames = node.getIntOr("reid_confirm_frames", params.reid_confirm_frames, 1, 100);
+  params.in_front_is_someone_else = node.getBoolOr("in_front_is_someone_else", params.in_front_is_someone_else);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -290,6 +292,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
+      a.someone_else[static_cast<std::size_t>(i)] = true;
       continue;
     }
     if (bearing && params_.depth_vets_bearings && c.depth &&
@@ -301,6 +304,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       a.in_front = true;
       in_front[static_cast<std::size_t>(i)] = true;
       doubtful[static_cast<std::size_t>(i)] = verdict == InFront::kDoubtful && !params_.in_front_doubtful_starts_track;
+      a.someone_else[static_cast<std::size_t>(i)] = verdict == InFront::kBeyondGate;
       continue;
     }
     const double cost = *followed_cost;
@@ -508,6 +512,31 @@ bool TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
   return false;
 }
 
+bool TargetTask::reidentificationConfirmed(const hal::DetectionFrame& frame,
+                                           const std::array<Candidate, hal::kMaxPersons>& candidates, int person) {
+  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
+  if (params_.reid_confirm_frames <= 1 || !prior.initialised || !prior.lost || person < 0) {
+    reid_streak_ = 0;  // "in a row": a frame that chose nobody for the lost track ends the run
+    return true;
+  }
+  const TargetMeasurement& m = candidates[static_cast<std::size_t>(person)].judged();
+  // The same one as the frame before: no farther than a running person goes in the time between, plus three
+  // standard deviations of the two measurements' difference (the regression's noise: the judged form).
+  constexpr double kRunningSpeedMps = 3.0;
+  const auto stdXy = [&](const TargetMeasurement& x) {
+    return x.std_xy_m > 0.0 ? x.std_xy_m : params_.estimator.measurement_std_xy_m;
+  };
+  bool same = false;
+  if (reid_streak_ > 0) {
+    const double dt_s = rt::nsToSeconds(m.stamp_ns - reid_last_.stamp_ns);
+    const double reach_m = kRunningSpeedMps * std::max(0.0, dt_s) + 3.0 * std::hypot(stdXy(m), stdXy(reid_last_));
+    same = (m.p_WT_m - reid_last_.p_WT_m).head<2>().norm() <= reach_m;
+  }
+  reid_streak_ = same ? reid_streak_ + 1 : 1;
+  reid_last_ = m;
+  return reid_streak_ >= params_.reid_confirm_frames;
+}
+
 int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
   std::array<Candidate, hal::kMaxPersons> candidates;
   return associate(frame, candidates).followed;
@@ -675,6 +704,10 @@ void TargetTask::step(rt::TimeNs now_ns) {
     std::array<Candidate, hal::kMaxPersons> candidates;
     Association a = associate(frame, candidates);
     const bool whole_frame_wanted = checkSwap(frame, candidates, a);
+    if (!reidentificationConfirmed(frame, candidates, a.followed)) {
+      a.followed = -1;  // the lost track waits (reid_confirm_frames); whoever it was stays off the bystander tracks
+      ++stats_.reid_deferred;
+    }
     const int person = a.followed;
     if (a.ambiguous) ++stats_.ambiguous;
     if (a.in_front) ++stats_.in_front;
@@ -714,11 +747,12 @@ void TargetTask::step(rt::TimeNs now_ns) {
     for (std::size_t i = 0; i < a.track.size(); ++i) {
       if (a.track[i] == kNoTrack) continue;
       const TargetMeasurement& m = *candidates[i].measurement;
+      const bool with_followed = followed_measured || (params_.in_front_is_someone_else && a.someone_else[i]);
       if (a.track[i] == kNewTrack)
-        bystanders_.start(m, candidates[i].look, followed_measured);
+        bystanders_.start(m, candidates[i].look, with_followed);
       else
         bystanders_.update(static_cast<std::size_t>(a.track[i]), m, candidates[i].look, params_.tracker.appearance_rate,
-                           followed_measured);
+                           with_followed);
     }
     if (followed_out_ != nullptr) {
       hal::DetectionFrame followed = frame;

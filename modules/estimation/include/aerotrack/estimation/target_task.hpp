@@ -162,6 +162,23 @@ struct TargetTaskParams {
   /// was taken (traced: image-mode crowd seed 9, flown from the truth, depth 1.3 m against 2.4 m predicted), and a
   /// low-scored person 7 m behind (seed 100, closed loop: no surface within 8 m). false: off.
   bool depth_vets_bearings = false;
+  /// With choose_by_estimate: a lost followed track is re-identified on someone only once the association has chosen
+  /// them for it in this many detection frames in a row, each within a walker's reach of the one before (where they
+  /// were measured, not the track's prediction); 1: at once. A lost track's gate has grown over wherever the person
+  /// may be, and whoever is seen first in it was taken: the look-alike coming into view a frame before the person
+  /// (traced: image-mode crowd seeds 71 and 72 in closed loop, 4.7 and 3.7 m from the person, taken on their first
+  /// frame at d2 0.8 and 7.7 while the person, nearer the prediction, was not yet detected). Waiting, the track takes
+  /// whoever is chosen frame after frame: the person nearer the prediction once they are seen too. Until then the
+  /// track stays lost and coasts.
+  int reid_confirm_frames = 1;
+  /// With in_front_after_ranged or hidden_behind_m: someone the live followed track refused as someone in front of
+  /// the person -- ranged nearer beyond its gate (not a doubtful refusal inside it), or fitting a bystander's track
+  /// in front of the person -- counts as seen beside the followed person: their bystander track competes with the
+  /// lost followed track for them (BystanderTracks::seenWithFollowed). Without it, a track updated only while the
+  /// followed person was hidden (behind that very bystander) was never "seen with" them, and once the followed track
+  /// was lost its re-identification took the bystander (traced: image-mode crowd seed 102 in closed loop, the
+  /// look-alike refused in front for 0.9 s, then taken at d2 3.7 in the frame the track was lost). false: off.
+  bool in_front_is_someone_else = false;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
@@ -199,6 +216,7 @@ struct TargetTaskStats {
   std::uint64_t in_front = 0;          ///< Frames someone it would take was ranged in front of the followed person.
   std::uint64_t behind_bystander = 0;  ///< Frames someone it would take fit a bystander in front of the person.
   std::uint64_t seen_through = 0;      ///< Frames a bearing it would take was one the depth camera sees through.
+  std::uint64_t reid_deferred = 0;     ///< Frames a lost track's choice waited for reid_confirm_frames.
   std::uint64_t depth_ranged = 0;      ///< ... of the followed person's frames, ranged by the depth camera.
   std::uint64_t depth_disagreed = 0;   ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;      ///< ... for which no depth image near in time saw them (occluded, out of view).
@@ -256,6 +274,9 @@ class TargetTask final : public rt::Task {
     bool in_front = false;   ///< Someone its gate took was ranged in front of the person (in_front_after_ranged).
     bool behind_bystander = false;  ///< Someone its gate took fit a bystander in front of the person (hidden_behind_m).
     bool seen_through = false;      ///< A bearing its gate took was seen through by the depth camera.
+    /// Each person the live followed track's rules showed to be someone else: ranged in front beyond its gate, or
+    /// fitting a bystander's track in front of the person (in_front_is_someone_else).
+    std::array<bool, hal::kMaxPersons> someone_else{};
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
@@ -321,7 +342,15 @@ class TargetTask final : public rt::Task {
   /// The followed person's own colour distances to reference_ (taken distances): running mean and mean square.
   double own_look_mean_ = 0.0, own_look_mean_sq_ = 0.0;
   int own_look_count_ = 0;
+  /// Whom the association chose for the lost followed track in the frames before (reid_confirm_frames): how many
+  /// frames in a row, and the newest one's measurement.
+  int reid_streak_ = 0;
+  TargetMeasurement reid_last_;
   int ranged_streak_ = 0;  ///< The followed track's last accepted measurements in a row that were ranged as they were.
+  /// Whether `person`, the association's choice for the followed track (-1: none), may be given to it now: always,
+  /// but while the track is lost, when they are its choice for the reid_confirm_frames-th frame in a row.
+  bool reidentificationConfirmed(const hal::DetectionFrame& frame,
+                                 const std::array<Candidate, hal::kMaxPersons>& candidates, int person);
   /// Whether a colour is as near the learnt one as the followed person's own frames are (look_gate_sigmas).
   bool looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const;
   rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
