@@ -46,6 +46,18 @@ inline std::shared_ptr<hal::DepthFrame> renderBodiesDepth(rt::TimeNs t_ns, const
   return frame;
 }
 
+/// The pinhole regression, the depth camera's ranges of bodies of body_radius_m, and the rule for someone else along
+/// the line of sight (in_front_after_ranged; judged on the gate, or nearer only).
+inline TargetTaskParams rangedParams(double body_radius_m, int in_front_after_ranged, bool on_the_gate) {
+  TargetTaskParams params;
+  params.localization = pinholeLocalization();
+  params.in_front_after_ranged = in_front_after_ranged;
+  params.in_front_test = on_the_gate ? TargetTaskParams::InFrontTest::kGate : TargetTaskParams::InFrontTest::kNearer;
+  params.depth_range.enabled = true;
+  params.depth_range.body_offset_m = body_radius_m;
+  return params;
+}
+
 /// A target task that ranges from the depth frames written to `depth` and publishes whom it follows to `followed`.
 struct RangedRig {
   explicit RangedRig(const TargetTaskParams& params) : rig(params) {

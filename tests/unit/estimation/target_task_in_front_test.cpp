@@ -45,17 +45,6 @@ struct Scene {
   TargetTaskStats stats;
 };
 
-/// The pinhole regression, the depth camera's ranges, and the rule for someone else along the line of sight.
-TargetTaskParams rangedParams(int in_front_after_ranged, bool on_the_gate) {
-  TargetTaskParams params;
-  params.localization = test::pinholeLocalization();
-  params.in_front_after_ranged = in_front_after_ranged;
-  params.in_front_test = on_the_gate ? TargetTaskParams::InFrontTest::kGate : TargetTaskParams::InFrontTest::kNearer;
-  params.depth_range.enabled = true;
-  params.depth_range.body_offset_m = kBodyRadiusM;
-  return params;
-}
-
 /// The depth camera sees nothing in [gap_from_s, gap_to_s) (the person outside its narrower view).
 struct DepthGap {
   double from_s = 0.0;
@@ -63,7 +52,7 @@ struct DepthGap {
 };
 
 Scene run(int in_front_after_ranged, double crossing_s, DepthGap gap = {}, bool spans_unseen = false) {
-  TargetTaskParams params = rangedParams(in_front_after_ranged, false);
+  TargetTaskParams params = test::rangedParams(kBodyRadiusM, in_front_after_ranged, false);
   params.in_front_streak_spans_unseen = spans_unseen;
   test::RangedRig ranged(params);
   auto& [detections, odometry, gimbal, out, task] = ranged.rig;
@@ -189,8 +178,8 @@ void expectTakenThenKept(const BehindScene& taken, const BehindScene& kept) {
 }
 
 TEST(TargetTaskInFront, GivenAWalkerRangedBehindThePersonBesideThem_WhenJudgedOnTheGate_ThenTheTrackDoesNotTakeThem) {
-  const BehindScene taken = runBehind(rangedParams(5, false));
-  const BehindScene kept = runBehind(rangedParams(5, true));
+  const BehindScene taken = runBehind(test::rangedParams(kBodyRadiusM, 5, false));
+  const BehindScene kept = runBehind(test::rangedParams(kBodyRadiusM, 5, true));
   // Nearer only: the walker's depth range fails the gate, and the regression's distance of them is given, every time.
   // On the gate: never.
   expectTakenThenKept(taken, kept);
@@ -200,7 +189,7 @@ TEST(TargetTaskInFront, GivenAWalkerBehindInsideTheGate_WhenTheBoundIsTheOwnRang
   // A looser depth camera's noise model (0.2 m along the line of sight, 0.4 m across at 5 m): the walker 0.6 m
   // behind is ranged inside the gate's 16.3, and is given. The bound in_front_gate_chi2 = 5 (above the person's own
   // ranged d2 here, which the test checks: every one of their frames is still given) refuses them.
-  TargetTaskParams loose = rangedParams(5, true);
+  TargetTaskParams loose = test::rangedParams(kBodyRadiusM, 5, true);
   loose.depth_range.range_std_m = 0.2;
   loose.depth_range.cross_std_per_m = 0.08;
   TargetTaskParams bound = loose;
@@ -246,7 +235,7 @@ struct WeaveScene {
 /// spreads; the bound in_front_gate_chi2 = 0.8 refuses the tail of that spread, inside the estimator's gate (at 1 it
 /// refused none of these frames).
 WeaveScene runWeave(bool doubtful_starts_track) {
-  TargetTaskParams params = rangedParams(5, true);
+  TargetTaskParams params = test::rangedParams(kBodyRadiusM, 5, true);
   params.in_front_gate_chi2 = 0.8;
   params.in_front_doubtful_starts_track = doubtful_starts_track;
   test::RangedRig ranged(params);

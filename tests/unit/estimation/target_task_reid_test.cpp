@@ -38,10 +38,9 @@ Scene run(int reid_confirm_frames, bool look_alike = true) {
   params.localization.noise_std_m = 0.01;  // the network's scatter (config/localization_image.yaml: 0.27 m at 5 m)
   params.localization.noise_std_per_m = 0.05;
   params.reid_confirm_frames = reid_confirm_frames;
-  rt::LatestSlot<hal::DetectionFrame> followed;
-  test::TaskRig rig(params);
-  auto& [detections, odometry, gimbal, out, task] = rig;
-  task.publishFollowedTo(followed);
+  test::FollowedRig rig(params);
+  auto& [detections, odometry, gimbal, out, task] = rig.rig;
+  const auto& followed = rig.followed;
   Scene scene;
   const int missed_frames = static_cast<int>(kMissedS * kRateHz);
   const int back = kLockFrames + missed_frames;  // the look-alike's first frame

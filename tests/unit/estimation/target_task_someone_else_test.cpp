@@ -33,12 +33,7 @@ struct Scene {
 };
 
 Scene run(bool in_front_is_someone_else) {
-  TargetTaskParams params;
-  params.localization = test::pinholeLocalization();
-  params.in_front_after_ranged = 5;
-  params.in_front_test = TargetTaskParams::InFrontTest::kGate;
-  params.depth_range.enabled = true;
-  params.depth_range.body_offset_m = kBodyRadiusM;
+  TargetTaskParams params = test::rangedParams(kBodyRadiusM, 5, true);
   params.in_front_is_someone_else = in_front_is_someone_else;
   test::RangedRig ranged(params);
   auto& [detections, odometry, gimbal, out, task] = ranged.rig;

@@ -87,4 +87,11 @@ struct TaskRig {
   TargetTask task;
 };
 
+/// A target task that publishes whom it follows to `followed`.
+struct FollowedRig {
+  explicit FollowedRig(const TargetTaskParams& params) : rig(params) { rig.task.publishFollowedTo(followed); }
+  rt::LatestSlot<hal::DetectionFrame> followed;
+  TaskRig rig;
+};
+
 }  // namespace aerotrack::estimation::test
