@@ -292,7 +292,6 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
-      a.someone_else[static_cast<std::size_t>(i)] = true;
       continue;
     }
     if (bearing && params_.depth_vets_bearings && c.depth &&
@@ -304,6 +303,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       a.in_front = true;
       in_front[static_cast<std::size_t>(i)] = true;
       doubtful[static_cast<std::size_t>(i)] = verdict == InFront::kDoubtful && !params_.in_front_doubtful_starts_track;
+      // Not the verdict behind a bystander's track, nor a doubtful one: a prediction that overshot a stopping person
+      // puts the person's own track in front of it (traced: crowd seed 87, then held by that track while the lost
+      // followed track took the look-alike).
       a.someone_else[static_cast<std::size_t>(i)] = verdict == InFront::kBeyondGate;
       continue;
     }

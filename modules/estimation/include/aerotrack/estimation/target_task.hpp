@@ -169,12 +169,14 @@ struct TargetTaskParams {
   /// (traced: image-mode crowd seeds 71 and 72 in closed loop, 4.7 and 3.7 m from the person, taken on their first
   /// frame at d2 0.8 and 7.7 while the person, nearer the prediction, was not yet detected). Waiting, the track takes
   /// whoever is chosen frame after frame: the person nearer the prediction once they are seen too. Until then the
-  /// track stays lost and coasts.
+  /// track stays lost and coasts. Shipped 1: at 3 the image-mode crowd lost more than it gained (the look-alike stays
+  /// in view while the person does not come; docs/modules/localization-estimation.md).
   int reid_confirm_frames = 1;
-  /// With in_front_after_ranged or hidden_behind_m: someone the live followed track refused as someone in front of
-  /// the person -- ranged nearer beyond its gate (not a doubtful refusal inside it), or fitting a bystander's track
-  /// in front of the person -- counts as seen beside the followed person: their bystander track competes with the
-  /// lost followed track for them (BystanderTracks::seenWithFollowed). Without it, a track updated only while the
+  /// With in_front_after_ranged: someone the live followed track refused as someone in front of the person beyond
+  /// its gate (InFront::kBeyondGate; not a doubtful refusal inside it, nor the verdict behind a bystander's track,
+  /// which a prediction overshooting a stopping person gives the person's own track: crowd seed 87) counts as seen
+  /// beside the followed person: their bystander track competes with the lost followed track for them
+  /// (BystanderTracks::seenWithFollowed). Without it, a track updated only while the
   /// followed person was hidden (behind that very bystander) was never "seen with" them, and once the followed track
   /// was lost its re-identification took the bystander (traced: image-mode crowd seed 102 in closed loop, the
   /// look-alike refused in front for 0.9 s, then taken at d2 3.7 in the frame the track was lost). false: off.
@@ -274,8 +276,8 @@ class TargetTask final : public rt::Task {
     bool in_front = false;   ///< Someone its gate took was ranged in front of the person (in_front_after_ranged).
     bool behind_bystander = false;  ///< Someone its gate took fit a bystander in front of the person (hidden_behind_m).
     bool seen_through = false;      ///< A bearing its gate took was seen through by the depth camera.
-    /// Each person the live followed track's rules showed to be someone else: ranged in front beyond its gate, or
-    /// fitting a bystander's track in front of the person (in_front_is_someone_else).
+    /// Each person the live followed track's rule for someone in front refused beyond its gate: someone else
+    /// (in_front_is_someone_else).
     std::array<bool, hal::kMaxPersons> someone_else{};
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
