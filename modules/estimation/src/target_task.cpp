@@ -303,9 +303,8 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       a.in_front = true;
       in_front[static_cast<std::size_t>(i)] = true;
       doubtful[static_cast<std::size_t>(i)] = verdict == InFront::kDoubtful && !params_.in_front_doubtful_starts_track;
-      // Not the verdict behind a bystander's track, nor a doubtful one: a prediction that overshot a stopping person
-      // puts the person's own track in front of it (traced: crowd seed 87, then held by that track while the lost
-      // followed track took the look-alike).
+      // Only a range beyond the gate: a doubtful one may be the person, and the verdict behind a bystander's track
+      // judges where a track lies against the prediction, not this person's own range.
       a.someone_else[static_cast<std::size_t>(i)] = verdict == InFront::kBeyondGate;
       continue;
     }

@@ -173,13 +173,15 @@ struct TargetTaskParams {
   /// in view while the person does not come; docs/modules/localization-estimation.md).
   int reid_confirm_frames = 1;
   /// With in_front_after_ranged: someone the live followed track refused as someone in front of the person beyond
-  /// its gate (InFront::kBeyondGate; not a doubtful refusal inside it, nor the verdict behind a bystander's track,
-  /// which a prediction overshooting a stopping person gives the person's own track: crowd seed 87) counts as seen
-  /// beside the followed person: their bystander track competes with the lost followed track for them
-  /// (BystanderTracks::seenWithFollowed). Without it, a track updated only while the
-  /// followed person was hidden (behind that very bystander) was never "seen with" them, and once the followed track
-  /// was lost its re-identification took the bystander (traced: image-mode crowd seed 102 in closed loop, the
-  /// look-alike refused in front for 0.9 s, then taken at d2 3.7 in the frame the track was lost). false: off.
+  /// its gate (InFront::kBeyondGate; not a doubtful refusal inside it, nor the verdict behind a bystander's track)
+  /// counts as seen beside the followed person: their bystander track competes with the lost followed track for them
+  /// (BystanderTracks::seenWithFollowed). Without it, a track updated only while the followed person was hidden
+  /// (behind that very bystander) was never "seen with" them, and once the followed track was lost its
+  /// re-identification took the bystander (traced: image-mode crowd seed 102 in closed loop, the look-alike refused
+  /// in front for 0.9 s, then taken at d2 3.7 in the frame the track was lost). Shipped false: the refusal can be the
+  /// person's own frame (the depth camera ranging something in front of them), and the mark then lasts the track's
+  /// life: it held the person while the lost track took the look-alike (crowd seed 87; 118 against 121 of 140 crowd
+  /// trials without a switch, docs/modules/localization-estimation.md).
   bool in_front_is_someone_else = false;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
