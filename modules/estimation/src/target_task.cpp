@@ -515,8 +515,9 @@ bool TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
 
 bool TargetTask::reidentificationConfirmed(const hal::DetectionFrame& frame,
                                            const std::array<Candidate, hal::kMaxPersons>& candidates, int person) {
+  if (params_.reid_confirm_frames <= 1) return true;  // off: no estimate computed for it
   const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
-  if (params_.reid_confirm_frames <= 1 || !prior.initialised || !prior.lost || person < 0) {
+  if (!prior.initialised || !prior.lost || person < 0) {
     reid_streak_ = 0;  // "in a row": a frame that chose nobody for the lost track ends the run
     return true;
   }

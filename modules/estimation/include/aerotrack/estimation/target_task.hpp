@@ -163,12 +163,12 @@ struct TargetTaskParams {
   /// low-scored person 7 m behind (seed 100, closed loop: no surface within 8 m). false: off.
   bool depth_vets_bearings = false;
   /// With choose_by_estimate: a lost followed track is re-identified on someone only once the association has chosen
-  /// them for it in this many detection frames in a row, each within a walker's reach of the one before (where they
-  /// were measured, not the track's prediction); 1: at once. A lost track's gate has grown over wherever the person
-  /// may be, and whoever is seen first in it was taken: the look-alike coming into view a frame before the person
-  /// (traced: image-mode crowd seeds 71 and 72 in closed loop, 4.7 and 3.7 m from the person, taken on their first
-  /// frame at d2 0.8 and 7.7 while the person, nearer the prediction, was not yet detected). Waiting, the track takes
-  /// whoever is chosen frame after frame: the person nearer the prediction once they are seen too. Until then the
+  /// them for it in this many detection frames in a row, each within a running person's reach of the one before (where
+  /// they were measured, not the track's prediction); 1: at once. A lost track's gate has grown over wherever the
+  /// person may be, and whoever is seen first in it was taken: the look-alike coming into view a frame before the
+  /// person (traced: image-mode crowd seeds 71 and 72 in closed loop, 4.7 and 3.7 m from the person, taken on their
+  /// first frame at d2 0.8 and 7.7 while the person, nearer the prediction, was not yet detected). Waiting, the track
+  /// takes whoever is chosen frame after frame: the person nearer the prediction once they are seen too. Until then the
   /// track stays lost and coasts. Shipped 1: at 3 the image-mode crowd lost more than it gained (the look-alike stays
   /// in view while the person does not come; docs/modules/localization-estimation.md).
   int reid_confirm_frames = 1;
