@@ -53,6 +53,8 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   out["behind_bystander"] = s.behind_bystander;
   out["seen_through"] = s.seen_through;
   out["reid_deferred"] = s.reid_deferred;
+  out["refused_alone_tracks"] = s.refused_alone_tracks;
+  out["bearings_after_gap"] = s.bearings_after_gap;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

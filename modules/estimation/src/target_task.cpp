@@ -38,6 +38,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.depth_vets_bearings = node.getBoolOr("depth_vets_bearings", params.depth_vets_bearings);
   params.reid_confirm_frames = node.getIntOr("reid_confirm_frames", params.reid_confirm_frames, 1, 100);
   params.in_front_is_someone_else = node.getBoolOr("in_front_is_someone_else", params.in_front_is_someone_else);
+  params.refused_alone_frames = node.getIntOr("refused_alone_frames", params.refused_alone_frames, 0, 100);
+  params.bearing_max_gap_s = node.getDoubleOr("bearing_max_gap_s", params.bearing_max_gap_s, 0.0, 10.0);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -246,8 +248,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   AssignmentCosts costs;
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};
-  std::array<bool, hal::kMaxPersons> in_front{};  // ranged in front of the followed person: someone else
-  std::array<bool, hal::kMaxPersons> doubtful{};  // ... refused by in_front_gate_chi2 only: maybe the person
+  std::array<bool, hal::kMaxPersons> in_front{};     // ranged in front of the followed person: someone else
+  std::array<bool, hal::kMaxPersons> doubtful{};     // ... refused by in_front_gate_chi2 only: maybe the person
+  std::array<bool, hal::kMaxPersons> beyond_gate{};  // a distance the live followed track's gate refused
   bearing_cost.fill(std::numeric_limits<double>::infinity());
   const double gate = params_.estimator.gate_chi2;
   const perception::TrackerParams& t = params_.tracker;
@@ -287,8 +290,15 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     }
     const std::optional<TargetEstimator::Fit> fit = estimator_.fit(c.judged());
     const std::optional<double> followed_cost = cost_of(fit, to_followed);
+    beyond_gate[static_cast<std::size_t>(i)] = !bearing && !prior.lost && fit && fit->d2 > gate;
     if (!followed_cost) continue;
     const double d2 = fit->d2;
+    if (bearing && params_.bearing_max_gap_s > 0.0 &&
+        (followed_accepted_ns_ < 0 ||
+         frame.stamp_ns - followed_accepted_ns_ > rt::secondsToNs(params_.bearing_max_gap_s))) {
+      a.bearing_after_gap = true;  // whoever stands on the line of sight now: the person must come back with a distance
+      continue;
+    }
     if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
@@ -378,6 +388,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   for (int i = 0; i < count; ++i) {
     const auto k = static_cast<std::size_t>(i);
     if ((followed_ranged || (in_front[k] && !doubtful[k])) && !person_taken[k] && distance(i)) a.track[k] = kNewTrack;
+    a.refused_alone[k] = beyond_gate[k] && !person_taken[k] && a.track[k] == kNoTrack;
   }
   return a;
 }
@@ -521,22 +532,46 @@ bool TargetTask::reidentificationConfirmed(const hal::DetectionFrame& frame,
     reid_streak_ = 0;  // "in a row": a frame that chose nobody for the lost track ends the run
     return true;
   }
+  // The same one as the frame before (judged: the regression's noise).
   const TargetMeasurement& m = candidates[static_cast<std::size_t>(person)].judged();
-  // The same one as the frame before: no farther than a running person goes in the time between, plus three
-  // standard deviations of the two measurements' difference (the regression's noise: the judged form).
+  reid_streak_ = reid_streak_ > 0 && withinReach(m, reid_last_) ? reid_streak_ + 1 : 1;
+  reid_last_ = m;
+  return reid_streak_ >= params_.reid_confirm_frames;
+}
+
+bool TargetTask::withinReach(const TargetMeasurement& m, const TargetMeasurement& before) const {
   constexpr double kRunningSpeedMps = 3.0;
   const auto stdXy = [&](const TargetMeasurement& x) {
     return x.std_xy_m > 0.0 ? x.std_xy_m : params_.estimator.measurement_std_xy_m;
   };
-  bool same = false;
-  if (reid_streak_ > 0) {
-    const double dt_s = rt::nsToSeconds(m.stamp_ns - reid_last_.stamp_ns);
-    const double reach_m = kRunningSpeedMps * std::max(0.0, dt_s) + 3.0 * std::hypot(stdXy(m), stdXy(reid_last_));
-    same = (m.p_WT_m - reid_last_.p_WT_m).head<2>().norm() <= reach_m;
+  const double dt_s = rt::nsToSeconds(m.stamp_ns - before.stamp_ns);
+  const double reach_m = kRunningSpeedMps * std::max(0.0, dt_s) + 3.0 * std::hypot(stdXy(m), stdXy(before));
+  return (m.p_WT_m - before.p_WT_m).head<2>().norm() <= reach_m;
+}
+
+void TargetTask::trackTheRefusedAlone(const std::array<Candidate, hal::kMaxPersons>& candidates, Association& a) {
+  if (params_.refused_alone_frames <= 0) return;
+  // The one who continues the run (where the one refused the frame before was), else the first refused: a new run.
+  int first = -1;
+  int continuing = -1;
+  for (std::size_t k = 0; k < a.refused_alone.size(); ++k) {
+    if (!a.refused_alone[k]) continue;
+    const int i = static_cast<int>(k);
+    if (first < 0) first = i;
+    if (continuing < 0 && refused_alone_streak_ > 0 && withinReach(candidates[k].judged(), refused_alone_last_))
+      continuing = i;
   }
-  reid_streak_ = same ? reid_streak_ + 1 : 1;
-  reid_last_ = m;
-  return reid_streak_ >= params_.reid_confirm_frames;
+  if (first < 0) {
+    refused_alone_streak_ = 0;  // "in a row": a frame without anyone refused alone ends the run
+    return;
+  }
+  const int person = continuing >= 0 ? continuing : first;
+  refused_alone_streak_ = continuing >= 0 ? refused_alone_streak_ + 1 : 1;
+  refused_alone_last_ = candidates[static_cast<std::size_t>(person)].judged();
+  if (refused_alone_streak_ < params_.refused_alone_frames) return;
+  a.track[static_cast<std::size_t>(person)] = kNewTrack;
+  ++stats_.refused_alone_tracks;
+  refused_alone_streak_ = 0;
 }
 
 int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
@@ -558,7 +593,10 @@ bool TargetTask::process(const Candidate& c) {
     ++stats_.unreliable;
     if (!c.measurement) return false;
     const MeasurementVerdict verdict = estimator_.add(*c.measurement);
-    if (verdict == MeasurementVerdict::kAccepted) ++stats_.bearings;
+    if (verdict == MeasurementVerdict::kAccepted) {
+      ++stats_.bearings;
+      followed_accepted_ns_ = c.measurement->stamp_ns;
+    }
     return false;
   }
   if (!c.measurement) {
@@ -579,6 +617,7 @@ bool TargetTask::process(const Candidate& c) {
   const MeasurementVerdict verdict = estimator_.add(*given);
   if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted) {
     ++stats_.accepted;
+    followed_accepted_ns_ = given->stamp_ns;
     // A start or a re-identification after a loss is the regression's; a fallback or a distance without the depth
     // camera's is not the camera's either.
     const bool agreed = verdict == MeasurementVerdict::kAccepted && !was_lost && ranged && given == &*c.measurement;
@@ -715,6 +754,8 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (a.in_front) ++stats_.in_front;
     if (a.behind_bystander) ++stats_.behind_bystander;
     if (a.seen_through) ++stats_.seen_through;
+    if (a.bearing_after_gap) ++stats_.bearings_after_gap;
+    trackTheRefusedAlone(candidates, a);
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;
       look_refused_d2_sum_ = 0.0;
@@ -749,7 +790,10 @@ void TargetTask::step(rt::TimeNs now_ns) {
     for (std::size_t i = 0; i < a.track.size(); ++i) {
       if (a.track[i] == kNoTrack) continue;
       const TargetMeasurement& m = *candidates[i].measurement;
-      const bool with_followed = followed_measured || (params_.in_front_is_someone_else && a.someone_else[i]);
+      // Someone refused alone over frames (refused_alone_frames: only they are on a track and refused alone) is
+      // someone else; someone refused in front, where in_front_is_someone_else says so.
+      const bool with_followed =
+          followed_measured || (params_.in_front_is_someone_else && a.someone_else[i]) || a.refused_alone[i];
       if (a.track[i] == kNewTrack)
         bystanders_.start(m, candidates[i].look, with_followed);
       else

@@ -183,6 +183,23 @@ struct TargetTaskParams {
   /// life: it held the person while the lost track took the look-alike (crowd seed 87; 118 against 121 of 140 crowd
   /// trials without a switch, docs/modules/localization-estimation.md).
   bool in_front_is_someone_else = false;
+  /// With choose_by_estimate: someone with a distance whom the live followed track's gate refuses (beyond it, and on
+  /// no bystander track) in this many detection frames in a row, each within a running person's reach of the one
+  /// before, is someone else: a bystander track is started on them, counted as seen beside the followed person (it
+  /// competes with a lost followed track's re-identification). Alone in the frame, a refused person was otherwise
+  /// never tracked (they may be the person whom the gate lost), and when they then came into the gate -- the
+  /// person hidden behind them -- nothing said they were someone else (traced: image-mode crowd seed 40, a
+  /// look-alike refused 5 frames in a row at d2 60 down to 12 as they walked up to the standing person, then taken at
+  /// d2 7.5; seed 73, refused 6 frames, then their bearing taken). One frame could be a jump of the person's own
+  /// measurement; several in a row, each where the one before was, are someone walking. 0: off.
+  int refused_alone_frames = 0;
+  /// With choose_by_estimate: a bearing (bearing_fallback) is given to the followed track only if the track accepted
+  /// a measurement of the person at most this long before the frame. A bearing fits anyone on its line of sight at
+  /// any range: it can carry a track that is seeing the person on, but after the person was hidden for a while,
+  /// whoever stands on that line now -- often whoever hid them -- fits it as well (traced: image-mode crowd seed 78,
+  /// the person unseen for 0.33 s, then the look-alike 0.5 m from them taken as a bearing at d2 3.3). The person
+  /// back in view is taken again with their first distance. 0: off.
+  double bearing_max_gap_s = 0.0;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
@@ -221,9 +238,12 @@ struct TargetTaskStats {
   std::uint64_t behind_bystander = 0;  ///< Frames someone it would take fit a bystander in front of the person.
   std::uint64_t seen_through = 0;      ///< Frames a bearing it would take was one the depth camera sees through.
   std::uint64_t reid_deferred = 0;     ///< Frames a lost track's choice waited for reid_confirm_frames.
-  std::uint64_t depth_ranged = 0;      ///< ... of the followed person's frames, ranged by the depth camera.
-  std::uint64_t depth_disagreed = 0;   ///< ... whose depth range the regression's disagreed with (not used).
-  std::uint64_t depth_unseen = 0;      ///< ... for which no depth image near in time saw them (occluded, out of view).
+  std::uint64_t refused_alone_tracks =
+      0;                                 ///< Bystander tracks started on someone refused alone (refused_alone_frames).
+  std::uint64_t bearings_after_gap = 0;  ///< Frames a bearing its gate took came too long after (bearing_max_gap_s).
+  std::uint64_t depth_ranged = 0;        ///< ... of the followed person's frames, ranged by the depth camera.
+  std::uint64_t depth_disagreed = 0;     ///< ... whose depth range the regression's disagreed with (not used).
+  std::uint64_t depth_unseen = 0;  ///< ... for which no depth image near in time saw them (occluded, out of view).
 };
 
 class TargetTask final : public rt::Task {
@@ -281,6 +301,9 @@ class TargetTask final : public rt::Task {
     /// Each person the live followed track's rule for someone in front refused beyond its gate: someone else
     /// (in_front_is_someone_else).
     std::array<bool, hal::kMaxPersons> someone_else{};
+    /// Each person with a distance the live followed track's gate refused and nobody took (refused_alone_frames).
+    std::array<bool, hal::kMaxPersons> refused_alone{};
+    bool bearing_after_gap = false;  ///< A bearing its gate took came too long after its last measurement.
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
@@ -350,6 +373,16 @@ class TargetTask final : public rt::Task {
   /// frames in a row, and the newest one's measurement.
   int reid_streak_ = 0;
   TargetMeasurement reid_last_;
+  /// Someone refused alone in the frames before (refused_alone_frames): how many frames in a row, and the newest one's
+  /// measurement.
+  int refused_alone_streak_ = 0;
+  TargetMeasurement refused_alone_last_;
+  /// Starts a bystander track on whom the association refused alone for the refused_alone_frames-th frame in a row.
+  void trackTheRefusedAlone(const std::array<Candidate, hal::kMaxPersons>& candidates, Association& a);
+  /// Whether measurement m can be the same person as `before`: no farther than a running person goes in the time
+  /// between, plus three standard deviations of the two measurements' difference.
+  bool withinReach(const TargetMeasurement& m, const TargetMeasurement& before) const;
+  rt::TimeNs followed_accepted_ns_ = -1;  ///< The newest measurement (distance or bearing) the followed track accepted.
   int ranged_streak_ = 0;  ///< The followed track's last accepted measurements in a row that were ranged as they were.
   /// Whether `person`, the association's choice for the followed track (-1: none), may be given to it now: always,
   /// but while the track is lost, when they are its choice for the reid_confirm_frames-th frame in a row.
