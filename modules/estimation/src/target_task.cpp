@@ -17,6 +17,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.bearing_fallback = node.getEnum("unreliable_torso", {"bearing", "skip"}) == "bearing";
   params.look_gate_sigmas = node.getDoubleOr("look_gate_sigmas", params.look_gate_sigmas, 0.0, 100.0);
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
+  params.look_gate_after_loss = node.getBoolOr("look_gate_after_loss", params.look_gate_after_loss);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
   params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
   params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
@@ -319,7 +320,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       continue;
     }
     const double cost = *followed_cost;
-    if (!looksLikeTheFollowed(c.look, frame.stamp_ns)) {
+    if ((!prior.lost || params_.look_gate_after_loss) && !looksLikeTheFollowed(c.look, frame.stamp_ns)) {
       a.look_refused = true;
       if (!bearing) a.look_refused_d2 = std::min(a.look_refused_d2, d2);
       continue;

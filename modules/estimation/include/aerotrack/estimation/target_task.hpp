@@ -58,8 +58,8 @@ struct TargetTaskParams {
   /// of the person's own distances plus this many standard deviations (one-sided: looking more alike is never
   /// refused). A look-alike beside a hidden person passes the colour gate (tracker.max_appearance_distance) and,
   /// in reach of the prediction, the motion gate; in the crowd in keypoint mode every identity switch left was one
-  /// (0.11-0.23 against the person's own 0.05 +- 0.015). After a loss (re-identification) only the colour gate
-  /// applies. 0: off.
+  /// (0.11-0.23 against the person's own 0.05 +- 0.015). After a loss (re-identification) too, unless
+  /// look_gate_after_loss is false. 0: off.
   double look_gate_sigmas = 3.0;
   /// ... unless the look gate alone has refused someone the followed track would have taken in every frame for
   /// this long, with distances that sat on the prediction as the person's own do (the mean Mahalanobis
@@ -68,6 +68,13 @@ struct TargetTaskParams {
   /// would otherwise shut the person out for good. A newcomer beside the hidden person sits off the prediction
   /// and drifts from it.
   double look_gate_confirm_s = 0.5;
+  /// Whether the look gate also judges a lost followed track's re-identification (else only the colour gate does).
+  /// A loss is often a turn or a long occlusion after which the person's look has changed by more than their own
+  /// spread, while a look-alike still looks like the learnt colour: with the gate, the person was refused and the
+  /// look-alike taken (traced: image-mode crowd seed 40 with refused_alone_frames, the person at d2 0.14 and colour
+  /// 0.14 refused, the look-alike at d2 1.18 and 0.07 taken; seed 77, the person turned, 0.33). Without it, someone
+  /// dressed otherwise is still refused by the colour gate, and the two are told apart by where they stand.
+  bool look_gate_after_loss = true;
   /// Which detected person the estimator is given (issue 22 item 2; docs/modules/localization-estimation.md):
   /// true (`association: estimate`): once the filter has started, an assignment (global nearest neighbour) of
   /// the frame's people to the followed track and to tracks of the other people (bystander_tracks.hpp), each
