@@ -31,6 +31,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
                                ? TargetTaskParams::InFrontTest::kGate
                                : TargetTaskParams::InFrontTest::kNearer;
   params.hidden_behind_m = node.getDoubleOr("hidden_behind_m", params.hidden_behind_m, 0.0, 5.0);
+  params.hidden_behind_better_fit = node.getBoolOr("hidden_behind_better_fit", params.hidden_behind_better_fit);
   params.young_look_samples = node.getIntOr("young_look_samples", params.young_look_samples, 0, 1000);
   if (node.has("assignment_cost"))
     params.assignment_cost = node.getEnum("assignment_cost", {"gate_fraction", "likelihood"}) == "likelihood"
@@ -300,7 +301,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       a.bearing_after_gap = true;  // whoever stands on the line of sight now: the person must come back with a distance
       continue;
     }
-    if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
+    if (T_WC && hiddenBehindABystander(i, d2, c.judged(), costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
       continue;
@@ -426,7 +427,8 @@ TargetTask::InFront TargetTask::inFrontOfTheFollowed(const Candidate& c, const T
   return nearer ? InFront::kBeyondGate : InFront::kNo;
 }
 
-bool TargetTask::hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
+bool TargetTask::hiddenBehindABystander(int person, double person_d2, const TargetMeasurement& judged,
+                                        const AssignmentCosts& costs, const TargetEstimate& prior,
                                         const Eigen::Vector3d& p_WC_m, rt::TimeNs t_ns) const {
   const double body_m = params_.hidden_behind_m;
   if (!(body_m > 0.0) || prior.lost) return false;
@@ -438,6 +440,10 @@ bool TargetTask::hiddenBehindABystander(int person, const AssignmentCosts& costs
   const Eigen::Vector2d toward = line_m / range_m;
   for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
     if (costs.at(static_cast<std::size_t>(person), 1 + j) == AssignmentCosts::kNotAllowed) continue;
+    if (params_.hidden_behind_better_fit) {
+      const std::optional<double> d2_j = bystanders_.mahalanobisSq(j, judged);
+      if (!d2_j || *d2_j > person_d2) continue;  // the followed track's prediction explains them better
+    }
     const std::optional<Eigen::Vector3d> p_m = bystanders_.position(j, t_ns);
     if (!p_m) continue;
     const Eigen::Vector2d from_camera_m = p_m->head<2>() - camera_m;

@@ -139,6 +139,13 @@ struct TargetTaskParams {
   /// grown gate as well as their own young track (colour learnt from few frames) and was taken (traced: image-mode
   /// crowd seed 46, 0.6 m in front, d2 5.7 to the followed track, for 4.8 s). 0: off.
   double hidden_behind_m = 0.0;
+  /// With hidden_behind_m: whoever fits such a bystander's track is refused only if they fit it at least as well by
+  /// place (squared Mahalanobis distance) as the followed track. false: fitting it at all (its gate and colour gate)
+  /// refuses them. A coasting bystander track's gate is wide, and its colour gate (0.45) takes a person in other
+  /// clothes: the followed person, stepping out from behind a bystander, fit the bystander's track and was refused
+  /// while they fit their own prediction at d2 0.2-0.8 (traced: image-mode crowd seed 2, 0.25 s, after which the
+  /// look-alike beside them was taken).
+  bool hidden_behind_better_fit = false;
   /// With choose_by_estimate: a bystander track whose colour was learnt from fewer frames than this, and lies within
   /// the colour gate of the followed person's (someone who may look like them), is not told from the person by
   /// colour: the candidate's colour distance to that young track counts no more than to the followed person's (in
@@ -328,8 +335,10 @@ class TargetTask final : public rt::Task {
   InFront inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const;
   /// Whether `person` fits (an allowed pair in `costs`) a bystander track standing in front of the followed
   /// person's prediction, seen from the camera at p_WC_m (hidden_behind_m).
-  bool hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
-                              const Eigen::Vector3d& p_WC_m, rt::TimeNs t_ns) const;
+  /// person_d2: their squared Mahalanobis distance to the followed track (hidden_behind_better_fit).
+  bool hiddenBehindABystander(int person, double person_d2, const TargetMeasurement& judged,
+                              const AssignmentCosts& costs, const TargetEstimate& prior, const Eigen::Vector3d& p_WC_m,
+                              rt::TimeNs t_ns) const;
   /// The swap check's evidence in this frame (SwapCheck); true while its kept hypothesis is open and the followed
   /// track holds someone it does not explain (the verdict then asks the detector for the whole frame). If confirmed,
   /// the followed track becomes the kept one and `a` is rewritten (its person the one who fit the kept track, whom the
