@@ -239,25 +239,24 @@ inline constexpr std::size_t kMaxBystanderTracks = kMaxOtherPeople;
 void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params);
 
 struct TargetTaskStats {
-  std::uint64_t detections = 0;        ///< Frames with the followed person.
-  std::uint64_t unreliable = 0;        ///< ... whose torso was not reliable.
-  std::uint64_t bearings = 0;          ///< ... of which the estimator used a bearing (bearing_fallback).
-  std::uint64_t no_pose = 0;           ///< ... whose capture time the histories did not cover.
-  std::uint64_t accepted = 0;          ///< Measurements the estimator used (or started from).
-  std::uint64_t rejected = 0;          ///< Measurements the estimator refused.
-  std::uint64_t reassigned = 0;        ///< Frames whose person the track's prediction chose over the lock-on's.
-  std::uint64_t swapped_back = 0;      ///< Times the swap check gave the followed track back its kept hypothesis.
-  std::uint64_t ambiguous = 0;         ///< Frames the followed track was given nobody: someone within reach.
-  std::uint64_t in_front = 0;          ///< Frames someone it would take was ranged in front of the followed person.
-  std::uint64_t behind_bystander = 0;  ///< Frames someone it would take fit a bystander in front of the person.
-  std::uint64_t seen_through = 0;      ///< Frames a bearing it would take was one the depth camera sees through.
-  std::uint64_t reid_deferred = 0;     ///< Frames a lost track's choice waited for reid_confirm_frames.
-  std::uint64_t refused_alone_tracks =
-      0;                                 ///< Bystander tracks started on someone refused alone (refused_alone_frames).
-  std::uint64_t bearings_after_gap = 0;  ///< Frames a bearing its gate took came too long after (bearing_max_gap_s).
-  std::uint64_t depth_ranged = 0;        ///< ... of the followed person's frames, ranged by the depth camera.
-  std::uint64_t depth_disagreed = 0;     ///< ... whose depth range the regression's disagreed with (not used).
-  std::uint64_t depth_unseen = 0;  ///< ... for which no depth image near in time saw them (occluded, out of view).
+  std::uint64_t detections = 0;            ///< Frames with the followed person.
+  std::uint64_t unreliable = 0;            ///< ... whose torso was not reliable.
+  std::uint64_t bearings = 0;              ///< ... of which the estimator used a bearing (bearing_fallback).
+  std::uint64_t no_pose = 0;               ///< ... whose capture time the histories did not cover.
+  std::uint64_t accepted = 0;              ///< Measurements the estimator used (or started from).
+  std::uint64_t rejected = 0;              ///< Measurements the estimator refused.
+  std::uint64_t reassigned = 0;            ///< Frames whose person the track's prediction chose over the lock-on's.
+  std::uint64_t swapped_back = 0;          ///< Times the swap check gave the followed track back its kept hypothesis.
+  std::uint64_t ambiguous = 0;             ///< Frames the followed track was given nobody: someone within reach.
+  std::uint64_t in_front = 0;              ///< Frames someone it would take was ranged in front of the followed person.
+  std::uint64_t behind_bystander = 0;      ///< Frames someone it would take fit a bystander in front of the person.
+  std::uint64_t seen_through = 0;          ///< Frames a bearing it would take was one the depth camera sees through.
+  std::uint64_t reid_deferred = 0;         ///< Frames a lost track's choice waited for reid_confirm_frames.
+  std::uint64_t refused_alone_tracks = 0;  ///< Tracks started on someone refused alone (refused_alone_frames).
+  std::uint64_t bearings_after_gap = 0;    ///< Bearings refused as too long after a measurement (bearing_max_gap_s).
+  std::uint64_t depth_ranged = 0;          ///< ... of the followed person's frames, ranged by the depth camera.
+  std::uint64_t depth_disagreed = 0;       ///< ... whose depth range the regression's disagreed with (not used).
+  std::uint64_t depth_unseen = 0;          ///< ... for which no depth image near in time saw them (out of view).
 };
 
 class TargetTask final : public rt::Task {
