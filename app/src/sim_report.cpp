@@ -54,6 +54,8 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   out["seen_through"] = s.seen_through;
   out["reid_deferred"] = s.reid_deferred;
   out["refused_alone_tracks"] = s.refused_alone_tracks;
+  out["refused_alone_vetoed"] = s.refused_alone_vetoed;
+  out["look_refused_kept_off"] = s.look_refused_kept_off;
   out["bearings_after_gap"] = s.bearings_after_gap;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();

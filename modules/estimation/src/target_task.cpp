@@ -41,6 +41,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.reid_confirm_frames = node.getIntOr("reid_confirm_frames", params.reid_confirm_frames, 1, 100);
   params.in_front_is_someone_else = node.getBoolOr("in_front_is_someone_else", params.in_front_is_someone_else);
   params.refused_alone_frames = node.getIntOr("refused_alone_frames", params.refused_alone_frames, 0, 100);
+  params.refused_alone_depth_veto = node.getBoolOr("refused_alone_depth_veto", params.refused_alone_depth_veto);
+  params.look_refused_off_tracks = node.getBoolOr("look_refused_off_tracks", params.look_refused_off_tracks);
   params.bearing_max_gap_s = node.getDoubleOr("bearing_max_gap_s", params.bearing_max_gap_s, 0.0, 10.0);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
@@ -148,13 +150,14 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
           seen.bearing_from_shoulders ? kp(hal::CocoKeypoint::kRightShoulder) : kp(hal::CocoKeypoint::kRightHip);
       pixel = Eigen::Vector2d(0.5 * (a.u_px + b.u_px), 0.5 * (a.v_px + b.v_px));
     }
-    rangeByDepth(frame, pixel, *T_WC, c);
+    c.depth_pixel = pixel;
+    rangeByDepth(frame, pixel, *T_WC, c, true);
   }
   return c;
 }
 
 void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel,
-                              const Eigen::Isometry3d& T_WC, Candidate& c) const {
+                              const Eigen::Isometry3d& T_WC, Candidate& c, bool gated) const {
   const DepthRangeParams& p = params_.depth_range;
   // The newest depth image taken at or before the photo (within max_offset_s), and where its camera was. Not a
   // later one: whether it has arrived when the detection does depends on the two devices' latencies, and a
@@ -170,11 +173,12 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
   // the followed person's distance, it does not vouch for a detection. Random keypoints (issue 23's
   // detector_garbage) put the line of sight on a wall, which the depth camera ranges as sharply as a person,
   // and the same wall every frame: sharp, consistent measurements a lost track would restart on. A start or a
-  // restart is the regression's; bystanders' tracks keep theirs.
+  // restart is the regression's; bystanders' tracks keep theirs. (Not `gated`: a judgement of who someone is
+  // (refused_alone_depth_veto), never given to the estimator.)
   const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
   if (!prior.initialised || prior.lost) return;
   const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
-  if (!d2 || !(*d2 <= params_.estimator.gate_chi2)) return;
+  if (gated && (!d2 || !(*d2 <= params_.estimator.gate_chi2))) return;
   const hal::OdometryHistory::Lookup pose = poses_.lookup(depth->stamp_ns);
   if (pose.status != rt::HistoryStatus::kOk) return;
   const Eigen::Isometry3d T_WD = pose.value * depth->T_BC;
@@ -253,6 +257,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   std::array<bool, hal::kMaxPersons> in_front{};     // ranged in front of the followed person: someone else
   std::array<bool, hal::kMaxPersons> doubtful{};     // ... refused by in_front_gate_chi2 only: maybe the person
   std::array<bool, hal::kMaxPersons> beyond_gate{};  // a distance the live followed track's gate refused
+  std::array<bool, hal::kMaxPersons> kept_off{};     // refused by the look gate, kept off the bystander tracks
   bearing_cost.fill(std::numeric_limits<double>::infinity());
   const double gate = params_.estimator.gate_chi2;
   const perception::TrackerParams& t = params_.tracker;
@@ -324,6 +329,12 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if ((!prior.lost || params_.look_gate_after_loss) && !looksLikeTheFollowed(c.look, frame.stamp_ns)) {
       a.look_refused = true;
       if (!bearing) a.look_refused_d2 = std::min(a.look_refused_d2, d2);
+      if (!bearing && !prior.lost && params_.look_refused_off_tracks && fitsFollowedBest(i, d2, c.judged(), costs)) {
+        for (std::size_t j = 0; j < bystanders_.capacity(); ++j)
+          costs.set(static_cast<std::size_t>(i), 1 + j, AssignmentCosts::kNotAllowed);
+        kept_off[static_cast<std::size_t>(i)] = true;
+        a.look_refused_kept_off = true;
+      }
       continue;
     }
     if (bearing) {
@@ -389,10 +400,38 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   if (a.followed >= 0) person_taken[static_cast<std::size_t>(a.followed)] = true;
   for (int i = 0; i < count; ++i) {
     const auto k = static_cast<std::size_t>(i);
+    person_taken[k] = person_taken[k] || kept_off[k];  // they may be the person: no track of their own either
     if ((followed_ranged || (in_front[k] && !doubtful[k])) && !person_taken[k] && distance(i)) a.track[k] = kNewTrack;
     a.refused_alone[k] = beyond_gate[k] && !person_taken[k] && a.track[k] == kNoTrack;
+    if (a.refused_alone[k] && params_.refused_alone_frames > 0 && params_.refused_alone_depth_veto && T_WC &&
+        depthPlacesInGate(frame, *T_WC, candidates[k])) {
+      a.refused_alone[k] = false;
+      a.refused_alone_vetoed = true;
+    }
   }
   return a;
+}
+
+bool TargetTask::fitsFollowedBest(int person, double followed_d2, const TargetMeasurement& judged,
+                                  const AssignmentCosts& costs) const {
+  for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
+    if (!std::isfinite(costs.at(static_cast<std::size_t>(person), 1 + j))) continue;  // not a pair the gates allow
+    const std::optional<double> d2 = bystanders_.mahalanobisSq(j, judged);
+    if (d2 && *d2 <= followed_d2) return false;
+  }
+  return true;
+}
+
+bool TargetTask::depthPlacesInGate(const hal::DetectionFrame& frame, const Eigen::Isometry3d& T_WC,
+                                   const Candidate& c) const {
+  if (!c.measurement || !params_.depth_range.enabled || depth_count_ == 0) return false;
+  Candidate ranged = c;  // ranged afresh from the regression's place, whatever the gate
+  ranged.measurement = c.judged();
+  ranged.unranged.reset();
+  rangeByDepth(frame, c.depth_pixel, T_WC, ranged, false);
+  if (!ranged.measurement->ranged) return false;
+  const std::optional<double> d2 = estimator_.mahalanobisSq(*ranged.measurement);
+  return d2 && *d2 <= params_.estimator.gate_chi2;
 }
 
 bool TargetTask::lookAlikeYoungTrack(std::size_t j) const {
@@ -762,6 +801,8 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (a.behind_bystander) ++stats_.behind_bystander;
     if (a.seen_through) ++stats_.seen_through;
     if (a.bearing_after_gap) ++stats_.bearings_after_gap;
+    if (a.refused_alone_vetoed) ++stats_.refused_alone_vetoed;
+    if (a.look_refused_kept_off) ++stats_.look_refused_kept_off;
     trackTheRefusedAlone(candidates, a);
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;

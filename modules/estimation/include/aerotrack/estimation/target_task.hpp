@@ -207,6 +207,23 @@ struct TargetTaskParams {
   /// d2 7.5; seed 73, refused 6 frames, then their bearing taken). One frame could be a jump of the person's own
   /// measurement; several in a row, each where the one before was, are someone walking. 0: off.
   int refused_alone_frames = 0;
+  /// With refused_alone_frames and depth_range: someone refused alone whose line of sight the depth camera ranges to
+  /// a place the followed track's gate takes is not refused (their run ends): the regression, not the person, is off
+  /// (traced: image-mode crowd seed 111, the person placed 1.4 m short three frames in a row while the depth camera,
+  /// which ranges only measurements inside the gate, would have put them on the prediction; the track started on
+  /// them was counted as someone else and held them while the lost followed track took the look-alike). The depth
+  /// range only vetoes a track: it is not given to the followed track, as random keypoints' line of sight on a wall
+  /// near the prediction would be ranged as sharply.
+  bool refused_alone_depth_veto = false;
+  /// With choose_by_estimate: someone the look gate (look_gate_sigmas) refuses for the live followed track -- inside
+  /// its gate and the colour gate -- who fits the followed track better (by d2) than every bystander track whose
+  /// gates allow them is given to no bystander track in that frame, nor starts one: they may be the person, turned
+  /// (as ambiguity_radius_m keeps the person taken off). Otherwise the assignment gave them to whichever bystander
+  /// track's gate reached them: traced, image-mode crowd seed 66, the person refused by the look gate (colour 0.151,
+  /// d2 1.33) took the look-alike's young track (d2 4.2), counted as seen beside the person, and the look-alike a new
+  /// track never seen beside them -- which, the person hidden a second later and the followed track lost, did not
+  /// compete, and the re-identification took the look-alike.
+  bool look_refused_off_tracks = false;
   /// With choose_by_estimate: a bearing (bearing_fallback) is given to the followed track only if the track accepted
   /// a measurement of the person at most this long before the frame. A bearing fits anyone on its line of sight at
   /// any range: it can carry a track that is seeing the person on, but after the person was hidden for a while,
@@ -254,9 +271,11 @@ struct TargetTaskStats {
   std::uint64_t reid_deferred = 0;         ///< Frames a lost track's choice waited for reid_confirm_frames.
   std::uint64_t refused_alone_tracks = 0;  ///< Tracks started on someone refused alone (refused_alone_frames).
   std::uint64_t bearings_after_gap = 0;    ///< Bearings refused as too long after a measurement (bearing_max_gap_s).
-  std::uint64_t depth_ranged = 0;          ///< ... of the followed person's frames, ranged by the depth camera.
-  std::uint64_t depth_disagreed = 0;       ///< ... whose depth range the regression's disagreed with (not used).
-  std::uint64_t depth_unseen = 0;          ///< ... for which no depth image near in time saw them (out of view).
+  std::uint64_t refused_alone_vetoed = 0;  ///< Refused alone but ranged into the gate (refused_alone_depth_veto).
+  std::uint64_t look_refused_kept_off = 0;  ///< Frames someone the look gate refused was kept off tracks.
+  std::uint64_t depth_ranged = 0;           ///< ... of the followed person's frames, ranged by the depth camera.
+  std::uint64_t depth_disagreed = 0;        ///< ... whose depth range the regression's disagreed with (not used).
+  std::uint64_t depth_unseen = 0;           ///< ... for which no depth image near in time saw them (out of view).
 };
 
 class TargetTask final : public rt::Task {
@@ -295,6 +314,8 @@ class TargetTask final : public rt::Task {
     /// A ranged measurement's regression-only form: who a person is (the association's gates) is judged
     /// on it, so the depth camera changes how well the followed person is placed, never who is followed.
     std::optional<TargetMeasurement> unranged;
+    /// The photo's pixel the depth camera's line of sight goes through (the torso's centre, or a cut-off torso's pair).
+    Eigen::Vector2d depth_pixel = Eigen::Vector2d::Zero();
     const TargetMeasurement& judged() const { return unranged ? *unranged : *measurement; }
   };
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
@@ -316,7 +337,10 @@ class TargetTask final : public rt::Task {
     std::array<bool, hal::kMaxPersons> someone_else{};
     /// Each person with a distance the live followed track's gate refused and nobody took (refused_alone_frames).
     std::array<bool, hal::kMaxPersons> refused_alone{};
-    bool bearing_after_gap = false;  ///< A bearing its gate took came too long after its last measurement.
+    bool bearing_after_gap = false;     ///< A bearing its gate took came too long after its last measurement.
+    bool refused_alone_vetoed = false;  ///< Someone refused alone was ranged into the gate (refused_alone_depth_veto).
+    bool look_refused_kept_off =
+        false;  ///< Someone the look gate refused was kept off tracks (look_refused_off_tracks).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
@@ -355,9 +379,17 @@ class TargetTask final : public rt::Task {
   hal::DetectionFrame::PredictedTorso predictedTorso(const hal::DetectionFrame& frame) const;
   /// c's measurement ranged along the line of sight through `pixel` (the photo's) by the depth image nearest the
   /// frame's time, if one sees the person where the regression (or the prior, for a bearing) roughly does; c learns
-  /// what the depth camera said.
+  /// what the depth camera said. `gated`: only a measurement the live followed track's gate takes (the rule for
+  /// what is given to the estimator); false, anyone's, for a judgement (refused_alone_depth_veto).
   void rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel, const Eigen::Isometry3d& T_WC,
-                    Candidate& c) const;
+                    Candidate& c, bool gated) const;
+  /// Whether the depth camera ranges candidate c (refused beyond the live followed track's gate) to a place the
+  /// gate takes (refused_alone_depth_veto).
+  bool depthPlacesInGate(const hal::DetectionFrame& frame, const Eigen::Isometry3d& T_WC, const Candidate& c) const;
+  /// Whether `person`, at followed_d2 from the followed track's prediction, fits it at least as well as every
+  /// bystander track whose pair `costs` allows (look_refused_off_tracks).
+  bool fitsFollowedBest(int person, double followed_d2, const TargetMeasurement& judged,
+                        const AssignmentCosts& costs) const;
   /// The bearing-only measurement of an unreliable torso, or nothing (no live track, no pose, the person
   /// behind or beside the camera).
   std::optional<TargetMeasurement> bearingMeasurement(const hal::DetectionFrame& frame,
