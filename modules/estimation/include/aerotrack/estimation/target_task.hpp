@@ -337,10 +337,9 @@ class TargetTask final : public rt::Task {
     std::array<bool, hal::kMaxPersons> someone_else{};
     /// Each person with a distance the live followed track's gate refused and nobody took (refused_alone_frames).
     std::array<bool, hal::kMaxPersons> refused_alone{};
-    bool bearing_after_gap = false;     ///< A bearing its gate took came too long after its last measurement.
-    bool refused_alone_vetoed = false;  ///< Someone refused alone was ranged into the gate (refused_alone_depth_veto).
-    bool look_refused_kept_off =
-        false;  ///< Someone the look gate refused was kept off tracks (look_refused_off_tracks).
+    bool bearing_after_gap = false;      ///< A bearing its gate took came too long after its last measurement.
+    bool refused_alone_vetoed = false;   ///< Someone refused alone was ranged into the gate (refused_alone_depth_veto).
+    bool look_refused_kept_off = false;  ///< Someone the look gate refused kept off tracks (look_refused_off_tracks).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
