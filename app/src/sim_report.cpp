@@ -56,6 +56,7 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   out["refused_alone_tracks"] = s.refused_alone_tracks;
   out["refused_alone_vetoed"] = s.refused_alone_vetoed;
   out["look_refused_kept_off"] = s.look_refused_kept_off;
+  out["lost_colour_capped"] = s.lost_colour_capped;
   out["bearings_after_gap"] = s.bearings_after_gap;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();

@@ -43,6 +43,8 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.refused_alone_frames = node.getIntOr("refused_alone_frames", params.refused_alone_frames, 0, 100);
   params.refused_alone_depth_veto = node.getBoolOr("refused_alone_depth_veto", params.refused_alone_depth_veto);
   params.look_refused_off_tracks = node.getBoolOr("look_refused_off_tracks", params.look_refused_off_tracks);
+  params.lost_competing_colour_capped =
+      node.getBoolOr("lost_competing_colour_capped", params.lost_competing_colour_capped);
   params.bearing_max_gap_s = node.getDoubleOr("bearing_max_gap_s", params.bearing_max_gap_s, 0.0, 10.0);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
@@ -290,6 +292,12 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       if (!fit_j || !(fit_j->d2 <= gate)) continue;  // outside the gate: no colour to compare (a free slot too)
       std::optional<double> appearance = appearance_to(bystanders_.look(j));
       if (appearance && to_followed && lookAlikeYoungTrack(j)) appearance = std::min(*appearance, *to_followed);
+      // Lost: only competing tracks reach here (competes), and place decides between them and the followed track.
+      if (appearance && to_followed && prior.lost && params_.lost_competing_colour_capped &&
+          *to_followed < *appearance) {
+        appearance = *to_followed;
+        a.lost_colour_capped = true;
+      }
       if (const auto cost = cost_of(fit_j, appearance)) {
         costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
         dearest = std::max(dearest, *cost);
@@ -803,6 +811,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     if (a.bearing_after_gap) ++stats_.bearings_after_gap;
     if (a.refused_alone_vetoed) ++stats_.refused_alone_vetoed;
     if (a.look_refused_kept_off) ++stats_.look_refused_kept_off;
+    if (a.lost_colour_capped) ++stats_.lost_colour_capped;
     trackTheRefusedAlone(candidates, a);
     if (person >= 0 || !a.look_refused) {
       look_refused_since_ns_ = -1;

@@ -224,6 +224,14 @@ struct TargetTaskParams {
   /// track never seen beside them -- which, the person hidden a second later and the followed track lost, did not
   /// compete, and the re-identification took the look-alike.
   bool look_refused_off_tracks = false;
+  /// With choose_by_estimate: while the followed track is lost, a competing bystander track's colour term (the
+  /// track of someone seen beside the person) is at most the candidate's colour distance to the person's, so that
+  /// place, not colour, tells whether a look-alike is the person come back or the bystander they are. A track's
+  /// colour is learnt from crowded crops and blended over frames; a look-alike's clean crop can lie nearer the
+  /// person's colour than their own track's. Otherwise the lost track's wide gate won on colour what the bystander
+  /// track won by place (traced: image-mode crowd seed 66, the lost track took the look-alike at d2 3.5 while the
+  /// look-alike's own competing track, seen beside the person, fit them at d2 0.1).
+  bool lost_competing_colour_capped = false;
   /// With choose_by_estimate: a bearing (bearing_fallback) is given to the followed track only if the track accepted
   /// a measurement of the person at most this long before the frame. A bearing fits anyone on its line of sight at
   /// any range: it can carry a track that is seeing the person on, but after the person was hidden for a while,
@@ -273,6 +281,7 @@ struct TargetTaskStats {
   std::uint64_t bearings_after_gap = 0;    ///< Bearings refused as too long after a measurement (bearing_max_gap_s).
   std::uint64_t refused_alone_vetoed = 0;  ///< Refused alone but ranged into the gate (refused_alone_depth_veto).
   std::uint64_t look_refused_kept_off = 0;  ///< Frames someone the look gate refused was kept off tracks.
+  std::uint64_t lost_colour_capped = 0;     ///< Frames a competing track's colour term was capped while lost.
   std::uint64_t depth_ranged = 0;           ///< ... of the followed person's frames, ranged by the depth camera.
   std::uint64_t depth_disagreed = 0;        ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;           ///< ... for which no depth image near in time saw them (out of view).
@@ -340,6 +349,7 @@ class TargetTask final : public rt::Task {
     bool bearing_after_gap = false;      ///< A bearing its gate took came too long after its last measurement.
     bool refused_alone_vetoed = false;   ///< Someone refused alone was ranged into the gate (refused_alone_depth_veto).
     bool look_refused_kept_off = false;  ///< Someone the look gate refused kept off tracks (look_refused_off_tracks).
+    bool lost_colour_capped = false;     ///< A competing track's colour term was capped (lost_competing_colour_capped).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
