@@ -250,17 +250,12 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "look_gate_sigmas" << YAML::Value << e.task.look_gate_sigmas;
     out << YAML::Key << "look_gate_confirm_s" << YAML::Value << e.task.look_gate_confirm_s;
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
-    out << YAML::Key << "ambiguity_radius_m" << YAML::Value << e.task.ambiguity_radius_m;
     out << YAML::Key << "in_front_after_ranged" << YAML::Value << e.task.in_front_after_ranged;
     out << YAML::Key << "in_front_streak_spans_unseen" << YAML::Value << e.task.in_front_streak_spans_unseen;
     out << YAML::Key << "in_front_gate_chi2" << YAML::Value << e.task.in_front_gate_chi2;
     out << YAML::Key << "in_front_test" << YAML::Value
         << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");
     out << YAML::Key << "hidden_behind_m" << YAML::Value << e.task.hidden_behind_m;
-    out << YAML::Key << "young_look_samples" << YAML::Value << e.task.young_look_samples;
-    out << YAML::Key << "assignment_cost" << YAML::Value
-        << (e.task.assignment_cost == estimation::TargetTaskParams::AssignmentCost::kLikelihood ? "likelihood"
-                                                                                                : "gate_fraction");
     out << YAML::Key << "depth_vets_bearings" << YAML::Value << e.task.depth_vets_bearings;
     out << YAML::Key << "verdict_torso_height_m" << YAML::Value << e.task.verdict_torso_height_m;
     out << YAML::Key << "verdict_torso_m" << YAML::Value << e.task.verdict_torso_m;

@@ -37,27 +37,20 @@ nlohmann::json mapSummary(const mapping::MappingTask* task, const std::vector<Ta
 nlohmann::json estimationSummary(const estimation::TargetTask* task, const TargetTruthCheckTask* check) {
   if (task == nullptr) return nullptr;
   const estimation::TargetTaskStats& s = task->stats();
-  nlohmann::json out = {{"detections", s.detections},
-                        {"unreliable", s.unreliable},
-                        {"bearings", s.bearings},
-                        {"reassigned", s.reassigned},
-                        {"swapped_back", s.swapped_back},
-                        {"ambiguous", s.ambiguous},
-                        {"no_pose", s.no_pose},
-                        {"accepted", s.accepted},
-                        {"rejected", s.rejected},
-                        {"depth_ranged", s.depth_ranged},
-                        {"depth_disagreed", s.depth_disagreed},
-                        {"depth_unseen", s.depth_unseen}};
+  nlohmann::json out = {
+      {"detections", s.detections},     {"unreliable", s.unreliable},
+      {"bearings", s.bearings},         {"reassigned", s.reassigned},
+      {"swapped_back", s.swapped_back}, {"no_pose", s.no_pose},
+      {"accepted", s.accepted},         {"rejected", s.rejected},
+      {"depth_ranged", s.depth_ranged}, {"depth_disagreed", s.depth_disagreed},
+      {"depth_unseen", s.depth_unseen},
+  };
   out["in_front"] = s.in_front;
   out["behind_bystander"] = s.behind_bystander;
   out["seen_through"] = s.seen_through;
-  out["reid_deferred"] = s.reid_deferred;
   out["refused_alone_tracks"] = s.refused_alone_tracks;
-  out["refused_alone_vetoed"] = s.refused_alone_vetoed;
   out["look_refused_kept_off"] = s.look_refused_kept_off;
   out["lost_colour_capped"] = s.lost_colour_capped;
-  out["bearings_after_gap"] = s.bearings_after_gap;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

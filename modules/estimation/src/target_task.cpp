@@ -19,7 +19,6 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.look_gate_confirm_s = node.getDoubleOr("look_gate_confirm_s", params.look_gate_confirm_s, 0.0, 60.0);
   params.look_gate_after_loss = node.getBoolOr("look_gate_after_loss", params.look_gate_after_loss);
   params.choose_by_estimate = node.getEnum("association", {"estimate", "lock_on"}) == "estimate";
-  params.ambiguity_radius_m = node.getDoubleOr("ambiguity_radius_m", params.ambiguity_radius_m, 0.0, 5.0);
   params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
   params.in_front_streak_spans_unseen =
       node.getBoolOr("in_front_streak_spans_unseen", params.in_front_streak_spans_unseen);
@@ -31,21 +30,11 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
                                ? TargetTaskParams::InFrontTest::kGate
                                : TargetTaskParams::InFrontTest::kNearer;
   params.hidden_behind_m = node.getDoubleOr("hidden_behind_m", params.hidden_behind_m, 0.0, 5.0);
-  params.hidden_behind_better_fit = node.getBoolOr("hidden_behind_better_fit", params.hidden_behind_better_fit);
-  params.young_look_samples = node.getIntOr("young_look_samples", params.young_look_samples, 0, 1000);
-  if (node.has("assignment_cost"))
-    params.assignment_cost = node.getEnum("assignment_cost", {"gate_fraction", "likelihood"}) == "likelihood"
-                                 ? TargetTaskParams::AssignmentCost::kLikelihood
-                                 : TargetTaskParams::AssignmentCost::kGateFraction;
   params.depth_vets_bearings = node.getBoolOr("depth_vets_bearings", params.depth_vets_bearings);
-  params.reid_confirm_frames = node.getIntOr("reid_confirm_frames", params.reid_confirm_frames, 1, 100);
-  params.in_front_is_someone_else = node.getBoolOr("in_front_is_someone_else", params.in_front_is_someone_else);
   params.refused_alone_frames = node.getIntOr("refused_alone_frames", params.refused_alone_frames, 0, 100);
-  params.refused_alone_depth_veto = node.getBoolOr("refused_alone_depth_veto", params.refused_alone_depth_veto);
   params.look_refused_off_tracks = node.getBoolOr("look_refused_off_tracks", params.look_refused_off_tracks);
   params.lost_competing_colour_capped =
       node.getBoolOr("lost_competing_colour_capped", params.lost_competing_colour_capped);
-  params.bearing_max_gap_s = node.getDoubleOr("bearing_max_gap_s", params.bearing_max_gap_s, 0.0, 10.0);
   params.verdict_torso_height_m = node.getDoubleOr("verdict_torso_height_m", params.verdict_torso_height_m, 0.1, 3.0);
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
@@ -153,13 +142,13 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
       pixel = Eigen::Vector2d(0.5 * (a.u_px + b.u_px), 0.5 * (a.v_px + b.v_px));
     }
     c.depth_pixel = pixel;
-    rangeByDepth(frame, pixel, *T_WC, c, true);
+    rangeByDepth(frame, pixel, *T_WC, c);
   }
   return c;
 }
 
 void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel,
-                              const Eigen::Isometry3d& T_WC, Candidate& c, bool gated) const {
+                              const Eigen::Isometry3d& T_WC, Candidate& c) const {
   const DepthRangeParams& p = params_.depth_range;
   // The newest depth image taken at or before the photo (within max_offset_s), and where its camera was. Not a
   // later one: whether it has arrived when the detection does depends on the two devices' latencies, and a
@@ -175,12 +164,11 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
   // the followed person's distance, it does not vouch for a detection. Random keypoints (issue 23's
   // detector_garbage) put the line of sight on a wall, which the depth camera ranges as sharply as a person,
   // and the same wall every frame: sharp, consistent measurements a lost track would restart on. A start or a
-  // restart is the regression's; bystanders' tracks keep theirs. (Not `gated`: a judgement of who someone is
-  // (refused_alone_depth_veto), never given to the estimator.)
+  // restart is the regression's; bystanders' tracks keep theirs.
   const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
   if (!prior.initialised || prior.lost) return;
   const std::optional<double> d2 = estimator_.mahalanobisSq(*c.measurement);
-  if (gated && (!d2 || !(*d2 <= params_.estimator.gate_chi2))) return;
+  if (!d2 || !(*d2 <= params_.estimator.gate_chi2)) return;
   const hal::OdometryHistory::Lookup pose = poses_.lookup(depth->stamp_ns);
   if (pose.status != rt::HistoryStatus::kOk) return;
   const Eigen::Isometry3d T_WD = pose.value * depth->T_BC;
@@ -243,10 +231,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   // Every (person, track) pair within the track's gate -- the estimator's own test against the state it would
   // update: live, the prediction; lost, the prediction with its grown covariance (where the person can have
   // gone since: the re-identification after an occlusion). The followed track's pairs also pass the colour the
-  // task has learnt, a bystander's the colour learnt for their track (a young track's that may be a look-alike's,
-  // no farther than the followed person's: young_look_samples); the cost (assignment_cost) is the lock-on's form
-  // (gate fraction plus weighted colour fraction), or that plus ln|S| (the likelihood), for every track alike. While
-  // the followed person is lost, a bystander track never seen beside them may be them, and does not compete. The
+  // task has learnt, a bystander's the colour learnt for their track; the cost is the lock-on's form (gate fraction
+  // plus weighted colour fraction) for every track alike. While the followed person is lost, a bystander track never
+  // seen beside them may be them, and does not compete. The
   // cheapest assignment of distances to tracks (global nearest neighbour, solved exactly: assignment.hpp); then, if
   // nobody went to the followed track, a bearing -- unless it fits better a bystander track that no one in the frame
   // explains (a bearing fits anyone on its line of sight), or the depth camera sees through where the person would be
@@ -264,9 +251,6 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   const double gate = params_.estimator.gate_chi2;
   const perception::TrackerParams& t = params_.tracker;
   const auto competes = [&](std::size_t j) { return !prior.lost || bystanders_.seenWithFollowed(j); };
-  const bool likelihood = params_.assignment_cost == TargetTaskParams::AssignmentCost::kLikelihood;
-  // The dearest pair allowed (likelihood costs have no fixed bound: ln|S| is any real).
-  double dearest = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < count; ++i) {
     const Candidate& c = candidates[static_cast<std::size_t>(i)];
     if (!c.measurement) continue;
@@ -276,14 +260,12 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       if (!colour.valid || !c.look.valid) return std::nullopt;
       return perception::appearanceDistance(colour, c.look);
     };
-    // The cost against a track's prediction and colour (assignment_cost); nothing outside either gate.
+    // The cost against a track's prediction and colour (the gate fraction); nothing outside either gate.
     const auto cost_of = [&](std::optional<TargetEstimator::Fit> fit,
                              std::optional<double> appearance) -> std::optional<double> {
       if (!fit || !(fit->d2 <= gate)) return std::nullopt;
       if (appearance && *appearance > t.max_appearance_distance) return std::nullopt;
-      const double fraction =
-          fit->d2 / gate + t.appearance_weight * appearance.value_or(0.0) / t.max_appearance_distance;
-      return likelihood ? gate * fraction + fit->log_det_S : fraction;
+      return fit->d2 / gate + t.appearance_weight * appearance.value_or(0.0) / t.max_appearance_distance;
     };
     const std::optional<double> to_followed = appearance_to(reference_);
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
@@ -291,30 +273,20 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       const std::optional<TargetEstimator::Fit> fit_j = bystanders_.fit(j, c.judged());
       if (!fit_j || !(fit_j->d2 <= gate)) continue;  // outside the gate: no colour to compare (a free slot too)
       std::optional<double> appearance = appearance_to(bystanders_.look(j));
-      if (appearance && to_followed && lookAlikeYoungTrack(j)) appearance = std::min(*appearance, *to_followed);
       // Lost: only competing tracks reach here (competes), and place decides between them and the followed track.
       if (appearance && to_followed && prior.lost && params_.lost_competing_colour_capped &&
           *to_followed < *appearance) {
         appearance = *to_followed;
         a.lost_colour_capped = true;
       }
-      if (const auto cost = cost_of(fit_j, appearance)) {
-        costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
-        dearest = std::max(dearest, *cost);
-      }
+      if (const auto cost = cost_of(fit_j, appearance)) costs.set(static_cast<std::size_t>(i), 1 + j, *cost);
     }
     const std::optional<TargetEstimator::Fit> fit = estimator_.fit(c.judged());
     const std::optional<double> followed_cost = cost_of(fit, to_followed);
     beyond_gate[static_cast<std::size_t>(i)] = !bearing && !prior.lost && fit && fit->d2 > gate;
     if (!followed_cost) continue;
     const double d2 = fit->d2;
-    if (bearing && params_.bearing_max_gap_s > 0.0 &&
-        (followed_accepted_ns_ < 0 ||
-         frame.stamp_ns - followed_accepted_ns_ > rt::secondsToNs(params_.bearing_max_gap_s))) {
-      a.bearing_after_gap = true;  // whoever stands on the line of sight now: the person must come back with a distance
-      continue;
-    }
-    if (T_WC && hiddenBehindABystander(i, d2, c.judged(), costs, prior, T_WC->translation(), frame.stamp_ns)) {
+    if (T_WC && hiddenBehindABystander(i, costs, prior, T_WC->translation(), frame.stamp_ns)) {
       a.behind_bystander = true;
       in_front[static_cast<std::size_t>(i)] = true;
       continue;
@@ -328,9 +300,6 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       a.in_front = true;
       in_front[static_cast<std::size_t>(i)] = true;
       doubtful[static_cast<std::size_t>(i)] = verdict == InFront::kDoubtful && !params_.in_front_doubtful_starts_track;
-      // Only a range beyond the gate: a doubtful one may be the person, and the verdict behind a bystander's track
-      // judges where a track lies against the prediction, not this person's own range.
-      a.someone_else[static_cast<std::size_t>(i)] = verdict == InFront::kBeyondGate;
       continue;
     }
     const double cost = *followed_cost;
@@ -350,14 +319,11 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       bearing_d2[static_cast<std::size_t>(i)] = d2;
     } else {
       costs.set(static_cast<std::size_t>(i), 0, cost);
-      dearest = std::max(dearest, cost);
     }
   }
-  // A person left without a track costs as much as the dearest pair the gates allow (gate fraction: at both gates'
-  // edges; likelihood, unbounded: one unit of d2 above the dearest pair of this frame, as an equal cost would tie
-  // with leaving them out), so that nobody who could take a free track is left out: of the assignments that pair
-  // the most people, the cheapest.
-  const double miss_cost = !likelihood ? 1.0 + t.appearance_weight : std::isfinite(dearest) ? dearest + 1.0 : 0.0;
+  // A person left without a track costs as much as the dearest pair the gates allow (at both gates' edges), so that
+  // nobody who could take a free track is left out: of the assignments that pair the most people, the cheapest.
+  const double miss_cost = 1.0 + t.appearance_weight;
   const AssignmentResult assigned =
       cheapestAssignment(costs, static_cast<std::size_t>(count), 1 + bystanders_.capacity(), miss_cost);
   std::array<bool, kMaxBystanderTracks> track_taken{};
@@ -389,14 +355,6 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     best_bearing = i;
   }
   if (a.followed < 0) a.followed = best_bearing;
-  // Someone else too near the person taken (ambiguity_radius_m): the frame is not the track's. The person taken
-  // stays out of the bystander tracks too: they may be the followed person.
-  if (params_.ambiguity_radius_m > 0.0 && a.followed >= 0 && !prior.lost &&
-      ambiguous(frame, a.followed, count, candidates, track_taken)) {
-    person_taken[static_cast<std::size_t>(a.followed)] = true;
-    a.followed = -1;
-    a.ambiguous = true;
-  }
   // Someone new is someone else only beside the followed person's distance in the same frame: alone, they may
   // be the followed person whom the gate lost (a turn, a jump of the localization), and a track started on
   // them would then take the person's measurements from their own track. Someone the depth camera ranged in front
@@ -411,11 +369,6 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     person_taken[k] = person_taken[k] || kept_off[k];  // they may be the person: no track of their own either
     if ((followed_ranged || (in_front[k] && !doubtful[k])) && !person_taken[k] && distance(i)) a.track[k] = kNewTrack;
     a.refused_alone[k] = beyond_gate[k] && !person_taken[k] && a.track[k] == kNoTrack;
-    if (a.refused_alone[k] && params_.refused_alone_frames > 0 && params_.refused_alone_depth_veto && T_WC &&
-        depthPlacesInGate(frame, *T_WC, candidates[k])) {
-      a.refused_alone[k] = false;
-      a.refused_alone_vetoed = true;
-    }
   }
   return a;
 }
@@ -428,26 +381,6 @@ bool TargetTask::fitsFollowedBest(int person, double followed_d2, const TargetMe
     if (d2 && *d2 <= followed_d2) return false;
   }
   return true;
-}
-
-bool TargetTask::depthPlacesInGate(const hal::DetectionFrame& frame, const Eigen::Isometry3d& T_WC,
-                                   const Candidate& c) const {
-  if (!c.measurement || !params_.depth_range.enabled || depth_count_ == 0) return false;
-  Candidate ranged = c;  // ranged afresh from the regression's place, whatever the gate
-  ranged.measurement = c.judged();
-  ranged.unranged.reset();
-  rangeByDepth(frame, c.depth_pixel, T_WC, ranged, false);
-  if (!ranged.measurement->ranged) return false;
-  const std::optional<double> d2 = estimator_.mahalanobisSq(*ranged.measurement);
-  return d2 && *d2 <= params_.estimator.gate_chi2;
-}
-
-bool TargetTask::lookAlikeYoungTrack(std::size_t j) const {
-  // Young: its colour, from a few crowded crops, may be off by more than the person's own distances; like the
-  // person: within the colour gate of theirs (someone dressed otherwise is still told apart by colour).
-  const perception::Appearance& look = bystanders_.look(j);
-  return bystanders_.lookSamples(j) < params_.young_look_samples && look.valid && reference_.valid &&
-         perception::appearanceDistance(reference_, look) <= params_.tracker.max_appearance_distance;
 }
 
 TargetTask::InFront TargetTask::inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const {
@@ -474,8 +407,7 @@ TargetTask::InFront TargetTask::inFrontOfTheFollowed(const Candidate& c, const T
   return nearer ? InFront::kBeyondGate : InFront::kNo;
 }
 
-bool TargetTask::hiddenBehindABystander(int person, double person_d2, const TargetMeasurement& judged,
-                                        const AssignmentCosts& costs, const TargetEstimate& prior,
+bool TargetTask::hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
                                         const Eigen::Vector3d& p_WC_m, rt::TimeNs t_ns) const {
   const double body_m = params_.hidden_behind_m;
   if (!(body_m > 0.0) || prior.lost) return false;
@@ -487,36 +419,12 @@ bool TargetTask::hiddenBehindABystander(int person, double person_d2, const Targ
   const Eigen::Vector2d toward = line_m / range_m;
   for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
     if (costs.at(static_cast<std::size_t>(person), 1 + j) == AssignmentCosts::kNotAllowed) continue;
-    if (params_.hidden_behind_better_fit) {
-      const std::optional<double> d2_j = bystanders_.mahalanobisSq(j, judged);
-      if (!d2_j || *d2_j > person_d2) continue;  // the followed track's prediction explains them better
-    }
     const std::optional<Eigen::Vector3d> p_m = bystanders_.position(j, t_ns);
     if (!p_m) continue;
     const Eigen::Vector2d from_camera_m = p_m->head<2>() - camera_m;
     const double along_m = from_camera_m.dot(toward);
     const double across_m = std::abs(from_camera_m.x() * toward.y() - from_camera_m.y() * toward.x());
     if (along_m > 0.0 && along_m < range_m - body_m && across_m < body_m) return true;
-  }
-  return false;
-}
-
-bool TargetTask::ambiguous(const hal::DetectionFrame& frame, int followed, int count,
-                           const std::array<Candidate, hal::kMaxPersons>& candidates,
-                           const std::array<bool, kMaxBystanderTracks>& track_taken) const {
-  // A fixed reach, not the track's gate: the gate grows while the track coasts, and two people a step apart
-  // would then stay ambiguous until the track is lost.
-  const Eigen::Vector2d p_m = candidates[static_cast<std::size_t>(followed)].judged().p_WT_m.head<2>();
-  const auto near = [&](const Eigen::Vector3d& q_m) {
-    return (q_m.head<2>() - p_m).norm() < params_.ambiguity_radius_m;
-  };
-  for (int i = 0; i < count; ++i) {
-    const Candidate& c = candidates[static_cast<std::size_t>(i)];
-    if (i != followed && c.measurement && !c.measurement->bearingOnly() && near(c.judged().p_WT_m)) return true;
-  }
-  for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
-    if (track_taken[j]) continue;
-    if (const auto q_m = bystanders_.position(j, frame.stamp_ns); q_m && near(*q_m)) return true;
   }
   return false;
 }
@@ -578,21 +486,6 @@ bool TargetTask::checkSwap(const hal::DetectionFrame& frame, const std::array<Ca
   return false;
 }
 
-bool TargetTask::reidentificationConfirmed(const hal::DetectionFrame& frame,
-                                           const std::array<Candidate, hal::kMaxPersons>& candidates, int person) {
-  if (params_.reid_confirm_frames <= 1) return true;  // off: no estimate computed for it
-  const TargetEstimate prior = estimator_.estimate(frame.stamp_ns);
-  if (!prior.initialised || !prior.lost || person < 0) {
-    reid_streak_ = 0;  // "in a row": a frame that chose nobody for the lost track ends the run
-    return true;
-  }
-  // The same one as the frame before (judged: the regression's noise).
-  const TargetMeasurement& m = candidates[static_cast<std::size_t>(person)].judged();
-  reid_streak_ = reid_streak_ > 0 && withinReach(m, reid_last_) ? reid_streak_ + 1 : 1;
-  reid_last_ = m;
-  return reid_streak_ >= params_.reid_confirm_frames;
-}
-
 bool TargetTask::withinReach(const TargetMeasurement& m, const TargetMeasurement& before) const {
   constexpr double kRunningSpeedMps = 3.0;
   const auto stdXy = [&](const TargetMeasurement& x) {
@@ -647,10 +540,7 @@ bool TargetTask::process(const Candidate& c) {
     ++stats_.unreliable;
     if (!c.measurement) return false;
     const MeasurementVerdict verdict = estimator_.add(*c.measurement);
-    if (verdict == MeasurementVerdict::kAccepted) {
-      ++stats_.bearings;
-      followed_accepted_ns_ = c.measurement->stamp_ns;
-    }
+    if (verdict == MeasurementVerdict::kAccepted) ++stats_.bearings;
     return false;
   }
   if (!c.measurement) {
@@ -671,7 +561,6 @@ bool TargetTask::process(const Candidate& c) {
   const MeasurementVerdict verdict = estimator_.add(*given);
   if (verdict == MeasurementVerdict::kAccepted || verdict == MeasurementVerdict::kStarted) {
     ++stats_.accepted;
-    followed_accepted_ns_ = given->stamp_ns;
     // A start or a re-identification after a loss is the regression's; a fallback or a distance without the depth
     // camera's is not the camera's either.
     const bool agreed = verdict == MeasurementVerdict::kAccepted && !was_lost && ranged && given == &*c.measurement;
@@ -799,17 +688,10 @@ void TargetTask::step(rt::TimeNs now_ns) {
     std::array<Candidate, hal::kMaxPersons> candidates;
     Association a = associate(frame, candidates);
     const bool whole_frame_wanted = checkSwap(frame, candidates, a);
-    if (!reidentificationConfirmed(frame, candidates, a.followed)) {
-      a.followed = -1;  // the lost track waits (reid_confirm_frames); whoever it was stays off the bystander tracks
-      ++stats_.reid_deferred;
-    }
     const int person = a.followed;
-    if (a.ambiguous) ++stats_.ambiguous;
     if (a.in_front) ++stats_.in_front;
     if (a.behind_bystander) ++stats_.behind_bystander;
     if (a.seen_through) ++stats_.seen_through;
-    if (a.bearing_after_gap) ++stats_.bearings_after_gap;
-    if (a.refused_alone_vetoed) ++stats_.refused_alone_vetoed;
     if (a.look_refused_kept_off) ++stats_.look_refused_kept_off;
     if (a.lost_colour_capped) ++stats_.lost_colour_capped;
     trackTheRefusedAlone(candidates, a);
@@ -848,9 +730,8 @@ void TargetTask::step(rt::TimeNs now_ns) {
       if (a.track[i] == kNoTrack) continue;
       const TargetMeasurement& m = *candidates[i].measurement;
       // Someone refused alone over frames (refused_alone_frames: only they are on a track and refused alone) is
-      // someone else; someone refused in front, where in_front_is_someone_else says so.
-      const bool with_followed =
-          followed_measured || (params_.in_front_is_someone_else && a.someone_else[i]) || a.refused_alone[i];
+      // someone else.
+      const bool with_followed = followed_measured || a.refused_alone[i];
       if (a.track[i] == kNewTrack)
         bystanders_.start(m, candidates[i].look, with_followed);
       else

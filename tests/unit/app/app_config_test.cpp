@@ -178,7 +178,6 @@ TEST(AppConfig, GivenTheVerdictsTorso_ThenItIsReadCheckedAndWrittenBack) {
   const std::string yaml = toYaml(*c);
   EXPECT_NE(yaml.find("verdict_torso_height_m: 1.3"), std::string::npos);
   EXPECT_NE(yaml.find("verdict_torso_m: 0.5"), std::string::npos);
-  EXPECT_NE(yaml.find("ambiguity_radius_m: 0"), std::string::npos);
   const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.verdict_torso_m", "5"}});
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("estimation.verdict_torso_m"), std::string::npos) << bad.error().message;
@@ -248,37 +247,6 @@ TEST(AppConfig, GivenHiddenBehind_ThenItIsReadCheckedAndWrittenBack) {
     ASSERT_FALSE(bad) << bad_value;
     EXPECT_NE(bad.error().message.find("estimation.hidden_behind_m"), std::string::npos) << bad.error().message;
   }
-}
-
-TEST(AppConfig, GivenYoungLookSamples_ThenItIsReadCheckedAndWrittenBack) {
-  const auto shipped = loadAppConfig(kConfigDir + "/sim.yaml");
-  ASSERT_TRUE(shipped && shipped->estimation) << (shipped ? "" : shipped.error().message);
-  EXPECT_EQ(shipped->estimation->task.young_look_samples, 0);
-  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.young_look_samples", "10"}});
-  ASSERT_TRUE(c) << c.error().message;
-  ASSERT_TRUE(c->estimation);
-  EXPECT_EQ(c->estimation->task.young_look_samples, 10);
-  EXPECT_NE(toYaml(*c).find("young_look_samples: 10"), std::string::npos);
-  for (const char* bad_value : {"-1", "1.5", "few"}) {
-    const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.young_look_samples", bad_value}});
-    ASSERT_FALSE(bad) << bad_value;
-    EXPECT_NE(bad.error().message.find("estimation.young_look_samples"), std::string::npos) << bad.error().message;
-  }
-}
-
-TEST(AppConfig, GivenAssignmentCost_ThenItIsReadCheckedAndWrittenBack) {
-  for (const auto& [name, cost] :
-       {std::pair{"likelihood", estimation::TargetTaskParams::AssignmentCost::kLikelihood},
-        std::pair{"gate_fraction", estimation::TargetTaskParams::AssignmentCost::kGateFraction}}) {
-    const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.assignment_cost", name}});
-    ASSERT_TRUE(c) << c.error().message;
-    ASSERT_TRUE(c->estimation);
-    EXPECT_EQ(c->estimation->task.assignment_cost, cost);
-    EXPECT_NE(toYaml(*c).find(std::string("assignment_cost: ") + name), std::string::npos);
-  }
-  const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.assignment_cost", "cheapest"}});
-  ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("estimation.assignment_cost"), std::string::npos) << bad.error().message;
 }
 
 TEST(AppConfig, GivenDepthVetsBearings_ThenItIsReadCheckedAndWrittenBack) {

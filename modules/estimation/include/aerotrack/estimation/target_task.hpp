@@ -84,12 +84,6 @@ struct TargetTaskParams {
   /// lock-on's choice. false (`association: lock_on`): always the lock-on's choice. Why: the lock-on judges in
   /// the image, where a bystander beside the target matches as well; in the world they stand apart.
   bool choose_by_estimate = true;
-  /// With choose_by_estimate: while the followed track is live, the person it would take is refused when someone
-  /// else -- another person of the frame with a distance, or a live bystander track that no one in the frame
-  /// explains -- stands within this horizontal distance of them; the track coasts. Two people this near overlap
-  /// in the image: the network reports one made of both, or each in turn, and neither colour (a look-alike) nor
-  /// the motion gate (both inside it) can tell which. 0: off.
-  double ambiguity_radius_m = 0.0;
   /// With choose_by_estimate and depth_range: once the followed track's last this many accepted measurements
   /// were ranged by the depth camera as they were (the track's distance agrees with the depth camera's), a
   /// person whose depth range lies nearer than the track predicts by more than its gate allows along the line
@@ -139,35 +133,6 @@ struct TargetTaskParams {
   /// grown gate as well as their own young track (colour learnt from few frames) and was taken (traced: image-mode
   /// crowd seed 46, 0.6 m in front, d2 5.7 to the followed track, for 4.8 s). 0: off.
   double hidden_behind_m = 0.0;
-  /// With hidden_behind_m: whoever fits such a bystander's track is refused only if they fit it at least as well by
-  /// place (squared Mahalanobis distance) as the followed track. false: fitting it at all (its gate and colour gate)
-  /// refuses them. A coasting bystander track's gate is wide, and its colour gate (0.45) takes a person in other
-  /// clothes: the followed person, stepping out from behind a bystander, fit the bystander's track and was refused
-  /// while they fit their own prediction at d2 0.2-0.8 (traced: image-mode crowd seed 2, 0.25 s, after which the
-  /// look-alike beside them was taken).
-  bool hidden_behind_better_fit = false;
-  /// With choose_by_estimate: a bystander track whose colour was learnt from fewer frames than this, and lies within
-  /// the colour gate of the followed person's (someone who may look like them), is not told from the person by
-  /// colour: the candidate's colour distance to that young track counts no more than to the followed person's (in
-  /// its gate and its cost), and who fits both is judged by where they are. The followed person's colour is learnt
-  /// from hundreds of frames and a young track's from a few crops that in a crowd hold parts of others: the same
-  /// look-alike lay 0.05 from the first and 0.23 from the second, which outweighed a d2 of 0.84 against 11.65
-  /// (traced: image-mode crowd seed 80; seed 126: 0.40 against 5.28). 0: off, and shipped off: at 10 it freed
-  /// those two seeds in closed loop but gave the person's own measurement to a young track 1.3 m away (crowd seed
-  /// 85: d2 0.94 against the followed track's 1.16) -- a young track's covariance is wide, so its d2 is small for
-  /// anyone near; judged by where they are, the comparison needs the likelihood (the covariance's size), which the
-  /// gate-fraction cost does not carry (docs/modules/localization-estimation.md).
-  int young_look_samples = 0;
-  /// With choose_by_estimate, the cost of giving a person to a track (`assignment_cost:`):
-  ///  - kGateFraction: the lock-on's form, d2 / gate_chi2 plus appearance_weight times the colour distance over
-  ///    max_appearance_distance, alike for every track;
-  ///  - kLikelihood: the same in units of d2 (times gate_chi2) plus ln|S| of the track's innovation covariance:
-  ///    twice the negative log-likelihood of where they stand (TargetEstimator::fit). A track of wide covariance
-  ///    (young, or coasting) fits anyone near at a small d2, and under kGateFraction takes the measurement of
-  ///    someone a tight track predicts as well (crowd seed 85 with young_look_samples: d2 0.94 against 1.16, the
-  ///    young track 1.3 m away from the person); ln|S| charges it for its reach.
-  enum class AssignmentCost { kGateFraction, kLikelihood };
-  AssignmentCost assignment_cost = AssignmentCost::kGateFraction;
   /// With depth_range: a bearing (bearing_fallback) whose line of sight the depth camera sees through where the
   /// followed track predicts the person -- free space up to a surface farther than max_ratio times the predicted
   /// range, or no surface within max_range_m, or a surface nearer than that range by the same factor (someone in
@@ -176,27 +141,6 @@ struct TargetTaskParams {
   /// was taken (traced: image-mode crowd seed 9, flown from the truth, depth 1.3 m against 2.4 m predicted), and a
   /// low-scored person 7 m behind (seed 100, closed loop: no surface within 8 m). false: off.
   bool depth_vets_bearings = false;
-  /// With choose_by_estimate: a lost followed track is re-identified on someone only once the association has chosen
-  /// them for it in this many detection frames in a row, each within a running person's reach of the one before (where
-  /// they were measured, not the track's prediction); 1: at once. A lost track's gate has grown over wherever the
-  /// person may be, and whoever is seen first in it was taken: the look-alike coming into view a frame before the
-  /// person (traced: image-mode crowd seeds 71 and 72 in closed loop, 4.7 and 3.7 m from the person, taken on their
-  /// first frame at d2 0.8 and 7.7 while the person, nearer the prediction, was not yet detected). Waiting, the track
-  /// takes whoever is chosen frame after frame: the person nearer the prediction once they are seen too. Until then the
-  /// track stays lost and coasts. Shipped 1: at 3 the image-mode crowd lost more than it gained (the look-alike stays
-  /// in view while the person does not come; docs/modules/localization-estimation.md).
-  int reid_confirm_frames = 1;
-  /// With in_front_after_ranged: someone the live followed track refused as someone in front of the person beyond
-  /// its gate (InFront::kBeyondGate; not a doubtful refusal inside it, nor the verdict behind a bystander's track)
-  /// counts as seen beside the followed person: their bystander track competes with the lost followed track for them
-  /// (BystanderTracks::seenWithFollowed). Without it, a track updated only while the followed person was hidden
-  /// (behind that very bystander) was never "seen with" them, and once the followed track was lost its
-  /// re-identification took the bystander (traced: image-mode crowd seed 102 in closed loop, the look-alike refused
-  /// in front for 0.9 s, then taken at d2 3.7 in the frame the track was lost). Shipped false: the refusal can be the
-  /// person's own frame (the depth camera ranging something in front of them), and the mark then lasts the track's
-  /// life: it held the person while the lost track took the look-alike (crowd seed 87; 118 against 121 of 140 crowd
-  /// trials without a switch, docs/modules/localization-estimation.md).
-  bool in_front_is_someone_else = false;
   /// With choose_by_estimate: someone with a distance whom the live followed track's gate refuses (beyond it, and on
   /// no bystander track) in this many detection frames in a row, each within a running person's reach of the one
   /// before, is someone else: a bystander track is started on them, counted as seen beside the followed person (it
@@ -207,22 +151,13 @@ struct TargetTaskParams {
   /// d2 7.5; seed 73, refused 6 frames, then their bearing taken). One frame could be a jump of the person's own
   /// measurement; several in a row, each where the one before was, are someone walking. 0: off.
   int refused_alone_frames = 0;
-  /// With refused_alone_frames and depth_range: someone refused alone whose line of sight the depth camera ranges to
-  /// a place the followed track's gate takes is not refused (their run ends): the regression, not the person, is off
-  /// (traced: image-mode crowd seed 111, the person placed 1.4 m short three frames in a row while the depth camera,
-  /// which ranges only measurements inside the gate, would have put them on the prediction; the track started on
-  /// them was counted as someone else and held them while the lost followed track took the look-alike). The depth
-  /// range only vetoes a track: it is not given to the followed track, as random keypoints' line of sight on a wall
-  /// near the prediction would be ranged as sharply.
-  bool refused_alone_depth_veto = false;
   /// With choose_by_estimate: someone the look gate (look_gate_sigmas) refuses for the live followed track -- inside
   /// its gate and the colour gate -- who fits the followed track better (by d2) than every bystander track whose
-  /// gates allow them is given to no bystander track in that frame, nor starts one: they may be the person, turned
-  /// (as ambiguity_radius_m keeps the person taken off). Otherwise the assignment gave them to whichever bystander
-  /// track's gate reached them: traced, image-mode crowd seed 66, the person refused by the look gate (colour 0.151,
-  /// d2 1.33) took the look-alike's young track (d2 4.2), counted as seen beside the person, and the look-alike a new
-  /// track never seen beside them -- which, the person hidden a second later and the followed track lost, did not
-  /// compete, and the re-identification took the look-alike.
+  /// gates allow them is given to no bystander track in that frame, nor starts one: they may be the person, turned.
+  /// Otherwise the assignment gave them to whichever bystander track's gate reached them: traced, image-mode crowd seed
+  /// 66, the person refused by the look gate (colour 0.151, d2 1.33) took the look-alike's young track (d2 4.2),
+  /// counted as seen beside the person, and the look-alike a new track never seen beside them -- which, the person
+  /// hidden a second later and the followed track lost, did not compete, and the re-identification took the look-alike.
   bool look_refused_off_tracks = false;
   /// With choose_by_estimate: while the followed track is lost, a competing bystander track's colour term (the
   /// track of someone seen beside the person) is at most the candidate's colour distance to the person's, so that
@@ -232,13 +167,6 @@ struct TargetTaskParams {
   /// track won by place (traced: image-mode crowd seed 66, the lost track took the look-alike at d2 3.5 while the
   /// look-alike's own competing track, seen beside the person, fit them at d2 0.1).
   bool lost_competing_colour_capped = false;
-  /// With choose_by_estimate: a bearing (bearing_fallback) is given to the followed track only if the track accepted
-  /// a measurement of the person at most this long before the frame. A bearing fits anyone on its line of sight at
-  /// any range: it can carry a track that is seeing the person on, but after the person was hidden for a while,
-  /// whoever stands on that line now -- often whoever hid them -- fits it as well (traced: image-mode crowd seed 78,
-  /// the person unseen for 0.33 s, then the look-alike 0.5 m from them taken as a bearing at d2 3.3). The person
-  /// back in view is taken again with their first distance. 0: off.
-  double bearing_max_gap_s = 0.0;
   /// A second opinion on whom the followed track holds (`swap_check:`, swap_check.hpp; with choose_by_estimate):
   /// when its innovations run large the track as it was is kept aside, and it takes back its place if someone
   /// new fits it while the followed track's person does not. frames 0: off (the default here; config/sim.yaml and
@@ -272,14 +200,10 @@ struct TargetTaskStats {
   std::uint64_t rejected = 0;              ///< Measurements the estimator refused.
   std::uint64_t reassigned = 0;            ///< Frames whose person the track's prediction chose over the lock-on's.
   std::uint64_t swapped_back = 0;          ///< Times the swap check gave the followed track back its kept hypothesis.
-  std::uint64_t ambiguous = 0;             ///< Frames the followed track was given nobody: someone within reach.
   std::uint64_t in_front = 0;              ///< Frames someone it would take was ranged in front of the followed person.
   std::uint64_t behind_bystander = 0;      ///< Frames someone it would take fit a bystander in front of the person.
   std::uint64_t seen_through = 0;          ///< Frames a bearing it would take was one the depth camera sees through.
-  std::uint64_t reid_deferred = 0;         ///< Frames a lost track's choice waited for reid_confirm_frames.
   std::uint64_t refused_alone_tracks = 0;  ///< Tracks started on someone refused alone (refused_alone_frames).
-  std::uint64_t bearings_after_gap = 0;    ///< Bearings refused as too long after a measurement (bearing_max_gap_s).
-  std::uint64_t refused_alone_vetoed = 0;  ///< Refused alone but ranged into the gate (refused_alone_depth_veto).
   std::uint64_t look_refused_kept_off = 0;  ///< Frames someone the look gate refused was kept off tracks.
   std::uint64_t lost_colour_capped = 0;     ///< Frames a competing track's colour term was capped while lost.
   std::uint64_t depth_ranged = 0;           ///< ... of the followed person's frames, ranged by the depth camera.
@@ -337,40 +261,25 @@ class TargetTask final : public rt::Task {
     std::array<int, hal::kMaxPersons> track{};  ///< Each person's bystander track, kNoTrack or kNewTrack.
     bool look_refused = false;                  ///< Someone fit the followed track but for the look gate...
     double look_refused_d2 = std::numeric_limits<double>::infinity();  ///< ... the nearest such distance's d2.
-    bool ambiguous = false;  ///< The followed track was given nobody: someone stood too near (ambiguity_radius_m).
-    bool in_front = false;   ///< Someone its gate took was ranged in front of the person (in_front_after_ranged).
+    bool in_front = false;  ///< Someone its gate took was ranged in front of the person (in_front_after_ranged).
     bool behind_bystander = false;  ///< Someone its gate took fit a bystander in front of the person (hidden_behind_m).
     bool seen_through = false;      ///< A bearing its gate took was seen through by the depth camera.
-    /// Each person the live followed track's rule for someone in front refused beyond its gate: someone else
-    /// (in_front_is_someone_else).
-    std::array<bool, hal::kMaxPersons> someone_else{};
     /// Each person with a distance the live followed track's gate refused and nobody took (refused_alone_frames).
     std::array<bool, hal::kMaxPersons> refused_alone{};
-    bool bearing_after_gap = false;      ///< A bearing its gate took came too long after its last measurement.
-    bool refused_alone_vetoed = false;   ///< Someone refused alone was ranged into the gate (refused_alone_depth_veto).
     bool look_refused_kept_off = false;  ///< Someone the look gate refused kept off tracks (look_refused_off_tracks).
     bool lost_colour_capped = false;     ///< A competing track's colour term was capped (lost_competing_colour_capped).
   };
   /// Whom the frame's people are (see choose_by_estimate), filling the candidates it judged (choosing by the
   /// estimate: everyone's; else the lock-on's choice's).
   Association associate(const hal::DetectionFrame& frame, std::array<Candidate, hal::kMaxPersons>& candidates) const;
-  /// Whether the followed track's choice, person `followed`, has someone else within ambiguity_radius_m.
-  bool ambiguous(const hal::DetectionFrame& frame, int followed, int count,
-                 const std::array<Candidate, hal::kMaxPersons>& candidates,
-                 const std::array<bool, kMaxBystanderTracks>& track_taken) const;
-  /// Whether bystander track j's colour is learnt from fewer than young_look_samples frames and within the colour
-  /// gate of the followed person's: then it does not tell the person from them (young_look_samples).
-  bool lookAlikeYoungTrack(std::size_t j) const;
   /// Whether the candidate's depth range puts them in front of the followed person (in_front_after_ranged), and
   /// whether only in_front_gate_chi2 does (their d2 inside the estimator's gate: doubtful).
   enum class InFront { kNo, kDoubtful, kBeyondGate };
   InFront inFrontOfTheFollowed(const Candidate& c, const TargetEstimate& prior) const;
   /// Whether `person` fits (an allowed pair in `costs`) a bystander track standing in front of the followed
   /// person's prediction, seen from the camera at p_WC_m (hidden_behind_m).
-  /// person_d2: their squared Mahalanobis distance to the followed track (hidden_behind_better_fit).
-  bool hiddenBehindABystander(int person, double person_d2, const TargetMeasurement& judged,
-                              const AssignmentCosts& costs, const TargetEstimate& prior, const Eigen::Vector3d& p_WC_m,
-                              rt::TimeNs t_ns) const;
+  bool hiddenBehindABystander(int person, const AssignmentCosts& costs, const TargetEstimate& prior,
+                              const Eigen::Vector3d& p_WC_m, rt::TimeNs t_ns) const;
   /// The swap check's evidence in this frame (SwapCheck); true while its kept hypothesis is open and the followed
   /// track holds someone it does not explain (the verdict then asks the detector for the whole frame). If confirmed,
   /// the followed track becomes the kept one and `a` is rewritten (its person the one who fit the kept track, whom the
@@ -388,13 +297,9 @@ class TargetTask final : public rt::Task {
   hal::DetectionFrame::PredictedTorso predictedTorso(const hal::DetectionFrame& frame) const;
   /// c's measurement ranged along the line of sight through `pixel` (the photo's) by the depth image nearest the
   /// frame's time, if one sees the person where the regression (or the prior, for a bearing) roughly does; c learns
-  /// what the depth camera said. `gated`: only a measurement the live followed track's gate takes (the rule for
-  /// what is given to the estimator); false, anyone's, for a judgement (refused_alone_depth_veto).
+  /// what the depth camera said. Only a measurement the live followed track's gate takes is ranged.
   void rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vector2d& pixel, const Eigen::Isometry3d& T_WC,
-                    Candidate& c, bool gated) const;
-  /// Whether the depth camera ranges candidate c (refused beyond the live followed track's gate) to a place the
-  /// gate takes (refused_alone_depth_veto).
-  bool depthPlacesInGate(const hal::DetectionFrame& frame, const Eigen::Isometry3d& T_WC, const Candidate& c) const;
+                    Candidate& c) const;
   /// Whether `person`, at followed_d2 from the followed track's prediction, fits it at least as well as every
   /// bystander track whose pair `costs` allows (look_refused_off_tracks).
   bool fitsFollowedBest(int person, double followed_d2, const TargetMeasurement& judged,
@@ -425,10 +330,6 @@ class TargetTask final : public rt::Task {
   /// The followed person's own colour distances to reference_ (taken distances): running mean and mean square.
   double own_look_mean_ = 0.0, own_look_mean_sq_ = 0.0;
   int own_look_count_ = 0;
-  /// Whom the association chose for the lost followed track in the frames before (reid_confirm_frames): how many
-  /// frames in a row, and the newest one's measurement.
-  int reid_streak_ = 0;
-  TargetMeasurement reid_last_;
   /// Someone refused alone in the frames before (refused_alone_frames): how many frames in a row, and the newest one's
   /// measurement.
   int refused_alone_streak_ = 0;
@@ -438,12 +339,7 @@ class TargetTask final : public rt::Task {
   /// Whether measurement m can be the same person as `before`: no farther than a running person goes in the time
   /// between, plus three standard deviations of the two measurements' difference.
   bool withinReach(const TargetMeasurement& m, const TargetMeasurement& before) const;
-  rt::TimeNs followed_accepted_ns_ = -1;  ///< The newest measurement (distance or bearing) the followed track accepted.
   int ranged_streak_ = 0;  ///< The followed track's last accepted measurements in a row that were ranged as they were.
-  /// Whether `person`, the association's choice for the followed track (-1: none), may be given to it now: always,
-  /// but while the track is lost, when they are its choice for the reid_confirm_frames-th frame in a row.
-  bool reidentificationConfirmed(const hal::DetectionFrame& frame,
-                                 const std::array<Candidate, hal::kMaxPersons>& candidates, int person);
   /// Whether a colour is as near the learnt one as the followed person's own frames are (look_gate_sigmas).
   bool looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const;
   rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
