@@ -141,7 +141,6 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
           seen.bearing_from_shoulders ? kp(hal::CocoKeypoint::kRightShoulder) : kp(hal::CocoKeypoint::kRightHip);
       pixel = Eigen::Vector2d(0.5 * (a.u_px + b.u_px), 0.5 * (a.v_px + b.v_px));
     }
-    c.depth_pixel = pixel;
     rangeByDepth(frame, pixel, *T_WC, c);
   }
   return c;
@@ -228,18 +227,17 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
       if (i != lock_on && distance(i)) a.track[static_cast<std::size_t>(i)] = kNewTrack;
     return a;
   }
-  // Every (person, track) pair within the track's gate -- the estimator's own test against the state it would
-  // update: live, the prediction; lost, the prediction with its grown covariance (where the person can have
-  // gone since: the re-identification after an occlusion). The followed track's pairs also pass the colour the
-  // task has learnt, a bystander's the colour learnt for their track; the cost is the lock-on's form (gate fraction
-  // plus weighted colour fraction) for every track alike. While the followed person is lost, a bystander track never
-  // seen beside them may be them, and does not compete. The
-  // cheapest assignment of distances to tracks (global nearest neighbour, solved exactly: assignment.hpp); then, if
-  // nobody went to the followed track, a bearing -- unless it fits better a bystander track that no one in the frame
-  // explains (a bearing fits anyone on its line of sight), or the depth camera sees through where the person would be
-  // on it (depth_vets_bearings). Nobody for the followed track: it coasts (never the lock-on's choice, whose bystander
-  // the estimator's restart rule would hand the track to). Column 0 of the costs is the followed track, column 1 + j
-  // bystander track j.
+  // Every (person, track) pair within the track's gate -- the estimator's own test against the state it would update:
+  // live, the prediction; lost, the prediction with its grown covariance (where the person can have gone since: the
+  // re-identification after an occlusion). The followed track's pairs also pass the colour the task has learnt, a
+  // bystander's the colour learnt for their track; the cost is the lock-on's form (gate fraction plus weighted colour
+  // fraction) for every track alike. While the followed person is lost, a bystander track never seen beside them may be
+  // them, and does not compete. The cheapest assignment of distances to tracks (global nearest neighbour, solved
+  // exactly: assignment.hpp); then, if nobody went to the followed track, a bearing -- unless it fits better a
+  // bystander track that no one in the frame explains (a bearing fits anyone on its line of sight), or the depth camera
+  // sees through where the person would be on it (depth_vets_bearings). Nobody for the followed track: it coasts (never
+  // the lock-on's choice, whose bystander the estimator's restart rule would hand the track to). Column 0 of the costs
+  // is the followed track, column 1 + j bystander track j.
   AssignmentCosts costs;
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};

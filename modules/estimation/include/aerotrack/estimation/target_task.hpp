@@ -247,8 +247,6 @@ class TargetTask final : public rt::Task {
     /// A ranged measurement's regression-only form: who a person is (the association's gates) is judged
     /// on it, so the depth camera changes how well the followed person is placed, never who is followed.
     std::optional<TargetMeasurement> unranged;
-    /// The photo's pixel the depth camera's line of sight goes through (the torso's centre, or a cut-off torso's pair).
-    Eigen::Vector2d depth_pixel = Eigen::Vector2d::Zero();
     const TargetMeasurement& judged() const { return unranged ? *unranged : *measurement; }
   };
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
