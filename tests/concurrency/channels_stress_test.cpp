@@ -18,11 +18,12 @@
 #include "aerotrack/rt/realtime_executor.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/spsc_queue.hpp"
+#include "support/sanitizers.hpp"
 
 namespace aerotrack::rt {
 namespace {
 
-#if defined(__SANITIZE_THREAD__)
+#if defined(AEROTRACK_TEST_TSAN)
 constexpr std::uint64_t kItems = 200'000;  // TSan slows atomics ~10x
 #else
 constexpr std::uint64_t kItems = 2'000'000;

@@ -16,6 +16,7 @@
 #include "app_config.hpp"
 #include "sim_report.hpp"
 #include "support/require.hpp"
+#include "support/sanitizers.hpp"
 #include "system.hpp"
 
 namespace aerotrack::app {
@@ -26,7 +27,7 @@ TEST(SimRealtime, GivenSimConfigOnThreadsThenEveryTaskRunsAndTheDroneTakesOff) {
   ASSERT_TRUE(config);
   config->realtime.use_realtime_priority = false;
   config->realtime.lock_memory = false;
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(AEROTRACK_TEST_ASAN) || defined(AEROTRACK_TEST_TSAN)
   // Sanitizers slow every thread 5-15x on threads that run in real time: the odometry then arrives
   // later than the supervisor's 0.2 s failsafe allows and the drone is (rightly) held on the ground.
   // This test is about the threads, not the failsafes (tested in lockstep), so give them room.
@@ -57,7 +58,7 @@ TEST(SimRealtime, GivenSimConfigOnThreadsThenEveryTaskRunsAndTheDroneTakesOff) {
   EXPECT_GT((*system)->channels().depth.version(), 5U);
   // The control tasks keep their budgets: overruns (runs longer than budget_ms) within 5 % of their
   // runs. Not under sanitizers, whose instrumentation multiplies execution times.
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#if !defined(AEROTRACK_TEST_ASAN) && !defined(AEROTRACK_TEST_TSAN)
   for (const auto& s : executor.stats()) {
     const std::string name = s.name;
     if (name != "gimbal_control" && name != "trajectory_server" && name != "supervisor" && name != "gimbal" &&

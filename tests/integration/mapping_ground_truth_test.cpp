@@ -130,8 +130,9 @@ MapScore mapAndScore(const std::string& scenario, double duration_s, double prob
     ++occupied;
     const octomap::point3d c = it.getCoordinate();
     // True surfaces: the obstacles and the ground plane z = 0, which the camera sees too.
-    const double to_surface_m = std::min((*sim)->obstacles().distance(Eigen::Vector3d(c.x(), c.y(), c.z())),
-                                         std::abs(static_cast<double>(c.z())));
+    const double to_surface_m =
+        std::min((*sim)->obstacles().distance(Eigen::Vector3f(c.x(), c.y(), c.z()).cast<double>()),
+                 std::abs(static_cast<double>(c.z())));
     if (to_surface_m <= tolerance_m) ++near_surface;
     occupied_keys.insert(keyOf(it.getKey()));
   }

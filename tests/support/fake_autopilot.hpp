@@ -66,13 +66,13 @@ class FakeAutopilot {
         custom_mode_ = kLoiter;  // offboard loss: PX4's failsafe holds position
         truth.v_N_mps.setZero();
       } else if (dt_s > 0.0) {
-        const Eigen::Vector3d to_go(setpoint_.x, setpoint_.y, setpoint_.z);
+        const Eigen::Vector3d to_go = Eigen::Vector3f(setpoint_.x, setpoint_.y, setpoint_.z).cast<double>();
         Eigen::Vector3d step_m = to_go - truth.p_N_m;
         const double max_m = params_.max_speed_mps * dt_s;
         if (step_m.norm() > max_m) step_m *= max_m / step_m.norm();
         truth.p_N_m += step_m;
         truth.v_N_mps = step_m / dt_s;
-        truth.yaw_rad = setpoint_.yaw;
+        truth.yaw_rad = static_cast<double>(setpoint_.yaw);
       }
     }
     if (silent_) return;

@@ -46,9 +46,12 @@ std::string hex(const std::vector<std::uint8_t>& bytes) {
   return s;
 }
 
-std::string num(double v) {
+// Every field of a frame, a float or an integer, printed through a double: exact for every float and every
+// integer below 2^53 (the conversion is explicit, so a float is not promoted silently: -Wdouble-promotion).
+template <class T>
+std::string num(T v) {
   char b[40];
-  std::snprintf(b, sizeof(b), "%.17g", v);  // exact: every float and every integer below 2^53
+  std::snprintf(b, sizeof(b), "%.17g", static_cast<double>(v));
   return b;
 }
 

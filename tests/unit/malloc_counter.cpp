@@ -5,7 +5,7 @@
 // skip (they run in the Release tree: scripts/check.sh release).
 #include "malloc_counter.hpp"
 
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#if !defined(AEROTRACK_TEST_ASAN) && !defined(AEROTRACK_TEST_TSAN)
 extern "C" void* __libc_malloc(std::size_t size);  // NOLINT: glibc's own allocator
 
 extern "C" void* malloc(std::size_t size) {  // NOLINT: interposes the C library's malloc

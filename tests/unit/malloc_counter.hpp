@@ -9,12 +9,14 @@
 #include <atomic>
 #include <cstddef>
 
+#include "../support/sanitizers.hpp"
+
 namespace aerotrack::test {
 
 inline std::atomic<bool> g_counting_mallocs{false};
 inline std::atomic<long> g_mallocs{0};
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(AEROTRACK_TEST_ASAN) || defined(AEROTRACK_TEST_TSAN)
 inline constexpr bool kMallocCounted = false;
 #else
 inline constexpr bool kMallocCounted = true;

@@ -164,7 +164,7 @@ TEST(FoxgloveMessages, DepthPointsAreTheDepthImageBackProjected) {
   frame.intrinsics.fy_px = 100.0;
   frame.intrinsics.cx_px = 8.0;
   frame.intrinsics.cy_px = 6.0;
-  frame.depth_m = cv::Mat(12, 16, CV_32FC1, cv::Scalar(2.0F));
+  frame.depth_m = cv::Mat(12, 16, CV_32FC1, cv::Scalar(2.0));
   frame.depth_m.at<float>(0, 0) = 0.0F;                                     // no return
   frame.depth_m.at<float>(0, 4) = std::numeric_limits<float>::quiet_NaN();  // no return
   foxglove::PointCloud m;

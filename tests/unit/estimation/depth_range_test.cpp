@@ -22,7 +22,7 @@ hal::DepthFrame wallAt(double z_m) {
   frame.intrinsics.fy_px = 80.0;
   frame.intrinsics.cx_px = 80.0;
   frame.intrinsics.cy_px = 60.0;
-  frame.depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(static_cast<float>(z_m)));
+  frame.depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(z_m));
   return frame;
 }
 
@@ -54,7 +54,7 @@ TEST(DepthRange, GivenAFlatWallThenTheRangeIsWhereTheLineCrossesIt) {
 TEST(DepthRange, GivenAPersonInFrontOfAWallThenTheLineThroughThemFindsTheirFront) {
   hal::DepthFrame frame = wallAt(6.0);
   // A person 3 m ahead covering the middle columns (a 0.5 m wide body at 3 m: 13 px).
-  frame.depth_m(cv::Rect(74, 30, 13, 60)) = 3.0F;
+  frame.depth_m(cv::Rect(74, 30, 13, 60)) = 3.0;
   const Eigen::Vector3d origin(0.1, -0.05, 0.0);  // the gimbal camera, 10 cm to the side
   const Eigen::Vector3d dir = (Eigen::Vector3d(0.0, 0.0, 3.0) - origin).normalized();
   const DepthSurface surface = surfaceAlongLine(frame, kT_WD, origin, dir, params());
@@ -72,7 +72,7 @@ TEST(DepthRange, GivenSomethingBetweenTheDepthCameraAndTheLineThenOccluded) {
   hal::DepthFrame frame = wallAt(6.0);
   // The line x = 0.3 m projects to u = 80 + 80 * 0.3 / z: columns 90-93 for z in [1.8, 2.4]. There the depth
   // camera sees a pole 1 m away, nearer than the line: what lies on the line beyond is hidden from it.
-  frame.depth_m(cv::Rect(90, 0, 4, 120)) = 1.0F;
+  frame.depth_m(cv::Rect(90, 0, 4, 120)) = 1.0;
   const DepthSurface surface =
       surfaceAlongLine(frame, kT_WD, Eigen::Vector3d(0.3, 0.0, 0.0), Eigen::Vector3d::UnitZ(), params());
   EXPECT_EQ(surface.status, DepthRangeStatus::kOccluded);
@@ -92,7 +92,7 @@ TEST(DepthRange, GivenALineOutOfViewOrThroughFreeSpaceThenNothing) {
   EXPECT_EQ(surfaceAlongLine(wrong, kT_WD, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), params()).status,
             DepthRangeStatus::kOutOfView);
   hal::DepthFrame nan_pixels = wallAt(4.0);
-  nan_pixels.depth_m = cv::Scalar(std::numeric_limits<float>::quiet_NaN());
+  nan_pixels.depth_m = cv::Scalar(std::numeric_limits<double>::quiet_NaN());
   EXPECT_EQ(surfaceAlongLine(nan_pixels, kT_WD, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), params()).status,
             DepthRangeStatus::kOutOfView);
 }

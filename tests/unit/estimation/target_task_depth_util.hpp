@@ -29,7 +29,7 @@ inline std::shared_ptr<hal::DepthFrame> renderBodiesDepth(rt::TimeNs t_ns, const
   frame->intrinsics = {160, 120, 80.0, 80.0, 80.0, 60.0, {}};
   // Optical x right, y down, z forward, in the body's x forward, y left, z up.
   frame->T_BC.linear() << 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0;
-  frame->depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(static_cast<float>(background_m)));
+  frame->depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(background_m));
   for (int u = 0; u < 160; ++u) {
     // The ray's horizontal part per metre of optical depth: x forward 1, y left -(u - cx) / fx (rows share it).
     const Eigen::Vector2d d(1.0, -(u + 0.5 - 80.0) / 80.0);
@@ -41,7 +41,7 @@ inline std::shared_ptr<hal::DepthFrame> renderBodiesDepth(rt::TimeNs t_ns, const
       const double disc = b * b - 4.0 * a * (c.squaredNorm() - body_radius_m * body_radius_m);
       if (disc >= 0.0) nearest = std::min(nearest, (-b - std::sqrt(disc)) / (2.0 * a));
     }
-    if (std::isfinite(nearest)) frame->depth_m.col(u).setTo(cv::Scalar(static_cast<float>(nearest)));
+    if (std::isfinite(nearest)) frame->depth_m.col(u).setTo(cv::Scalar(nearest));
   }
   return frame;
 }

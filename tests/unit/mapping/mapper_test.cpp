@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -28,7 +29,7 @@ hal::DepthFrame wallFrame(rt::TimeNs t_ns, float range_m) {
   hal::DepthFrame f;
   f.stamp_ns = t_ns;
   f.intrinsics = {40, 30, 20.0, 20.0, 20.0, 15.0, {}};
-  f.depth_m = cv::Mat(30, 40, CV_32FC1, cv::Scalar(range_m));
+  f.depth_m = cv::Mat(30, 40, CV_32FC1, cv::Scalar(static_cast<double>(range_m)));
   Eigen::Matrix3d optical;
   optical << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   f.T_BC.linear() = optical;
@@ -200,7 +201,8 @@ TEST(BodyAround, GivenAnEstimateThenTheColumnGrowsWithTheMajorAxisOfItsUncertain
   // An uncertain estimate (std 0.5 m: 1.4 m wide): nothing, rather than a wall beside the person erased.
   EXPECT_FALSE(bodyAround(Eigen::Vector3d::Zero(), 0.25 * Eigen::Matrix2d::Identity(), params).has_value());
   // Off, or an estimate that is not finite: nothing.
-  EXPECT_FALSE(bodyAround(Eigen::Vector3d(NAN, 0.0, 0.0), cov, params).has_value());
+  EXPECT_FALSE(
+      bodyAround(Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0), cov, params).has_value());
   params.enabled = false;
   EXPECT_FALSE(bodyAround(Eigen::Vector3d::Zero(), cov, params).has_value());
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "aerotrack/trajectory_server/min_jerk_tour.hpp"
@@ -22,7 +23,7 @@ MinJerkTour makeTour(double vmax = 2.0, double amax = 2.0) {
 TEST(MinJerkTour, GivenBadInputThenError) {
   EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}}, 1, 1));
   EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}, {1, 0, 0}}, 0, 1));
-  EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}, {NAN, 0, 0}}, 1, 1));
+  EXPECT_FALSE(MinJerkTour::create({{0, 0, 0}, {std::numeric_limits<double>::quiet_NaN(), 0, 0}}, 1, 1));
 }
 
 TEST(MinJerkTour, LegDurationIsTheSmallestThatRespectsBothLimits) {

@@ -257,7 +257,8 @@ TEST(Appearance, GivenRandomPixels_WhenMeasured_ThenTheHistogramMatchesOpenCvsHs
     for (int v = v0; v < v1; ++v)
       for (int u = u0; u < u1; ++u) {
         const cv::Vec3f p = hsv.at<cv::Vec3f>(v, u);
-        const hal::ColourVote vote = hal::colourVote(p[0], p[1], p[2]);
+        const hal::ColourVote vote =
+            hal::colourVote(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
         counts[vote.bin[0]] += vote.share[0];
         counts[vote.bin[1]] += vote.share[1];
       }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -249,7 +250,7 @@ TEST(KinodynamicSearch, GivenAnAltitudeBandThenPathsKeepToItAndAStartBelowItOnly
 
 // The smallest horizontal distance between the path and `person`'s motion, sampled every 10 ms.
 double closestToPersonM(const SearchPath& path, const MovingPerson& person) {
-  double min_m = INFINITY;
+  double min_m = std::numeric_limits<double>::infinity();
   for (double t = 0.0; t <= path.duration_s; t += 0.01)
     min_m = std::min(min_m, (path.stateAt(t).p_W_m.head<2>() - person.at(t)).norm());
   return min_m;

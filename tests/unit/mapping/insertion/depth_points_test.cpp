@@ -36,7 +36,7 @@ DepthPointsParams everyPixel() {
 
 Eigen::Vector3d at(const octomap::Pointcloud& cloud, std::size_t i) {
   const octomap::point3d& p = cloud[i];
-  return {p.x(), p.y(), p.z()};
+  return Eigen::Vector3f(p.x(), p.y(), p.z()).cast<double>();
 }
 
 TEST(DepthPoints, GivenInvalidParams_WhenValidate_ThenError) {
@@ -136,7 +136,7 @@ TEST(DepthPoints, GivenPixelsBeyondMaxRange_WhenConvert_ThenMissesOnTheRayAtMaxR
 
 TEST(DepthPoints, GivenDecimation_WhenConvert_ThenEveryNthPixelFromTheCorner) {
   hal::DepthFrame frame = makeFrame();
-  frame.depth_m.setTo(3.0F);
+  frame.depth_m.setTo(3.0);
   octomap::Pointcloud hits;
   octomap::Pointcloud misses;
   DepthPointsParams params;  // decimation 4: 40 x 30.
@@ -156,7 +156,7 @@ TEST(DepthPoints, GivenDecimation_WhenConvert_ThenEveryNthPixelFromTheCorner) {
   EXPECT_EQ(hits.size(), 23U * 18U);
 
   hal::DepthFrame big = makeFrame(640, 480);  // 640 x 480 at 16: the same 40 x 30 points.
-  big.depth_m.setTo(3.0F);
+  big.depth_m.setTo(3.0);
   params.decimation = 16;
   stats = depthToPoints(big, Eigen::Isometry3d::Identity(), params, hits, misses).value();
   EXPECT_EQ(stats.pixels_visited, 1200U);
@@ -165,7 +165,7 @@ TEST(DepthPoints, GivenDecimation_WhenConvert_ThenEveryNthPixelFromTheCorner) {
 
 TEST(DepthPoints, GivenCloudsFromAPreviousFrame_WhenConvertAgain_ThenClearedAndMemoryReused) {
   hal::DepthFrame frame = makeFrame();
-  frame.depth_m.setTo(3.0F);
+  frame.depth_m.setTo(3.0);
   frame.depth_m.at<float>(0, 0) = 50.0F;
   octomap::Pointcloud hits;
   octomap::Pointcloud misses;
@@ -186,7 +186,7 @@ TEST(DepthPoints, GivenMalformedFrameOrPose_WhenConvert_ThenErrorAndNoPoints) {
   octomap::Pointcloud misses;
   hits.push_back(1.0F, 2.0F, 3.0F);
   hal::DepthFrame frame = makeFrame();
-  frame.depth_m.setTo(3.0F);
+  frame.depth_m.setTo(3.0);
 
   hal::DepthFrame wrong_type = frame;
   wrong_type.depth_m = cv::Mat::zeros(120, 160, CV_64FC1);

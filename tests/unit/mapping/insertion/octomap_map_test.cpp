@@ -346,7 +346,7 @@ TEST(OctomapMap, GivenClutteredFramesThatPruneAndReexpand_WhenInserted_ThenSameT
           hits.push_back(origin + dir * range_m);  // Rounds 8, 9: obstacles inside cleared space.
         }
       }
-      (void)map.insert(hits, misses, Eigen::Vector3d(origin.x(), origin.y(), origin.z())).value();
+      (void)map.insert(hits, misses, Eigen::Vector3f(origin.x(), origin.y(), origin.z()).cast<double>()).value();
       referenceInsert(reference, hits, misses, origin);
       ASSERT_TRUE(map.tree() == reference) << "round " << round;
       ASSERT_EQ(changedKeys(map), referenceChanges(reference)) << "round " << round;

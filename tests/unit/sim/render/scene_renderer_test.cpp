@@ -49,7 +49,7 @@ cv::Mat changed(const cv::Mat& a, const cv::Mat& b, float threshold = 0.0F) {
   cv::absdiff(a, b, diff);
   cv::Mat sum;
   cv::transform(diff, sum, cv::Matx13f(1, 1, 1));
-  return sum > threshold;
+  return sum > static_cast<double>(threshold);
 }
 
 bool castInstalled() {
@@ -159,7 +159,7 @@ TEST_F(SceneRendererTest, AnObstacleBetweenCameraAndPersonHidesTheirPixels) {
 
   // When the scene is rendered with and without the person, with and without the pole
   const cv::Mat with_pole = changed(render(pole, T_WC, &person), render(pole, T_WC, nullptr));
-  const cv::Mat pole_pixels = scratch_.depth_m < std::numeric_limits<float>::infinity();
+  const cv::Mat pole_pixels = scratch_.depth_m < std::numeric_limits<double>::infinity();
   const cv::Mat without_pole = changed(render(empty, T_WC, &person), render(empty, T_WC, nullptr));
 
   // Then no pixel of the pole shows the person, though the person is there behind it, and the
@@ -227,7 +227,7 @@ TEST_F(SceneRendererTest, TheDepthBufferHoldsTheNearestObstacleOnEveryPixelsRay)
           if (const auto t = firstHit(b, ray, max_range); t && *t >= 0.05) nearest = std::min(nearest, *t);
         for (const Cylinder& c : forest.cylinders())
           if (const auto t = firstHit(c, ray, max_range); t && *t >= 0.05) nearest = std::min(nearest, *t);
-        const double rendered = scratch_.depth_m.at<float>(v, u);
+        const auto rendered = static_cast<double>(scratch_.depth_m.at<float>(v, u));
         const bool same = std::isinf(nearest) ? std::isinf(rendered) : std::abs(rendered - nearest) <= 1e-3 * nearest;
         differing += same ? 0 : 1;
       }

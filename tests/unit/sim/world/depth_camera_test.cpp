@@ -4,6 +4,7 @@
 // tolerances), determinism for one seed, and no reallocation of a correctly sized image.
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -71,7 +72,7 @@ Stats stats(const cv::Mat& depth_m) {
   Stats s;
   for (int v = 0; v < depth_m.rows; ++v) {
     for (int u = 0; u < depth_m.cols; ++u) {
-      const double z = depth_m.at<float>(v, u);
+      const auto z = static_cast<double>(depth_m.at<float>(v, u));
       if (z == 0.0) {
         ++s.zeros;
         continue;
@@ -107,7 +108,7 @@ TEST(DepthCameraParams, GivenOutOfRangeFieldsThenValidateFails) {
   EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.vfov_deg = std::nan(""); }));
   EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.min_range_m = -0.1; }));
   EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.min_range_m = 11.0; }));
-  EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.max_range_m = INFINITY; }));
+  EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.max_range_m = std::numeric_limits<double>::infinity(); }));
   EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.noise_coeff_per_m = -1e-3; }));
   EXPECT_TRUE(invalid([](DepthCameraParams& p) { p.dropout_probability = 1.5; }));
 }
@@ -133,7 +134,8 @@ TEST(RenderDepth, GivenAnyPoseThenEveryValueIsAWholeNumberOfMillimetresAsTheD435
   for (int v = 0; v < depth_m.rows; ++v) {
     for (int u = 0; u < depth_m.cols; ++u) {
       const float z = depth_m.at<float>(v, u);
-      ASSERT_EQ(z, depthFromZ16(depthToZ16(z))) << u << ", " << v;  // a Z16 value, read back exactly
+      ASSERT_EQ(z, depthFromZ16(depthToZ16(static_cast<double>(z))))
+          << u << ", " << v;  // a Z16 value, read back exactly
       valid += z > 0.0F ? 1 : 0;
     }
   }
@@ -334,7 +336,7 @@ TEST(RenderDepth, GivenSameSeedThenIdenticalImageAndOtherSeedDiffers) {
 
 TEST(RenderDepth, GivenCorrectlySizedImageThenNotReallocated) {
   std::mt19937_64 rng(1);
-  cv::Mat depth_m(120, 160, CV_32FC1, cv::Scalar(-1.0F));
+  cv::Mat depth_m(120, 160, CV_32FC1, cv::Scalar(-1.0));
   const uchar* data = depth_m.data;
   renderDepth(wallAt(4.0), lookAlongX({0, 0, 50}), ideal(), rng, depth_m);
   EXPECT_EQ(depth_m.data, data);
