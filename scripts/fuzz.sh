@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the fuzz tree (scripts/build.sh --tree fuzz: clang, libFuzzer, ASan + UBSan) and runs each
-# fuzz target for SECONDS on a corpus seeded from the repository's own files (tests/fuzz/README.md).
+# fuzz target for SECONDS on a corpus seeded from the repository's own files (tests/fuzz/README.md), as
+# many targets at once as there are cores.
 # A crash, a leak, undefined behaviour, a timeout (10 s on one input) or more than 2 GB of memory is a
 # failure: the input is kept in build-fuzz/crashes/ and the script exits 1. Prints one line per
 # target with its executions. With --runs N each target instead runs N inputs (the long runs of
@@ -43,21 +44,32 @@ seeds() {
 }
 
 mkdir -p build-fuzz/crashes
-failed=0
-for t in "${targets[@]}"; do
-  corpus=build-fuzz/corpus/$t
+# fuzz_one TARGET: fuzzes one target and prints its line; exits 1 if it failed.
+fuzz_one() {
+  local t=$1 corpus=build-fuzz/corpus/$1 log=$out/fuzz_$1.log status=ok runs secs
   mkdir -p "$corpus"
   seeds "$t" | xargs -r cp -t "$corpus"
-  log=$out/fuzz_$t.log
-  if "$out"/fuzz/fuzz_"$t" "$corpus" "${limit[@]}" -timeout=10 -rss_limit_mb=2048 \
-    -print_final_stats=1 -artifact_prefix=build-fuzz/crashes/"$t"- >"$log" 2>&1; then
-    status=ok
-  else
-    status=FAILED
-    failed=1
-  fi
+  "$out"/fuzz/fuzz_"$t" "$corpus" "${limit[@]}" -timeout=10 -rss_limit_mb=2048 \
+    -print_final_stats=1 -artifact_prefix=build-fuzz/crashes/"$t"- >"$log" 2>&1 || status=FAILED
   runs=$(awk '/stat::number_of_executed_units/ {print $2}' "$log")
   secs=$(awk '/^Done [0-9]+ runs in/ {print $5}' "$log")
   echo "fuzz: $t: ${runs:-?} executions in ${secs:-?} s, $status$([[ $status == ok ]] || echo " (see $log)")"
+  [[ $status == ok ]]
+}
+
+# libFuzzer runs on one core: as many targets at once as there are cores (CI's 2-core machine: 3 rounds of 2
+# instead of 6 one after the other), each line printed when its round ends.
+jobs=$(nproc)
+failed=0
+for ((i = 0; i < ${#targets[@]}; i += jobs)); do
+  pids=()
+  for t in "${targets[@]:i:jobs}"; do
+    fuzz_one "$t" >"$out/fuzz_$t.line" &
+    pids+=($!)
+  done
+  for j in "${!pids[@]}"; do
+    wait "${pids[j]}" || failed=1
+  done
+  for t in "${targets[@]:i:jobs}"; do cat "$out/fuzz_$t.line"; done
 done
 exit "$failed"
