@@ -214,6 +214,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "near_crop_sides" << YAML::Value << p.whole_frame.near_crop_sides;
     out << YAML::Key << "every_s" << YAML::Value << p.whole_frame.every_s;
     out << YAML::Key << "on_crop_lost" << YAML::Value << p.whole_frame.on_crop_lost;
+    out << YAML::Key << "beside_crop_every_s" << YAML::Value << p.whole_frame.beside_crop_every_s;
     out << YAML::EndMap;
     out << YAML::Key << "follow_estimator" << YAML::Value << p.follow_estimator;
     out << YAML::Key << "torso_min_joint_score" << YAML::Value << p.torso.min_joint_score;

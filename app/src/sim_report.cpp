@@ -183,6 +183,8 @@ nlohmann::json perceptionSummary(const perception::DetectionTask* task) {
           {"network_runs", runs},
           {"reseated_by_estimator", counts.reseated},
           {"crops_at_prediction", counts.to_prediction},
+          {"whole_frames_beside_crop", counts.beside_crop},
+          {"people_added_beside_crop", counts.beside_crop_added},
           {"frames_with_target", task->framesWithTarget()},
           {"target_ratio", task->framesDetected() > 0 ? static_cast<double>(task->framesWithTarget()) /
                                                             static_cast<double>(task->framesDetected())

@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -178,6 +179,53 @@ TEST(DetectorOnPhotos, GivenPedestrianVideo_WhenTracking_ThenTheCropStaysOnOneLo
   EXPECT_GE(locked, kFrames - 2);
   EXPECT_GE(cropped, kFrames - 3);   // the crop, not the full-frame search, does the tracking
   EXPECT_LT(largest_step_px, 25.0);  // pedestrians move a few pixels a frame: no switch to another
+}
+
+TEST(DetectorOnPhotos, GivenPedestrianVideo_WhenTheWholeFrameRunsBesideTheCrop_ThenTheOthersJoinTheCropsPerson) {
+  // vtest.avi's street with the whole frame beside the crop every 0.3 s (3 frames at 10 fps): the crop still
+  // measures the locked pedestrian, and the frames it ran beside show the other pedestrians too, never the locked
+  // one twice.
+  DetectorParams params;
+  params.model_dir = std::string(AEROTRACK_SOURCE_DIR) + "/models";
+  params.whole_frame.beside_crop_every_s = 0.3;
+  Detector detector = aerotrack::test::require(Detector::create(params), "Detector::create");
+  cv::VideoCapture video(kData + "vtest.avi");
+  ASSERT_TRUE(video.isOpened());
+  cv::Mat frame;
+  int cropped = 0;
+  std::size_t most_people_beside = 0;
+  double nearest_other_torsos = std::numeric_limits<double>::infinity();
+  constexpr int kFrames = 25;
+  for (int i = 0; i < kFrames; ++i) {
+    ASSERT_TRUE(video.read(frame));
+    const auto out = detector.track(frame, rt::secondsToNs(i / 10.0));
+    ASSERT_TRUE(out.has_value()) << out.error().message;
+    if (!out->cropped || !out->target) continue;
+    ++cropped;
+    most_people_beside = std::max(most_people_beside, out->count);
+    const TorsoFeatures& locked = out->persons[*out->target].torso;
+    for (std::size_t k = 0; k < out->count; ++k) {
+      const TorsoFeatures& t = out->persons[k].torso;
+      if (k == *out->target || !t.reliable) continue;
+      nearest_other_torsos =
+          std::min(nearest_other_torsos, std::hypot(t.u_px - locked.u_px, t.v_px - locked.v_px) / locked.torso_px);
+    }
+  }
+  const TrackCounts& counts = detector.counts();
+  std::printf(
+      "vtest, 25 frames: %llu whole frames beside the crop, %llu people added, nearest other torso %.2f torso "
+      "lengths\n",
+      static_cast<unsigned long long>(counts.beside_crop), static_cast<unsigned long long>(counts.beside_crop_added),
+      nearest_other_torsos);
+  EXPECT_GE(cropped, kFrames - 3);  // the crop still does the tracking
+  EXPECT_GE(counts.beside_crop, 5U);
+  EXPECT_LE(counts.beside_crop, 9U);                        // at most every third frame
+  EXPECT_GE(counts.beside_crop_added, counts.beside_crop);  // the street always has someone else
+  EXPECT_GE(most_people_beside, 3U);
+  EXPECT_GT(nearest_other_torsos, 0.5);  // the locked pedestrian was not added again beside themselves
+  std::uint64_t total = 0;
+  for (const std::uint64_t n : counts.runs) total += n;
+  EXPECT_EQ(total, static_cast<std::uint64_t>(kFrames));  // a frame with a whole frame beside is still one crop run
 }
 
 /// The people of a tracking result as the target task hands them back, target_index its choice.

@@ -16,6 +16,8 @@ DetectorParams parseDetectorParams(const rt::ConfigNode& node) {
   p.whole_frame.near_crop_sides = whole.getDouble("near_crop_sides", -1.0, 10.0);
   p.whole_frame.every_s = whole.getDouble("every_s", 0.0, 3600.0);
   p.whole_frame.on_crop_lost = whole.getBoolOr("on_crop_lost", p.whole_frame.on_crop_lost);
+  p.whole_frame.beside_crop_every_s =
+      whole.getDoubleOr("beside_crop_every_s", p.whole_frame.beside_crop_every_s, 0.0, 3600.0);
   whole.finish();
   p.follow_estimator = node.getBool("follow_estimator");
   p.torso.min_joint_score = node.getDouble("torso_min_joint_score", 0.0, 1.0);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace aerotrack::perception {
 
@@ -55,6 +56,8 @@ rt::Status validate(const DetectorParams& p) {
   if (!(p.whole_frame.near_crop_sides <= 10.0)) return rt::Error{"whole_frame.near_crop_sides: must be <= 10"};
   if (!(p.whole_frame.every_s >= 0.0 && p.whole_frame.every_s <= 3600.0))
     return rt::Error{"whole_frame.every_s: must be in [0, 3600]"};
+  if (!(p.whole_frame.beside_crop_every_s >= 0.0 && p.whole_frame.beside_crop_every_s <= 3600.0))
+    return rt::Error{"whole_frame.beside_crop_every_s: must be in [0, 3600]"};
   if (!(p.crop.min_side_fraction > 0.0 && p.crop.min_side_fraction <= 1.0))
     return rt::Error{"crop.min_side_fraction: must be in (0, 1]"};
   if (!(p.torso.min_joint_score >= 0.0 && p.torso.min_joint_score <= 1.0))
@@ -180,6 +183,57 @@ const char* toString(WholeFrameReason reason) {
       return "wanted";
   }
   return "?";
+}
+
+std::size_t addOthersBesideCrop(DetectorOutput& crop, const DetectorOutput& whole, double min_keypoint_score,
+                                double same_fraction) {
+  // How far apart two detections lie, in units of the taller one's box: the mean distance of the joints both are sure
+  // of, or, with fewer than three such joints, 0 for boxes overlapping by more than half of the smaller one's area.
+  const auto apart = [&](const hal::PersonDetection& a, const hal::PersonDetection& b) {
+    double sum_px = 0.0;
+    int common = 0;
+    for (std::size_t k = 0; k < hal::kNumKeypoints; ++k) {
+      const hal::Keypoint2D& ka = a.keypoints[k];
+      const hal::Keypoint2D& kb = b.keypoints[k];
+      if (!(ka.score >= min_keypoint_score && kb.score >= min_keypoint_score)) continue;
+      sum_px += std::hypot(ka.u_px - kb.u_px, ka.v_px - kb.v_px);
+      ++common;
+    }
+    constexpr int kMinCommonJoints = 3;
+    if (common >= kMinCommonJoints) return sum_px / common / std::max({a.bbox_h_px, b.bbox_h_px, 1.0});
+    const double du =
+        std::min(a.bbox_u_px + a.bbox_w_px, b.bbox_u_px + b.bbox_w_px) - std::max(a.bbox_u_px, b.bbox_u_px);
+    const double dv =
+        std::min(a.bbox_v_px + a.bbox_h_px, b.bbox_v_px + b.bbox_h_px) - std::max(a.bbox_v_px, b.bbox_v_px);
+    const double smaller = std::min(a.bbox_w_px * a.bbox_h_px, b.bbox_w_px * b.bbox_h_px);
+    const bool overlapping = du > 0.0 && dv > 0.0 && smaller > 0.0 && du * dv > 0.5 * smaller;
+    return overlapping ? 0.0 : std::numeric_limits<double>::infinity();
+  };
+  // Each of the crop's people is at most one of the whole frame's: the nearest, if near enough. The coarser whole frame
+  // places a small pedestrian's joints up to a fifth of their height off the crop's (vtest.avi); a neighbour beside
+  // them, found in the whole frame too, is not their nearest and stays.
+  std::array<bool, hal::kMaxPersons> duplicate{};
+  const std::size_t whole_count = std::min(whole.count, hal::kMaxPersons);
+  for (std::size_t c = 0; c < std::min(crop.count, hal::kMaxPersons); ++c) {
+    double nearest = std::numeric_limits<double>::infinity();
+    std::size_t nearest_w = whole_count;
+    for (std::size_t w = 0; w < whole_count; ++w) {
+      const double d = duplicate[w] ? std::numeric_limits<double>::infinity()
+                                    : apart(crop.persons[c].detection, whole.persons[w].detection);
+      if (d < nearest) {
+        nearest = d;
+        nearest_w = w;
+      }
+    }
+    if (nearest_w < whole_count && nearest <= same_fraction) duplicate[nearest_w] = true;
+  }
+  std::size_t added = 0;
+  for (std::size_t w = 0; w < whole_count && crop.count < hal::kMaxPersons; ++w) {
+    if (duplicate[w]) continue;
+    crop.persons[crop.count++] = whole.persons[w];
+    ++added;
+  }
+  return added;
 }
 
 bool someoneNearRegion(std::span<const hal::PersonDetection> persons, std::size_t target, const InputTransform& region,
@@ -310,6 +364,18 @@ rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stam
       const bool judged_by_estimator = !params_.whole_frame.on_crop_lost && estimator_live_;
       if (out->target || judged_by_estimator) {
         ++counts_.runs[static_cast<std::size_t>(WholeFrameReason::kNone)];
+        if (whole.beside_crop_every_s > 0.0 &&
+            stamp_ns - last_whole_ns_ >= rt::secondsToNs(whole.beside_crop_every_s)) {
+          // Everyone in view, beside the crop's measurement of the person (WholeFrameParams::beside_crop_every_s).
+          auto search_model = model(params_.search_model);
+          if (!search_model) return search_model.error();
+          MoveNetModel* search = search_model.value();
+          auto all = runModel(*search, bgr, letterbox(bgr.cols, bgr.rows, search->info().input_size_px));
+          if (!all) return all.error();
+          counts_.beside_crop_added += addOthersBesideCrop(*out, *all, params_.bbox_min_keypoint_score);
+          ++counts_.beside_crop;
+          last_whole_ns_ = stamp_ns;
+        }
         remember(*out);
         return out;
       }

@@ -121,6 +121,86 @@ TEST(SomeoneNearRegion, GivenPeopleAroundACrop_WhenTheMarginGrows_ThenThoseWithi
   EXPECT_TRUE(someoneNearRegion(std::span(inside), 0, crop, 0.0));
 }
 
+DetectedPerson personAt(double hip_u, double hip_v, double torso_px, double score = 0.9) {
+  DetectedPerson p;
+  p.detection.keypoints = standingPerson(hip_u, hip_v, torso_px, score);
+  // The box of the joints (nose to ankles, 3 torso lengths), as the decoders make it.
+  p.detection.bbox_u_px = hip_u - 0.3 * torso_px;
+  p.detection.bbox_v_px = hip_v - 1.4 * torso_px;
+  p.detection.bbox_w_px = 0.6 * torso_px;
+  p.detection.bbox_h_px = 3.0 * torso_px;
+  return p;
+}
+
+TEST(AddOthersBesideCrop, GivenTheCropsPersonAndTwoOthersInTheWholeFrame_WhenAdded_ThenOnlyTheOthersAreAdded) {
+  DetectorOutput crop;
+  crop.persons[0] = personAt(300.0, 250.0, 60.0);
+  crop.count = 1;
+  crop.target = 0;
+  DetectorOutput whole;
+  // The crop's person again, as the whole frame's coarser network places them (a few pixels off)...
+  whole.persons[0] = personAt(304.0, 247.0, 57.0);
+  // ... someone half hidden beside them (a shoulder's width to the side: 0.8 torso lengths), not the crop's person's
+  // nearest in the whole frame, and someone far.
+  whole.persons[1] = personAt(348.0, 252.0, 58.0);
+  whole.persons[2] = personAt(560.0, 200.0, 30.0);
+  whole.count = 3;
+  EXPECT_EQ(addOthersBesideCrop(crop, whole, 0.2), 2U);
+  ASSERT_EQ(crop.count, 3U);
+  EXPECT_EQ(crop.target, std::optional<std::size_t>(0));  // the crop's own people keep their places
+  EXPECT_DOUBLE_EQ(crop.persons[0].detection.bbox_u_px, 300.0 - 18.0);
+  EXPECT_DOUBLE_EQ(crop.persons[1].detection.keypoints[index(CocoKeypoint::kLeftHip)].u_px, 348.0 + 0.15 * 58.0);
+  EXPECT_DOUBLE_EQ(crop.persons[2].detection.keypoints[index(CocoKeypoint::kLeftHip)].u_px, 560.0 + 0.15 * 30.0);
+}
+
+TEST(AddOthersBesideCrop, GivenTheWholeFrameMissedTheCropsPerson_WhenAdded_ThenOnlySomeoneAtTheirPlaceIsTakenForThem) {
+  DetectorOutput crop;
+  crop.persons[0] = personAt(300.0, 250.0, 60.0);
+  crop.count = 1;
+  // Someone a shoulder's width aside (0.27 box heights) is nearest and near enough: taken for the crop's person, whom
+  // the coarser whole frame may place that far off. Someone 1.2 torso lengths aside (0.4 box heights) is not.
+  DetectorOutput beside;
+  beside.persons[0] = personAt(348.0, 250.0, 60.0);
+  beside.count = 1;
+  EXPECT_EQ(addOthersBesideCrop(crop, beside, 0.2), 0U);
+  DetectorOutput farther;
+  farther.persons[0] = personAt(372.0, 250.0, 60.0);
+  farther.count = 1;
+  EXPECT_EQ(addOthersBesideCrop(crop, farther, 0.2), 1U);
+  EXPECT_EQ(crop.count, 2U);
+}
+
+TEST(AddOthersBesideCrop, GivenJointsTooUnsureToCompare_WhenAdded_ThenTheBoxesOverlapDecides) {
+  DetectorOutput crop;
+  crop.persons[0] = personAt(300.0, 250.0, 60.0);
+  crop.count = 1;
+  DetectorOutput whole;
+  whole.persons[0] = personAt(302.0, 251.0, 60.0, /*score=*/0.1);  // the same box, no sure joint
+  whole.persons[1] = personAt(330.0, 250.0, 60.0, /*score=*/0.1);  // a box overlapping it by 17 %
+  whole.count = 2;
+  EXPECT_EQ(addOthersBesideCrop(crop, whole, 0.2), 1U);
+  ASSERT_EQ(crop.count, 2U);
+  EXPECT_DOUBLE_EQ(crop.persons[1].detection.bbox_u_px, 330.0 - 18.0);
+}
+
+TEST(AddOthersBesideCrop, GivenMoreThanAFrameHolds_WhenAdded_ThenItStopsAtTheMostPersons) {
+  DetectorOutput crop;
+  crop.persons[0] = personAt(40.0, 250.0, 20.0);
+  crop.count = 1;
+  DetectorOutput whole;
+  for (std::size_t i = 0; i < hal::kMaxPersons; ++i)
+    whole.persons[i] = personAt(100.0 + 80.0 * static_cast<double>(i), 250.0, 20.0);
+  whole.count = hal::kMaxPersons;
+  EXPECT_EQ(addOthersBesideCrop(crop, whole, 0.2), hal::kMaxPersons - 1);
+  EXPECT_EQ(crop.count, hal::kMaxPersons);
+  // An empty whole frame adds nobody.
+  DetectorOutput alone;
+  alone.persons[0] = crop.persons[0];
+  alone.count = 1;
+  EXPECT_EQ(addOthersBesideCrop(alone, DetectorOutput{}, 0.2), 0U);
+  EXPECT_EQ(alone.count, 1U);
+}
+
 TEST(TorsoFeatures, GivenAConfidentTorso_WhenMeasured_ThenLengthAndCentreComeFromNeckAndMidHip) {
   const Keypoints k = standingPerson(300.0, 250.0, 80.0, 0.9);
   const TorsoFeatures f = torsoFeatures(k, 640, 480, TorsoFeatureParams{});

@@ -53,6 +53,12 @@ struct WholeFrameParams {
   /// whole frame shows everyone the estimator might take for the person: after an occlusion, a look-alike beside the
   /// hidden person (traced: image-mode crowd seed 41). Measured level in the image-mode crowd (docs/benchmarks.md).
   bool on_crop_lost = true;
+  /// Locked, the crop published: at least this often the search model also runs on the whole frame, and the people
+  /// it shows other than the crop's are added to the crop's frame (0: never). The followed person keeps the crop's
+  /// measurement (a whole frame replacing the crop measured them small, or not at all, and a bystander near their
+  /// prediction was taken: every_s, docs/benchmarks.md), while a newcomer -- a look-alike walking up to the person --
+  /// is seen, and tracked as someone else, before they reach the crop (issue 22, item 2). One more inference each time.
+  double beside_crop_every_s = 0.0;
 };
 
 struct DetectorParams {
@@ -110,7 +116,9 @@ const char* toString(WholeFrameReason reason);
 struct TrackCounts {
   std::array<std::uint64_t, kWholeFrameReasons> runs{};  ///< By WholeFrameReason (kNone: the crop alone).
   std::uint64_t reseated = 0;                            ///< Verdicts that moved the lock to another person.
-  std::uint64_t to_prediction = 0;  ///< Verdicts that took nobody and moved the crop to the track's prediction.
+  std::uint64_t to_prediction = 0;      ///< Verdicts that took nobody and moved the crop to the track's prediction.
+  std::uint64_t beside_crop = 0;        ///< Whole frames run beside a crop (WholeFrameParams::beside_crop_every_s)...
+  std::uint64_t beside_crop_added = 0;  ///< ... and the people they added to the crop's frames.
 };
 
 class Detector {
@@ -175,6 +183,14 @@ class Detector {
 
 /// Whether a person other than persons[target] has a box within margin_sides x the region's side of the
 /// region (the crop around the target). Pure.
+/// Adds to `crop` (a crop's result) the people of `whole` (the same image's whole-frame result) who are not the
+/// crop's. Each of the crop's people is the whole frame's person nearest to them -- the mean distance of the joints
+/// both score above min_keypoint_score (at least three), in units of the taller box's height; with fewer common joints,
+/// a box overlapping theirs by more than half of the smaller one's area -- if within same_fraction. Returns how many
+/// were added (at most hal::kMaxPersons in all).
+std::size_t addOthersBesideCrop(DetectorOutput& crop, const DetectorOutput& whole, double min_keypoint_score,
+                                double same_fraction = 0.3);
+
 bool someoneNearRegion(std::span<const hal::PersonDetection> persons, std::size_t target, const InputTransform& region,
                        double margin_sides);
 
