@@ -367,10 +367,7 @@ rt::Expected<DetectorOutput> Detector::track(const cv::Mat& bgr, rt::TimeNs stam
         if (whole.beside_crop_every_s > 0.0 &&
             stamp_ns - last_whole_ns_ >= rt::secondsToNs(whole.beside_crop_every_s)) {
           // Everyone in view, beside the crop's measurement of the person (WholeFrameParams::beside_crop_every_s).
-          auto search_model = model(params_.search_model);
-          if (!search_model) return search_model.error();
-          MoveNetModel* search = search_model.value();
-          auto all = runModel(*search, bgr, letterbox(bgr.cols, bgr.rows, search->info().input_size_px));
+          auto all = detectFrame(bgr, params_.search_model);
           if (!all) return all.error();
           counts_.beside_crop_added += addOthersBesideCrop(*out, *all, params_.bbox_min_keypoint_score);
           ++counts_.beside_crop;

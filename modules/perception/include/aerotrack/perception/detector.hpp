@@ -181,8 +181,6 @@ class Detector {
   TrackCounts counts_;
 };
 
-/// Whether a person other than persons[target] has a box within margin_sides x the region's side of the
-/// region (the crop around the target). Pure.
 /// Adds to `crop` (a crop's result) the people of `whole` (the same image's whole-frame result) who are not the
 /// crop's. Each of the crop's people is the whole frame's person nearest to them -- the mean distance of the joints
 /// both score above min_keypoint_score (at least three), in units of the taller box's height; with fewer common joints,
@@ -191,6 +189,8 @@ class Detector {
 std::size_t addOthersBesideCrop(DetectorOutput& crop, const DetectorOutput& whole, double min_keypoint_score,
                                 double same_fraction = 0.3);
 
+/// Whether a person other than persons[target] has a box within margin_sides x the region's side of the
+/// region (the crop around the target). Pure.
 bool someoneNearRegion(std::span<const hal::PersonDetection> persons, std::size_t target, const InputTransform& region,
                        double margin_sides);
 
