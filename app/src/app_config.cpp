@@ -286,6 +286,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "range_std_per_m2" << YAML::Value << r.range_std_per_m2;
     out << YAML::Key << "cross_std_per_m" << YAML::Value << r.cross_std_per_m;
     out << YAML::Key << "person_speed_mps" << YAML::Value << r.person_speed_mps;
+    out << YAML::Key << "scale_rate" << YAML::Value << r.scale_rate;
     out << YAML::EndMap;
     out << YAML::Key << "estimator" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "accel_psd_xy_m2ps3" << YAML::Value << k.accel_psd_xy_m2ps3;

@@ -45,6 +45,8 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
       {"depth_ranged", s.depth_ranged}, {"depth_disagreed", s.depth_disagreed},
       {"depth_unseen", s.depth_unseen},
   };
+  out["scale_samples"] = s.scale_samples;
+  out["range_scale"] = s.range_scale;
   out["in_front"] = s.in_front;
   out["behind_bystander"] = s.behind_bystander;
   out["seen_through"] = s.seen_through;

@@ -9,11 +9,11 @@
 namespace aerotrack::estimation {
 
 rt::Status validate(const DepthRangeParams& p) {
-  const bool finite = std::isfinite(p.body_offset_m) && std::isfinite(p.step_m) &&
-                      std::isfinite(p.surface_tolerance_m) && std::isfinite(p.min_range_m) &&
-                      std::isfinite(p.max_range_m) && std::isfinite(p.max_ratio) && std::isfinite(p.max_offset_s) &&
-                      std::isfinite(p.range_std_m) && std::isfinite(p.range_std_per_m2) &&
-                      std::isfinite(p.cross_std_per_m) && std::isfinite(p.person_speed_mps);
+  const bool finite =
+      std::isfinite(p.body_offset_m) && std::isfinite(p.step_m) && std::isfinite(p.surface_tolerance_m) &&
+      std::isfinite(p.min_range_m) && std::isfinite(p.max_range_m) && std::isfinite(p.max_ratio) &&
+      std::isfinite(p.max_offset_s) && std::isfinite(p.range_std_m) && std::isfinite(p.range_std_per_m2) &&
+      std::isfinite(p.cross_std_per_m) && std::isfinite(p.person_speed_mps) && std::isfinite(p.scale_rate);
   if (!finite) return rt::Error{"depth range: every parameter must be finite"};
   if (!(p.step_m > 0.0) || !(p.step_m <= p.surface_tolerance_m))
     return rt::Error{"depth range: need 0 < step_m <= surface_tolerance_m (a step must not jump over a surface)"};
@@ -23,6 +23,7 @@ rt::Status validate(const DepthRangeParams& p) {
   if (p.body_offset_m < 0.0 || p.max_offset_s < 0.0 || p.range_std_m < 0.0 || p.range_std_per_m2 < 0.0 ||
       p.cross_std_per_m < 0.0 || p.person_speed_mps < 0.0)
     return rt::Error{"depth range: offsets and noises must be >= 0"};
+  if (!(p.scale_rate >= 0.0 && p.scale_rate <= 1.0)) return rt::Error{"depth range: need 0 <= scale_rate <= 1"};
   return rt::ok();
 }
 
@@ -42,6 +43,8 @@ DepthRangeParams parseDepthRangeParams(const rt::ConfigNode& node) {
   p.range_std_per_m2 = node.getDouble("range_std_per_m2", 0.0, 1.0);
   p.cross_std_per_m = node.getDouble("cross_std_per_m", 0.0, 1.0);
   p.person_speed_mps = node.getDouble("person_speed_mps", 0.0, 20.0);
+  // Optional (absent: off), so that a dataset recorded before it replays with its own configuration.
+  if (node.has("scale_rate")) p.scale_rate = node.getDouble("scale_rate", 0.0, 1.0);
   node.finish();
   return p;
 }

@@ -81,8 +81,12 @@ TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory pose
       swap_check_(std::move(swap_check)) {}
 
 Eigen::Vector3d TargetTask::localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
-                                     Eigen::Vector3d& p_C_m) const {
+                                     Eigen::Vector3d& p_C_m, double& regression_range_m) const {
   p_C_m = localization::predict(params_.localization, torso.torso_px, torso.u_px);
+  regression_range_m = p_C_m.head<2>().norm();
+  // The person's own scale along the line of sight (1 until the depth camera has ranged them); the height is the
+  // regression's, as a ranged measurement's is.
+  p_C_m.head<2>() *= stats_.range_scale;
   // The regression was fitted on a level camera: read its output in the level frame.
   return cameraToWorld(p_C_m, T_WC, CameraFrame::kLevel);
 }
@@ -120,12 +124,19 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
   c.torso = perception::remeasured(c.torso, level);
   if (c.torso.reliable) {
     Eigen::Vector3d p_C_m;
-    const Eigen::Vector3d p_WT_m = localize(c.torso, *T_WC, p_C_m);
+    const Eigen::Vector3d p_WT_m = localize(c.torso, *T_WC, p_C_m, c.regression_range_m);
     if (p_WT_m.allFinite()) {
       c.measurement.emplace();
       c.measurement->stamp_ns = frame.stamp_ns;
       c.measurement->p_WT_m = p_WT_m;
       c.measurement->std_xy_m = measurementStdM(p_C_m);
+      if (stats_.range_scale != 1.0) {  // as someone else: the fit's own scale
+        Eigen::Vector3d p_C_fit_m = p_C_m;
+        p_C_fit_m.head<2>() /= stats_.range_scale;
+        c.unscaled = *c.measurement;
+        c.unscaled->p_WT_m = cameraToWorld(p_C_fit_m, *T_WC, CameraFrame::kLevel);
+        c.unscaled->std_xy_m = measurementStdM(p_C_fit_m);
+      }
     }
   } else if (params_.bearing_fallback) {
     c.measurement = bearingMeasurement(frame, c.torso, *T_WC);
@@ -197,6 +208,7 @@ void TargetTask::rangeByDepth(const hal::DetectionFrame& frame, const Eigen::Vec
   m.p_WT_m.head<2>() = p_xy;  // the height stays the regression's (the estimator's z is its ground level)
   m.bearing_W = line_W;
   m.ranged = true;
+  c.depth_range_m = depth_range_m;
   m.range_std_m = std::hypot(depthRangeStdM(surface.range_m, p), moved_m);
   m.std_xy_m = std::hypot(std::max(params_.min_measurement_std_m, p.cross_std_per_m * depth_range_m), moved_m);
 }
@@ -268,7 +280,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     const std::optional<double> to_followed = appearance_to(reference_);
     for (std::size_t j = 0; j < bystanders_.capacity() && !bearing; ++j) {
       if (!competes(j)) continue;
-      const std::optional<TargetEstimator::Fit> fit_j = bystanders_.fit(j, c.judged());
+      const std::optional<TargetEstimator::Fit> fit_j = bystanders_.fit(j, c.judgedAsOther());
       if (!fit_j || !(fit_j->d2 <= gate)) continue;  // outside the gate: no colour to compare (a free slot too)
       std::optional<double> appearance = appearance_to(bystanders_.look(j));
       // Lost: only competing tracks reach here (competes), and place decides between them and the followed track.
@@ -304,7 +316,8 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if ((!prior.lost || params_.look_gate_after_loss) && !looksLikeTheFollowed(c.look, frame.stamp_ns)) {
       a.look_refused = true;
       if (!bearing) a.look_refused_d2 = std::min(a.look_refused_d2, d2);
-      if (!bearing && !prior.lost && params_.look_refused_off_tracks && fitsFollowedBest(i, d2, c.judged(), costs)) {
+      if (!bearing && !prior.lost && params_.look_refused_off_tracks &&
+          fitsFollowedBest(i, d2, c.judgedAsOther(), costs)) {
         for (std::size_t j = 0; j < bystanders_.capacity(); ++j)
           costs.set(static_cast<std::size_t>(i), 1 + j, AssignmentCosts::kNotAllowed);
         kept_off[static_cast<std::size_t>(i)] = true;
@@ -345,7 +358,8 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     bool explains_bystander = false;
     for (std::size_t j = 0; j < bystanders_.capacity() && !explains_bystander; ++j) {
       if (track_taken[j] || !competes(j)) continue;
-      const std::optional<double> d2 = bystanders_.mahalanobisSq(j, candidates[static_cast<std::size_t>(i)].judged());
+      const std::optional<double> d2 =
+          bystanders_.mahalanobisSq(j, candidates[static_cast<std::size_t>(i)].judgedAsOther());
       explains_bystander = d2 && *d2 <= bearing_d2[static_cast<std::size_t>(i)];
     }
     if (explains_bystander) continue;
@@ -503,7 +517,7 @@ void TargetTask::trackTheRefusedAlone(const std::array<Candidate, hal::kMaxPerso
     if (!a.refused_alone[k]) continue;
     const int i = static_cast<int>(k);
     if (first < 0) first = i;
-    if (continuing < 0 && refused_alone_streak_ > 0 && withinReach(candidates[k].judged(), refused_alone_last_))
+    if (continuing < 0 && refused_alone_streak_ > 0 && withinReach(candidates[k].judgedAsOther(), refused_alone_last_))
       continuing = i;
   }
   if (first < 0) {
@@ -512,7 +526,7 @@ void TargetTask::trackTheRefusedAlone(const std::array<Candidate, hal::kMaxPerso
   }
   const int person = continuing >= 0 ? continuing : first;
   refused_alone_streak_ = continuing >= 0 ? refused_alone_streak_ + 1 : 1;
-  refused_alone_last_ = candidates[static_cast<std::size_t>(person)].judged();
+  refused_alone_last_ = candidates[static_cast<std::size_t>(person)].judgedAsOther();
   if (refused_alone_streak_ < params_.refused_alone_frames) return;
   a.track[static_cast<std::size_t>(person)] = kNewTrack;
   ++stats_.refused_alone_tracks;
@@ -565,6 +579,9 @@ bool TargetTask::process(const Candidate& c) {
     // Not seen by the depth camera (in_front_streak_spans_unseen): no word on the track's distance either way.
     const bool unseen = verdict == MeasurementVerdict::kAccepted && !was_lost && !ranged && !c.depth_disagreed &&
                         c.depth != DepthRangeStatus::kFound;
+    // The person's scale from every frame of theirs the depth camera ranged, whichever form the track took: a scale
+    // far from 1 leaves the ranged form beyond the gate until it is learnt.
+    if (verdict == MeasurementVerdict::kAccepted && !was_lost && ranged && c.torso.reliable) learnScale(c);
     if (agreed)
       ++ranged_streak_;
     else if (!(unseen && params_.in_front_streak_spans_unseen))
@@ -585,6 +602,20 @@ bool TargetTask::process(const Candidate& c) {
   }
   ++stats_.rejected;
   return false;
+}
+
+void TargetTask::learnScale(const Candidate& c) {
+  const DepthRangeParams& p = params_.depth_range;
+  if (!(p.scale_rate > 0.0) || !(c.regression_range_m > 0.0) || !(c.depth_range_m > 0.0)) return;
+  // The mean in log: a factor and its inverse weigh alike. The first frames are averaged (rate 1/n), so the first
+  // ranged frame does not set the scale alone; then the rate forgets, as the regression's error changes with the
+  // distance (its fit's terms in 1/torso^2 weigh more far away).
+  ++stats_.scale_samples;
+  const double rate = std::max(p.scale_rate, 1.0 / static_cast<double>(stats_.scale_samples));
+  const double bound = std::log(p.max_ratio);
+  log_range_scale_ += rate * (std::log(c.depth_range_m / c.regression_range_m) - log_range_scale_);
+  log_range_scale_ = std::clamp(log_range_scale_, -bound, bound);
+  stats_.range_scale = std::exp(log_range_scale_);
 }
 
 bool TargetTask::looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const {
@@ -726,7 +757,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     }
     for (std::size_t i = 0; i < a.track.size(); ++i) {
       if (a.track[i] == kNoTrack) continue;
-      const TargetMeasurement& m = *candidates[i].measurement;
+      const TargetMeasurement& m = candidates[i].givenAsOther();
       // Someone refused alone over frames (refused_alone_frames: only they are on a track and refused alone) is
       // someone else.
       const bool with_followed = followed_measured || a.refused_alone[i];

@@ -259,6 +259,19 @@ TEST(AppConfig, GivenTheSimConfig_ThenEveryPhotoHasADepthImageWithinTheOffset) {
   EXPECT_GE(c->estimation->task.depth_range.max_offset_s, 1.0 / hal::sim::DepthCameraSpec{}.rate_hz);
 }
 
+TEST(AppConfig, GivenTheDepthScaleRate_ThenItIsReadCheckedAndWrittenBack) {
+  const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.depth_range.scale_rate", "0.25"}});
+  ASSERT_TRUE(c) << c.error().message;
+  ASSERT_TRUE(c->estimation);
+  EXPECT_EQ(c->estimation->task.depth_range.scale_rate, 0.25);
+  EXPECT_NE(toYaml(*c).find("scale_rate: 0.25"), std::string::npos);
+  for (const char* bad_value : {"-0.1", "1.5", "fast"}) {
+    const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.depth_range.scale_rate", bad_value}});
+    ASSERT_FALSE(bad) << bad_value;
+    EXPECT_NE(bad.error().message.find("estimation.depth_range.scale_rate"), std::string::npos) << bad.error().message;
+  }
+}
+
 TEST(AppConfig, GivenInFrontTest_ThenItIsReadCheckedAndWrittenBack) {
   const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_test", "nearer"}});
   ASSERT_TRUE(c) << c.error().message;

@@ -119,6 +119,11 @@ TEST(DepthRange, GivenBadParamsThenValidateSaysWhich) {
   p = params();
   p.range_std_m = std::numeric_limits<double>::infinity();
   EXPECT_FALSE(validate(p).has_value());
+  p = params();
+  p.scale_rate = 1.5;  // a rate above 1 overshoots the ratio it learns from
+  EXPECT_FALSE(validate(p).has_value());
+  p.scale_rate = -0.1;
+  EXPECT_FALSE(validate(p).has_value());
 }
 
 }  // namespace

@@ -39,12 +39,24 @@ struct DepthRangeParams {
   double range_std_per_m2 = 0.0015;  ///< ... and the stereo noise k z^2 added to it (in quadrature).
   double cross_std_per_m = 0.01;     ///< Across the line of sight: the keypoints' scatter, per metre of range.
   double person_speed_mps = 1.5;     ///< How fast they may have moved between depth image and photo (noise).
+  /// > 0: the followed person's own scale, learnt from the depth camera. Each of the live followed track's frames
+  /// that the depth camera ranged (the range or, too sharp for the gate, the regression's taken) gives the ratio of
+  /// that range to the regression's; their running mean in log (the first samples averaged, then this rate per
+  /// frame) scales every regression distance after, where the depth camera does not see the person -- as the
+  /// followed person's: the bystander tracks keep the fit's own scale. The regression places a person whose torso
+  /// is longer or shorter than its fit's average too near or too far by a factor that no filter averages away;
+  /// unscaled, 0.5 s out of the depth camera's view fed the track distances 0.3-0.5 m short at 3.4-4.7 m, its
+  /// speed fell from 1.0 to 0.3 m/s, and the person's own depth ranges, now beyond the gate, were refused as
+  /// someone in front (traced: image-mode crowd seed 1 at 21.8-23.2 s, docs/benchmarks.md). Within
+  /// [1/max_ratio, max_ratio]. 0: off.
+  double scale_rate = 0.0;
 };
 
 /// Ok if every field is finite and in range (0 < step <= tolerance, 0 <= min < max, ratio >= 1, stds >= 0).
 rt::Status validate(const DepthRangeParams& params);
 
-/// Reads the `depth_range:` section of `estimation:` (every key required). Throws rt::ConfigError naming the key.
+/// Reads the `depth_range:` section of `estimation:` (every key required but scale_rate, absent: 0). Throws
+/// rt::ConfigError naming the key.
 DepthRangeParams parseDepthRangeParams(const rt::ConfigNode& node);
 
 enum class DepthRangeStatus : std::uint8_t {

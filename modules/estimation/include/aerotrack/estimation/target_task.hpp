@@ -209,6 +209,8 @@ struct TargetTaskStats {
   std::uint64_t depth_ranged = 0;           ///< ... of the followed person's frames, ranged by the depth camera.
   std::uint64_t depth_disagreed = 0;        ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;           ///< ... for which no depth image near in time saw them (out of view).
+  std::uint64_t scale_samples = 0;          ///< Frames the person's scale was learnt from (depth_range.scale_rate).
+  double range_scale = 1.0;                 ///< ... and the scale the regression's distances are multiplied by now.
 };
 
 class TargetTask final : public rt::Task {
@@ -248,6 +250,19 @@ class TargetTask final : public rt::Task {
     /// on it, so the depth camera changes how well the followed person is placed, never who is followed.
     std::optional<TargetMeasurement> unranged;
     const TargetMeasurement& judged() const { return unranged ? *unranged : *measurement; }
+    /// The regression's own horizontal range, before the person's scale (depth_range.scale_rate); 0: none.
+    double regression_range_m = 0.0;
+    /// The regression's measurement at its fit's own scale, where the person's scale changed it: the scale is the
+    /// followed person's, and whether someone is a bystander is judged, and their track kept, without it.
+    std::optional<TargetMeasurement> unscaled;
+    /// The measurement as a bystander track's gate judges it.
+    const TargetMeasurement& judgedAsOther() const { return unscaled ? *unscaled : judged(); }
+    /// ... and as their track is given it: a depth range as it is (the depth camera's, whoever they are).
+    const TargetMeasurement& givenAsOther() const {
+      return measurement->ranged || !unscaled ? *measurement : *unscaled;
+    }
+    /// The depth camera's horizontal range of them (measurement ranged); 0: none.
+    double depth_range_m = 0.0;
   };
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
   /// (the capture time's pose; unknown: no measurement).
@@ -287,9 +302,12 @@ class TargetTask final : public rt::Task {
   /// Gives the candidate to the estimator; true if it took a distance.
   bool process(const Candidate& candidate);
   /// The person's position in W from their (levelled) torso: the regression, read in the level camera frame
-  /// of the camera at T_WC; and the camera-frame point.
+  /// of the camera at T_WC, its horizontal range scaled by the person's (depth_range.scale_rate); the
+  /// camera-frame point (scaled), and the regression's own horizontal range before the scale.
   Eigen::Vector3d localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
-                           Eigen::Vector3d& p_C_m) const;
+                           Eigen::Vector3d& p_C_m, double& regression_range_m) const;
+  /// Learns the person's scale from a frame whose depth range the followed track took (depth_range.scale_rate).
+  void learnScale(const Candidate& c);
   double measurementStdM(const Eigen::Vector3d& p_C_m) const;
   /// Where the live track predicts the person's torso in the frame's image (nothing: lost, no pose, out of view).
   hal::DetectionFrame::PredictedTorso predictedTorso(const hal::DetectionFrame& frame) const;
@@ -338,6 +356,7 @@ class TargetTask final : public rt::Task {
   /// between, plus three standard deviations of the two measurements' difference.
   bool withinReach(const TargetMeasurement& m, const TargetMeasurement& before) const;
   int ranged_streak_ = 0;  ///< The followed track's last accepted measurements in a row that were ranged as they were.
+  double log_range_scale_ = 0.0;  ///< The person's scale (depth_range.scale_rate), in log; stats_ holds the count.
   /// Whether a colour is as near the learnt one as the followed person's own frames are (look_gate_sigmas).
   bool looksLikeTheFollowed(const perception::Appearance& look, rt::TimeNs stamp_ns) const;
   rt::TimeNs look_refused_since_ns_ = -1;  ///< First frame of the look gate's current run of refusals; -1: none.
