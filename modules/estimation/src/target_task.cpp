@@ -81,12 +81,8 @@ TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory pose
       swap_check_(std::move(swap_check)) {}
 
 Eigen::Vector3d TargetTask::localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
-                                     Eigen::Vector3d& p_C_m, double& regression_range_m) const {
+                                     Eigen::Vector3d& p_C_m) const {
   p_C_m = localization::predict(params_.localization, torso.torso_px, torso.u_px);
-  regression_range_m = p_C_m.head<2>().norm();
-  // The person's own scale along the line of sight (1 until the depth camera has ranged them); the height is the
-  // regression's, as a ranged measurement's is.
-  p_C_m.head<2>() *= stats_.range_scale;
   // The regression was fitted on a level camera: read its output in the level frame.
   return cameraToWorld(p_C_m, T_WC, CameraFrame::kLevel);
 }
@@ -124,18 +120,20 @@ TargetTask::Candidate TargetTask::candidate(const hal::DetectionFrame& frame, in
   c.torso = perception::remeasured(c.torso, level);
   if (c.torso.reliable) {
     Eigen::Vector3d p_C_m;
-    const Eigen::Vector3d p_WT_m = localize(c.torso, *T_WC, p_C_m, c.regression_range_m);
+    const Eigen::Vector3d p_WT_m = localize(c.torso, *T_WC, p_C_m);
     if (p_WT_m.allFinite()) {
       c.measurement.emplace();
       c.measurement->stamp_ns = frame.stamp_ns;
       c.measurement->p_WT_m = p_WT_m;
       c.measurement->std_xy_m = measurementStdM(p_C_m);
-      if (stats_.range_scale != 1.0) {  // as someone else: the fit's own scale
-        Eigen::Vector3d p_C_fit_m = p_C_m;
-        p_C_fit_m.head<2>() /= stats_.range_scale;
+      c.regression_range_m = p_C_m.head<2>().norm();
+      if (stats_.range_scale != 1.0) {
+        // As the followed person: their own scale along the line of sight (depth_range.scale_rate), the height the
+        // regression's as a ranged measurement's is. As someone else: the fit's, kept in `unscaled`.
         c.unscaled = *c.measurement;
-        c.unscaled->p_WT_m = cameraToWorld(p_C_fit_m, *T_WC, CameraFrame::kLevel);
-        c.unscaled->std_xy_m = measurementStdM(p_C_fit_m);
+        p_C_m.head<2>() *= stats_.range_scale;
+        c.measurement->p_WT_m = cameraToWorld(p_C_m, *T_WC, CameraFrame::kLevel);
+        c.measurement->std_xy_m = measurementStdM(p_C_m);
       }
     }
   } else if (params_.bearing_fallback) {

@@ -252,6 +252,8 @@ class TargetTask final : public rt::Task {
     const TargetMeasurement& judged() const { return unranged ? *unranged : *measurement; }
     /// The regression's own horizontal range, before the person's scale (depth_range.scale_rate); 0: none.
     double regression_range_m = 0.0;
+    /// The depth camera's horizontal range of them (measurement ranged); 0: none.
+    double depth_range_m = 0.0;
     /// The regression's measurement at its fit's own scale, where the person's scale changed it: the scale is the
     /// followed person's, and whether someone is a bystander is judged, and their track kept, without it.
     std::optional<TargetMeasurement> unscaled;
@@ -261,8 +263,6 @@ class TargetTask final : public rt::Task {
     const TargetMeasurement& givenAsOther() const {
       return measurement->ranged || !unscaled ? *measurement : *unscaled;
     }
-    /// The depth camera's horizontal range of them (measurement ranged); 0: none.
-    double depth_range_m = 0.0;
   };
   /// Person `index` of the frame, its torso measured in the level camera's image of the camera at T_WC
   /// (the capture time's pose; unknown: no measurement).
@@ -302,11 +302,11 @@ class TargetTask final : public rt::Task {
   /// Gives the candidate to the estimator; true if it took a distance.
   bool process(const Candidate& candidate);
   /// The person's position in W from their (levelled) torso: the regression, read in the level camera frame
-  /// of the camera at T_WC, its horizontal range scaled by the person's (depth_range.scale_rate); the
-  /// camera-frame point (scaled), and the regression's own horizontal range before the scale.
+  /// of the camera at T_WC; and the camera-frame point.
   Eigen::Vector3d localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
-                           Eigen::Vector3d& p_C_m, double& regression_range_m) const;
-  /// Learns the person's scale from a frame whose depth range the followed track took (depth_range.scale_rate).
+                           Eigen::Vector3d& p_C_m) const;
+  /// Learns the person's scale from a frame the followed track took and the depth camera ranged
+  /// (depth_range.scale_rate).
   void learnScale(const Candidate& c);
   double measurementStdM(const Eigen::Vector3d& p_C_m) const;
   /// Where the live track predicts the person's torso in the frame's image (nothing: lost, no pose, out of view).
