@@ -253,6 +253,7 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "association" << YAML::Value << (e.task.choose_by_estimate ? "estimate" : "lock_on");
     out << YAML::Key << "in_front_after_ranged" << YAML::Value << e.task.in_front_after_ranged;
     out << YAML::Key << "in_front_streak_spans_unseen" << YAML::Value << e.task.in_front_streak_spans_unseen;
+    out << YAML::Key << "in_front_unseen_limit" << YAML::Value << e.task.in_front_unseen_limit;
     out << YAML::Key << "in_front_gate_chi2" << YAML::Value << e.task.in_front_gate_chi2;
     out << YAML::Key << "in_front_test" << YAML::Value
         << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");

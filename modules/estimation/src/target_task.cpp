@@ -22,6 +22,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.in_front_after_ranged = node.getIntOr("in_front_after_ranged", params.in_front_after_ranged, 0, 1000);
   params.in_front_streak_spans_unseen =
       node.getBoolOr("in_front_streak_spans_unseen", params.in_front_streak_spans_unseen);
+  params.in_front_unseen_limit = node.getIntOr("in_front_unseen_limit", params.in_front_unseen_limit, 0, 1000);
   params.in_front_gate_chi2 = node.getDoubleOr("in_front_gate_chi2", params.in_front_gate_chi2, 0.0, 1000.0);
   params.in_front_doubtful_starts_track =
       node.getBoolOr("in_front_doubtful_starts_track", params.in_front_doubtful_starts_track);
@@ -580,10 +581,17 @@ bool TargetTask::process(const Candidate& c) {
     // The person's scale from every frame of theirs the depth camera ranged, whichever form the track took: a scale
     // far from 1 leaves the ranged form beyond the gate until it is learnt.
     if (verdict == MeasurementVerdict::kAccepted && !was_lost && ranged && c.torso.reliable) learnScale(c);
-    if (agreed)
+    if (agreed) {
       ++ranged_streak_;
-    else if (!(unseen && params_.in_front_streak_spans_unseen))
+      unseen_run_ = 0;
+    } else if (unseen && params_.in_front_streak_spans_unseen) {
+      // The regression alone has carried the track since its last range: past the limit its distance is the
+      // regression's, whose bias the person's own ranged frames would then show as someone else.
+      if (++unseen_run_ > params_.in_front_unseen_limit && params_.in_front_unseen_limit > 0) ranged_streak_ = 0;
+    } else {
       ranged_streak_ = 0;
+      unseen_run_ = 0;
+    }
     if (!c.torso.reliable) return true;  // a cut-off person's colour is not their whole torso's: not learnt
     // The colour of whom the track follows, learnt slowly from the first lock on; kept through restarts
     // (a restart is a re-identification of the same person, or the lock-on's choice after a long loss).

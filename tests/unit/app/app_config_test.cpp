@@ -285,15 +285,19 @@ TEST(AppConfig, GivenInFrontTest_ThenItIsReadCheckedAndWrittenBack) {
 
 TEST(AppConfig, GivenTheInFrontStreakAndBound_ThenTheyAreReadCheckedAndWrittenBack) {
   const auto c = loadAppConfig(kConfigDir + "/sim.yaml", {{"estimation.in_front_streak_spans_unseen", "true"},
-                                                          {"estimation.in_front_gate_chi2", "5.5"}});
+                                                          {"estimation.in_front_gate_chi2", "5.5"},
+                                                          {"estimation.in_front_unseen_limit", "4"}});
   ASSERT_TRUE(c) << c.error().message;
   ASSERT_TRUE(c->estimation);
   EXPECT_TRUE(c->estimation->task.in_front_streak_spans_unseen);
   EXPECT_DOUBLE_EQ(c->estimation->task.in_front_gate_chi2, 5.5);
+  EXPECT_EQ(c->estimation->task.in_front_unseen_limit, 4);
   EXPECT_NE(toYaml(*c).find("in_front_streak_spans_unseen: true"), std::string::npos);
   EXPECT_NE(toYaml(*c).find("in_front_gate_chi2: 5.5"), std::string::npos);
+  EXPECT_NE(toYaml(*c).find("in_front_unseen_limit: 4"), std::string::npos);
   for (const auto& [key, bad_value] :
        {std::pair{"estimation.in_front_streak_spans_unseen", "sometimes"},
+        std::pair{"estimation.in_front_unseen_limit", "-1"}, std::pair{"estimation.in_front_unseen_limit", "2.5"},
         std::pair{"estimation.in_front_gate_chi2", "-1"}, std::pair{"estimation.in_front_gate_chi2", "tight"}}) {
     const auto bad = loadAppConfig(kConfigDir + "/sim.yaml", {{key, bad_value}});
     ASSERT_FALSE(bad) << key << " " << bad_value;

@@ -51,9 +51,11 @@ struct DepthGap {
   double to_s = 0.0;
 };
 
-Scene run(int in_front_after_ranged, double crossing_s, DepthGap gap = {}, bool spans_unseen = false) {
+Scene run(int in_front_after_ranged, double crossing_s, DepthGap gap = {}, bool spans_unseen = false,
+          int unseen_limit = 0) {
   TargetTaskParams params = test::rangedParams(kBodyRadiusM, in_front_after_ranged, false);
   params.in_front_streak_spans_unseen = spans_unseen;
+  params.in_front_unseen_limit = unseen_limit;
   test::RangedRig ranged(params);
   auto& [detections, odometry, gimbal, out, task] = ranged.rig;
   auto& followed = ranged.followed;
@@ -214,6 +216,17 @@ TEST(TargetTaskInFront, GivenTheDepthCameraBlindBeforeACrossing_WhenTheStreakSpa
   EXPECT_EQ(spanned.person_given_after, static_cast<int>(std::round((kDurationS - kCrossingS - 0.5) * kRateHz)));
   ASSERT_TRUE(spanned.estimate.initialised && !spanned.estimate.lost);
   EXPECT_NEAR(spanned.estimate.p_WT_m.x(), kPersonXM, 0.1);
+  // in_front_unseen_limit: the 1.2 s unseen end the streak after all -- the track's distance is the regression's by
+  // then -- and the two ranged frames before the crosser hides the person do not arm it again: the crosser is given
+  // (the limit's price: someone else ranged first after a long gap is judged as the regression's, as a drifted
+  // person must be)...
+  const Scene limited = run(5, kCrossingS, gap, true, 2);
+  EXPECT_GT(limited.crosser_given, 0);
+  EXPECT_EQ(limited.stats.in_front, 0U);
+  // ... while five agreeing ranges before the crossing arm it again, and the crosser is not.
+  const Scene rearmed = run(5, kCrossingS, DepthGap{1.5, kCrossingS - 0.5}, true, 2);
+  EXPECT_EQ(rearmed.crosser_given, 0);
+  EXPECT_GE(rearmed.stats.in_front, 5U);
 }
 
 TEST(TargetTaskInFront, GivenTooFewRangesYet_ThenTheRegressionsDistanceIsStillGiven) {
