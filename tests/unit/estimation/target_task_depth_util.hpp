@@ -15,6 +15,7 @@
 #include "aerotrack/hal/types.hpp"
 #include "aerotrack/rt/shared_slot.hpp"
 #include "aerotrack/rt/time.hpp"
+#include "support/require.hpp"
 #include "target_task_test_util.hpp"
 
 namespace aerotrack::estimation::test {
@@ -68,5 +69,31 @@ struct RangedRig {
   rt::SharedSlot<hal::DepthFrame> depth;
   TaskRig rig;
 };
+
+/// Someone in a detection frame: where the regression's fit would place them (a torso of the fit's length), and
+/// the colour bin of their torso.
+struct Drawn {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  int colour_bin = 0;
+};
+
+/// Frame i at t_ns, the drone hovering: the depth camera's image of `bodies_m` if it sees them (else no depth frame),
+/// a detection frame of `people` (the first the lock-on's), stepped through the task. Its estimate.
+inline TargetEstimate stepRanged(RangedRig& ranged, int i, rt::TimeNs t_ns, bool depth_seen,
+                                 const std::vector<Eigen::Vector2d>& bodies_m, double body_radius_m,
+                                 const std::vector<Drawn>& people) {
+  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
+  pushHover(odometry, gimbal, t_ns);
+  if (depth_seen) ranged.depth.write(renderBodiesDepth(t_ns, bodies_m, body_radius_m));
+  hal::DetectionFrame frame = emptyFrame(i, t_ns);
+  frame.person_count = static_cast<int>(people.size());
+  for (std::size_t k = 0; k < people.size(); ++k)
+    drawPersonInColour(frame.persons[k], people[k].x_m, people[k].y_m, people[k].colour_bin);
+  frame.target_index = 0;
+  detections.try_push(frame);
+  task.step(t_ns + 1);
+  return aerotrack::test::require(out.read(), "an estimate");
+}
 
 }  // namespace aerotrack::estimation::test

@@ -8,8 +8,9 @@
 // refused as someone else for 0.9 s while the drone stopped and the person walked on).
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
 #include "aerotrack/estimation/target_task.hpp"
-#include "support/require.hpp"
 #include "target_task_depth_util.hpp"
 #include "target_task_test_util.hpp"
 
@@ -39,30 +40,22 @@ Walk walkAway(int unseen_limit) {
   params.in_front_streak_spans_unseen = true;
   params.in_front_unseen_limit = unseen_limit;
   test::RangedRig ranged(params);
-  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
   Walk walk;
   const int frames = static_cast<int>(kDurationS * test::kFrameRateHz);
   for (int i = 0; i <= frames; ++i) {
     const double t_s = i / test::kFrameRateHz;
-    const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     const double x_m = kStartXM + kSpeedMps * t_s;
-    test::pushHover(odometry, gimbal, t_ns);
     const bool unseen = t_s >= kUnseenFromS && t_s < kUnseenToS;
-    if (!unseen) ranged.depth.write(test::renderBodiesDepth(t_ns, {Eigen::Vector2d(x_m, 0.0)}, kBodyRadiusM));
-    hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
-    frame.person_count = 1;
-    test::drawPersonInColour(frame.persons[0], x_m / kScale, 0.0, 3);
-    frame.target_index = 0;
-    detections.try_push(frame);
-    task.step(t_ns + 1);
-    const TargetEstimate e = aerotrack::test::require(out.read(), "an estimate");
+    const TargetEstimate e = test::stepRanged(ranged, i, rt::secondsToNs(t_s), !unseen, {Eigen::Vector2d(x_m, 0.0)},
+                                              kBodyRadiusM, {{x_m / kScale, 0.0, 3}});
     const double error_m = (e.p_WT_m.head<2>() - Eigen::Vector2d(x_m, 0.0)).norm();
+    const std::uint64_t sequence = test::emptyFrame(i, 0).sequence;  // the frame stepRanged sent
     const auto f = ranged.followed.read();
-    if (t_s >= kUnseenToS && f && f->sequence == frame.sequence && f->target_index < 0) ++walk.refused_after;
+    if (t_s >= kUnseenToS && f && f->sequence == sequence && f->target_index < 0) ++walk.refused_after;
     if (t_s < kUnseenToS) walk.error_gap_end_m = error_m;
     walk.error_end_m = error_m;
   }
-  walk.stats = task.stats();
+  walk.stats = ranged.rig.task.stats();
   return walk;
 }
 

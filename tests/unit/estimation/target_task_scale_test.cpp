@@ -12,7 +12,6 @@
 #include <limits>
 
 #include "aerotrack/estimation/target_task.hpp"
-#include "support/require.hpp"
 #include "target_task_depth_util.hpp"
 #include "target_task_test_util.hpp"
 
@@ -43,27 +42,15 @@ Walk walkAway(double scale_rate) {
   TargetTaskParams params = test::rangedParams(kBodyRadiusM, 0, false);
   params.depth_range.scale_rate = scale_rate;
   test::RangedRig ranged(params);
-  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
-  auto& depth = ranged.depth;
   Walk walk;
   const int frames = static_cast<int>(kDurationS * test::kFrameRateHz);
   for (int i = 0; i <= frames; ++i) {
     const double t_s = i / test::kFrameRateHz;
-    const rt::TimeNs t_ns = rt::secondsToNs(t_s);
     const double x_m = kStartXM + kSpeedMps * t_s;
-    test::pushHover(odometry, gimbal, t_ns);
-    if (t_s < kSeenS)
-      depth.write(test::renderBodiesDepth(
-          t_ns, {Eigen::Vector2d(x_m, 0.0), Eigen::Vector2d(kBystanderXM, kBystanderYM)}, kBodyRadiusM));
-    hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
-    frame.person_count = 2;
     // A torso kScale times the fit's, at x_m: the image of the fit's torso at x_m / kScale.
-    test::drawPersonInColour(frame.persons[0], x_m / kScale, 0.0, 3);
-    test::drawPersonInColour(frame.persons[1], kBystanderXM, kBystanderYM, 7);
-    frame.target_index = 0;
-    detections.try_push(frame);
-    task.step(t_ns + 1);
-    const TargetEstimate e = aerotrack::test::require(out.read(), "an estimate");
+    const TargetEstimate e = test::stepRanged(ranged, i, rt::secondsToNs(t_s), t_s < kSeenS,
+                                              {Eigen::Vector2d(x_m, 0.0), Eigen::Vector2d(kBystanderXM, kBystanderYM)},
+                                              kBodyRadiusM, {{x_m / kScale, 0.0, 3}, {kBystanderXM, kBystanderYM, 7}});
     const double error_m = (e.p_WT_m.head<2>() - Eigen::Vector2d(x_m, 0.0)).norm();
     if (t_s < kSeenS) walk.error_seen_m = error_m;
     walk.error_end_m = error_m;
@@ -73,7 +60,7 @@ Walk walkAway(double scale_rate) {
       walk.bystander_error_m = std::min(
           walk.bystander_error_m, (e.others[k].p_W_m.head<2>() - Eigen::Vector2d(kBystanderXM, kBystanderYM)).norm());
   }
-  walk.stats = task.stats();
+  walk.stats = ranged.rig.task.stats();
   return walk;
 }
 
@@ -108,18 +95,10 @@ TEST(TargetTaskScale, GivenAFactorBeyondTheDepthRangesBound_ThenNothingIsLearnt)
   params.depth_range.scale_rate = 0.05;
   params.depth_range.max_ratio = 1.1;
   test::RangedRig ranged(params);
-  auto& [detections, odometry, gimbal, out, task] = ranged.rig;
-  for (int i = 0; i <= 30; ++i) {
-    const rt::TimeNs t_ns = rt::secondsToNs(i / test::kFrameRateHz);
-    test::pushHover(odometry, gimbal, t_ns);
-    ranged.depth.write(test::renderBodiesDepth(t_ns, {Eigen::Vector2d(kStartXM, 0.0)}, kBodyRadiusM));
-    hal::DetectionFrame frame = test::emptyFrame(i, t_ns);
-    frame.person_count = 1;
-    test::drawPersonInColour(frame.persons[0], kStartXM / kScale, 0.0, 3);
-    frame.target_index = 0;
-    detections.try_push(frame);
-    task.step(t_ns + 1);
-  }
+  for (int i = 0; i <= 30; ++i)
+    test::stepRanged(ranged, i, rt::secondsToNs(i / test::kFrameRateHz), true, {Eigen::Vector2d(kStartXM, 0.0)},
+                     kBodyRadiusM, {{kStartXM / kScale, 0.0, 3}});
+  const TargetTask& task = ranged.rig.task;
   EXPECT_GT(task.stats().depth_disagreed, 20U);
   EXPECT_EQ(task.stats().scale_samples, 0U);
   EXPECT_EQ(task.stats().range_scale, 1.0);
