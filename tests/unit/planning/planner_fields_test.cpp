@@ -39,8 +39,8 @@ TEST(PlannerFields, GivenEachFieldAtTheEndsOfItsRangeThenParserAndValidateAgree)
   // issue 21 item 3: relocation's 14, its list three; goal.max_lead_s and the time weight's two; the camera
   // view's four: person_torso_half_m and optimizer.camera_view_weight, camera_half_vfov_rad, camera_view_margin_rad;
   // the time weight's speed change; the predictor's newest_velocity_weight; the altitude band's two;
-  // goal.trail_speed_mps; min_bystander_distance_m).
-  EXPECT_EQ(probes, 4 * 101);
+  // goal.trail_speed_mps; min_bystander_distance_m; issue 22: bystander_sight_radius_m).
+  EXPECT_EQ(probes, 4 * 102);
   // In range, yet refused by both because of a rule across fields, with the other field at its default.
   EXPECT_EQ(refused_inside, (std::set<std::string>{
                                 "flight_altitude_m@lo",        // 0.1 is not above takeoff_below_m (0.5)
@@ -75,8 +75,8 @@ TEST(PlannerFields, GivenTheWrittenSectionThenItsKeysAreExactlyTheKeysTheParserR
   // optimizer_limit_fraction, check.max_repair_stretch and optimizer.corridor_margin_per_speed_s; issue 21
   // item 3 the relocation section's 12 (and its own key); goal.max_lead_s and the time weight's two; the
   // camera view's four; the time weight's speed change; the predictor's two velocity keys; the altitude band's two;
-  // goal.trail_speed_mps; min_bystander_distance_m.
-  EXPECT_EQ(written.size(), 109U);
+  // goal.trail_speed_mps; min_bystander_distance_m; issue 22: bystander_sight_radius_m.
+  EXPECT_EQ(written.size(), 110U);
   for (const char* key : {"planning_budget_s", "goal.visible_max_turn_rad", "goal.max_lead_s", "search.occlusion_aware",
                           "corridor.max_box_size_m", "optimizer.max_pieces", "prediction.qp_max_iterations",
                           "check.margin_escape_s", "check.max_repair_stretch", "optimizer_limit_fraction",

@@ -23,6 +23,7 @@ const rt::FieldTable<TrackingPlannerParams>& trackingPlannerFields() {
           rt::number("max_altitude_m", &P::max_altitude_m, Range::closed(0.1, 1000.0)),
           rt::number("min_person_distance_m", &P::min_person_distance_m, Range::closed(0.0, 50.0)),
           rt::number("min_bystander_distance_m", &P::min_bystander_distance_m, Range::closed(0.0, 50.0)),
+          rt::number("bystander_sight_radius_m", &P::bystander_sight_radius_m, Range::closed(0.0, 5.0)),
           rt::number("optimizer_limit_fraction", &P::optimizer_limit_fraction, Range::openClosed(0.0, 1.0)),
           rt::number("time_weight_reference_speed_mps", &P::time_weight_reference_speed_mps,
                      Range::openClosed(0.0, 100.0)),

@@ -514,9 +514,22 @@ KinematicState TrackingPlanner::selectGoal(const mapping::LocalGrid& grid, const
   // 1.0, has no visibility terms).
   if (!search_.occlusionAware())
     return makeTrackingGoal(person_now, person_predicted, p_drone_at_altitude, params_.goal);
-  const Eigen::Vector3d p_ahead_W_m =
-      person.positionAt(start_ns + rt::secondsToNs(free_until_s(params_.prediction.horizon_s)));
-  return makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal, &p_ahead_W_m);
+  const rt::TimeNs ahead_ns = start_ns + rt::secondsToNs(free_until_s(params_.prediction.horizon_s));
+  const Eigen::Vector3d p_ahead_W_m = person.positionAt(ahead_ns);
+  // The others where they stand now and where they walk by the horizon (PersonMotion::otherAt).
+  std::array<Eigen::Vector2d, estimation::kMaxOtherPeople> others_now;
+  std::array<Eigen::Vector2d, estimation::kMaxOtherPeople> others_ahead;
+  const std::size_t others =
+      params_.bystander_sight_radius_m > 0.0 ? std::min(person.otherCount(), others_now.size()) : 0;
+  for (std::size_t i = 0; i < others; ++i) {
+    others_now[i] = person.otherAt(i, start_ns).head<2>();
+    others_ahead[i] = person.otherAt(i, ahead_ns).head<2>();
+  }
+  const SightBlockers blockers{std::span<const Eigen::Vector2d>(others_now.data(), others),
+                               std::span<const Eigen::Vector2d>(others_ahead.data(), others),
+                               params_.bystander_sight_radius_m};
+  return makeVisibleTrackingGoal(grid, person_now, person_predicted, p_drone_at_altitude, params_.goal, &p_ahead_W_m,
+                                 blockers);
 }
 
 double TrackingPlanner::timeWeightScale(double person_speed_mps, double speed_change_mps) const {
@@ -553,7 +566,8 @@ SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid,
   // The other people, as the final check predicts them (PersonMotion::otherAt), from the search's start.
   std::array<MovingPerson, kMaxSearchPeople> people{};
   std::size_t people_count = 0;
-  if (params_.min_bystander_distance_m > 0.0 && person.otherCount() > 0) {
+  const bool keep_clear = params_.min_bystander_distance_m > 0.0;
+  if ((keep_clear || params_.bystander_sight_radius_m > 0.0) && person.otherCount() > 0) {
     const double since_s = rt::nsToSeconds(start_ns - person.people->stamp_ns);
     for (std::size_t i = 0; i < person.otherCount() && people_count < people.size(); ++i) {
       people[people_count++] = {person.otherAt(i, start_ns).head<2>(), person.people->others[i].v_W_mps.head<2>(),
@@ -564,7 +578,8 @@ SearchStatus TrackingPlanner::searchTrackingPath(const mapping::LocalGrid& grid,
   // optimised trajectory leaves the path by a few centimetres, and at the check's own distance half of the plans
   // past someone failed by that much (crowd seed 14: 0.75-0.80 m against 0.8 m).
   search_.setPeople(std::span<const MovingPerson>(people.data(), people_count),
-                    params_.min_bystander_distance_m + grid.params().resolution_m);
+                    keep_clear ? params_.min_bystander_distance_m + grid.params().resolution_m : 0.0,
+                    params_.bystander_sight_radius_m);
   return search_.search(grid, search_start, search_goal, start_time_s, person_fn, path_);
 }
 

@@ -2,6 +2,7 @@
 #include "aerotrack/planning/kinodynamic_search.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -138,9 +139,26 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
   return goal;
 }
 
+bool peopleBlockSight(const Eigen::Vector2d& from_W_m, const Eigen::Vector2d& to_W_m,
+                      std::span<const Eigen::Vector2d> people_W_m, double radius_m) {
+  if (!(radius_m > 0.0)) return false;
+  const Eigen::Vector2d d = to_W_m - from_W_m;
+  const double length_m = d.norm();
+  if (!(length_m > 0.0)) return false;
+  const Eigen::Vector2d u = d / length_m;
+  for (const Eigen::Vector2d& q : people_W_m) {
+    if ((q - to_W_m).norm() < radius_m) continue;  // on the person: maybe their own second track
+    const Eigen::Vector2d r = q - from_W_m;
+    const double along_m = r.dot(u);
+    if (along_m > 0.0 && along_m < length_m && std::abs(u.x() * r.y() - u.y() * r.x()) < radius_m) return true;
+  }
+  return false;
+}
+
 KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
-                                       const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m) {
+                                       const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m,
+                                       const SightBlockers& others) {
   KinematicState goal = makeTrackingGoal(person_now, person_predicted, p_drone_W_m, params);
   const double w = std::clamp(params.predicted_weight, 0.0, 1.0);
   const Eigen::Vector3d p_person = (1.0 - w) * person_now.p_W_m + w * person_predicted.p_W_m;
@@ -152,7 +170,10 @@ KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const Kin
   for (int pass = 0; pass < 2; ++pass) {
     const auto usable = [&](const Eigen::Vector3d& p) {
       return !grid.isOccupied(p) && grid.lineOfSight(p, p_person) &&
-             (pass == 1 || p_ahead_W_m == nullptr || grid.lineOfSight(p, *p_ahead_W_m));
+             !peopleBlockSight(p.head<2>(), p_person.head<2>(), others.now_W_m, others.radius_m) &&
+             (pass == 1 || p_ahead_W_m == nullptr ||
+              (grid.lineOfSight(p, *p_ahead_W_m) &&
+               !peopleBlockSight(p.head<2>(), p_ahead_W_m->head<2>(), others.ahead_W_m, others.radius_m)));
     };
     if (usable(goal.p_W_m)) return goal;
     for (int k = 1; k <= steps; ++k) {
@@ -320,6 +341,14 @@ bool KinodynamicSearch::clearOfPeople(const Eigen::Vector3d& a, double ta_s, con
   return true;
 }
 
+bool KinodynamicSearch::peopleOcclude(const Eigen::Vector3d& p, const Eigen::Vector3d& person_W_m, double t_s) const {
+  if (people_count_ == 0 || !(people_sight_radius_m_ > 0.0)) return false;
+  std::array<Eigen::Vector2d, kMaxSearchPeople> at_W_m;
+  for (std::size_t i = 0; i < people_count_; ++i) at_W_m[i] = people_[i].at(t_s);
+  return peopleBlockSight(p.head<2>(), person_W_m.head<2>(),
+                          std::span<const Eigen::Vector2d>(at_W_m.data(), people_count_), people_sight_radius_m_);
+}
+
 bool KinodynamicSearch::endClearOfPeople(const Eigen::Vector3d& end, double t_s) const {
   // The path ends at rest there (the planner appends a brake): held until everyone stands still.
   double still_s = t_s;
@@ -444,7 +473,9 @@ SearchStatus KinodynamicSearch::search(const mapping::LocalGrid& grid, const Kin
   if (goal_v_inf > params_.max_velocity_mps) goal.v_W_mps *= params_.max_velocity_mps / goal_v_inf;
   const bool check_occlusion = params_.occlusion_aware && params_.occlusion_penalty > 0.0 && person_W_m;
   const auto occluded = [&](const Eigen::Vector3d& p, double t) {
-    return check_occlusion && !grid.lineOfSight(p, person_W_m(start_time_s + t));
+    if (!check_occlusion) return false;
+    const Eigen::Vector3d person = person_W_m(start_time_s + t);
+    return !grid.lineOfSight(p, person) || peopleOcclude(p, person, t);
   };
   // P_occ is added lazily, when a node is first popped (the paper checks occlusion "in each expanding
   // process"): an occluded node goes back into the open list with the penalty, so the line of sight is

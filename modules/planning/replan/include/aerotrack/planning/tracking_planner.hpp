@@ -85,6 +85,12 @@ struct TrackingPlannerParams {
   /// drone flew on at 1.8 m/s; the map-based stop came at 0.5 m). The drone's radius plus a person's half
   /// width (0.25 m each) plus room for the estimate's error at a few metres and a brake.
   double min_bystander_distance_m = 0.8;
+  /// Occlusion-aware mode: the other people the target task tracks hide the person from a point when one of them
+  /// stands within this of the line of sight to the person, in front of them (peopleBlockSight) -- for the visible
+  /// goal (now and at the prediction horizon) and the search's occlusion penalty, along their constant-velocity
+  /// paths; 0: off (only the map occludes); >= 0. Why (issue 22 item 2): see SightBlockers. A person's half
+  /// width plus the other's (0.25 m each): their silhouettes overlap.
+  double bystander_sight_radius_m = 0.0;
   /// The optimiser's velocity, acceleration and jerk targets are this fraction of the check's (the
   /// vehicle's) limits, set by create(): one set of limits, the soft penalties' targets inside it by a
   /// stated margin (issue 21). The optimizer section's own limit fields are overwritten; in (0, 1].

@@ -118,9 +118,29 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
 /// see both come first, then those that see the person now. Why: with x_tp taken close to now, a drone
 /// near a corner kept a goal that saw the person at the corner and not where they were walking, backed off
 /// along the line to them, and lost them round it (issue 21, sharp_turn seed 8 at 0.85 m/s).
+///
+/// `others` (optional): the other people, horizontally, now and at the time of `p_ahead_W_m`; a candidate with
+/// one of them standing on its line of sight to the person (peopleBlockSight, others.radius_m) does not see them.
+/// Why (issue 22 item 2): in the crowd the goal held behind the person saw through bystanders, the map holding
+/// them only where the depth camera last saw them; every traced long switch to the look-alike followed a second
+/// in which someone standing in front of the person was refused and the person's track starved.
+struct SightBlockers {
+  std::span<const Eigen::Vector2d> now_W_m;
+  std::span<const Eigen::Vector2d> ahead_W_m;
+  double radius_m = 0.0;  ///< 0: nobody blocks.
+};
 KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
-                                       const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m = nullptr);
+                                       const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m = nullptr,
+                                       const SightBlockers& others = {});
+
+/// Whether one of `people_W_m` stands on the line of sight from `from_W_m` to `to_W_m` (horizontal, W): their
+/// centre nearer the segment than radius_m, and nearer `from_W_m` along it than `to_W_m` is (in front of what
+/// is looked at; beside or behind it hides nothing). Someone within radius_m of `to_W_m` is not counted: the
+/// target task can hold a second track on the person themself (one started on a refused frame of theirs), and
+/// every point round the person would be blocked by it. Pure.
+bool peopleBlockSight(const Eigen::Vector2d& from_W_m, const Eigen::Vector2d& to_W_m,
+                      std::span<const Eigen::Vector2d> people_W_m, double radius_m);
 
 /// A goal the search can reach: the search only expands states inside the grid's window (nothing is known
 /// beyond it), so a goal outside the window, or within `margin_m` of its faces, is moved along the straight
@@ -205,10 +225,14 @@ class KinodynamicSearch {
   /// (which forbids coming closer). Why (issue 21 item 5): the final check alone refused every plan that
   /// passed near a walker, and the drone fell behind the person in the crowd; searched around, it follows
   /// on. Holds until set again (an empty span, or a clearance not above 0, clears it); no allocation.
-  void setPeople(std::span<const MovingPerson> people, double clearance_m) {
+  /// sight_radius_m > 0 (occlusion-aware mode): a node from which one of them, where they walk by then, stands on
+  /// the line of sight to the person (peopleBlockSight) is occluded, as one the map's line of sight fails
+  /// (issue 22 item 2: see SightBlockers).
+  void setPeople(std::span<const MovingPerson> people, double clearance_m, double sight_radius_m = 0.0) {
     people_count_ = std::min(people.size(), people_.size());
     std::copy_n(people.begin(), people_count_, people_.begin());
     people_clearance_m_ = clearance_m;
+    people_sight_radius_m_ = sight_radius_m;
   }
 
   /// Searches from start to goal in `grid` (blocked = LocalGrid::isOccupied, which applies the inflation
@@ -269,6 +293,9 @@ class KinodynamicSearch {
   std::array<MovingPerson, kMaxSearchPeople> people_{};  // setPeople
   std::size_t people_count_ = 0;
   double people_clearance_m_ = 0.0;
+  double people_sight_radius_m_ = 0.0;
+  /// Someone this search was given stands on the line of sight from p to the person at t seconds after the start.
+  bool peopleOcclude(const Eigen::Vector3d& p, const Eigen::Vector3d& person_W_m, double t_s) const;
   std::array<bool, kMaxSearchPeople> avoided_{};  // per search: not already within the clearance of the start
   std::vector<Eigen::Vector3d> inputs_;
   std::vector<Node> nodes_;
