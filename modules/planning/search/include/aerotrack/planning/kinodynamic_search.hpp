@@ -107,6 +107,17 @@ rt::Status validate(const TrackingGoalParams& params);
 KinematicState makeTrackingGoal(const KinematicState& person_now, const KinematicState& person_predicted,
                                 const Eigen::Vector3d& p_drone_W_m, const TrackingGoalParams& params);
 
+/// The other people, horizontally (W), as makeVisibleTrackingGoal's candidates must see past them: where they stand
+/// now, and where they will be at the time of its `p_ahead_W_m`. Why (issue 22 item 2): in the crowd the goal held
+/// behind the person saw through bystanders, the map holding them only where the depth camera last saw them; every
+/// traced long switch to the look-alike followed a second in which someone standing in front of the person was
+/// refused and the person's track starved.
+struct SightBlockers {
+  std::span<const Eigen::Vector2d> now_W_m;
+  std::span<const Eigen::Vector2d> ahead_W_m;
+  double radius_m = 0.0;  ///< 0: nobody blocks.
+};
+
 /// makeTrackingGoal, kept where it is when it is free in the grid and the person (at the mixed position)
 /// is in its line of sight; else the nearest point on the same circle round the person that is both,
 /// turning both ways from it in visible_step_rad up to visible_max_turn_rad (the plain goal if none is).
@@ -119,16 +130,8 @@ KinematicState makeTrackingGoal(const KinematicState& person_now, const Kinemati
 /// near a corner kept a goal that saw the person at the corner and not where they were walking, backed off
 /// along the line to them, and lost them round it (issue 21, sharp_turn seed 8 at 0.85 m/s).
 ///
-/// `others` (optional): the other people, horizontally, now and at the time of `p_ahead_W_m`; a candidate with
-/// one of them standing on its line of sight to the person (peopleBlockSight, others.radius_m) does not see them.
-/// Why (issue 22 item 2): in the crowd the goal held behind the person saw through bystanders, the map holding
-/// them only where the depth camera last saw them; every traced long switch to the look-alike followed a second
-/// in which someone standing in front of the person was refused and the person's track starved.
-struct SightBlockers {
-  std::span<const Eigen::Vector2d> now_W_m;
-  std::span<const Eigen::Vector2d> ahead_W_m;
-  double radius_m = 0.0;  ///< 0: nobody blocks.
-};
+/// `others` (optional, SightBlockers): a candidate with one of them standing on its line of sight to the person
+/// (peopleBlockSight, others.radius_m) does not see them.
 KinematicState makeVisibleTrackingGoal(const mapping::LocalGrid& grid, const KinematicState& person_now,
                                        const KinematicState& person_predicted, const Eigen::Vector3d& p_drone_W_m,
                                        const TrackingGoalParams& params, const Eigen::Vector3d* p_ahead_W_m = nullptr,
