@@ -53,6 +53,12 @@ nlohmann::json estimationSummary(const estimation::TargetTask* task, const Targe
   out["refused_alone_tracks"] = s.refused_alone_tracks;
   out["look_refused_kept_off"] = s.look_refused_kept_off;
   out["lost_colour_capped"] = s.lost_colour_capped;
+  out["depth_frames_searched"] = s.depth_frames_searched;
+  out["depth_people"] = s.depth_people;
+  out["depth_people_followed"] = s.depth_people_followed;
+  out["depth_people_fed"] = s.depth_people_fed;
+  out["depth_people_updates"] = s.depth_people_updates;
+  out["depth_people_tracks"] = s.depth_people_tracks;
   if (check != nullptr) {
     out["checked_steps"] = check->steps();
     out["live_ratio"] =

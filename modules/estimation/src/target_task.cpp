@@ -40,6 +40,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
   params.verdict_torso_m = node.getDoubleOr("verdict_torso_m", params.verdict_torso_m, 0.1, 2.0);
   params.estimator = parseTargetEstimatorParams(node.child("estimator"));
   if (node.has("depth_range")) params.depth_range = parseDepthRangeParams(node.child("depth_range"));
+  if (node.has("depth_people")) params.depth_people = parseDepthPeopleParams(node.child("depth_people"));
   if (node.has("swap_check")) params.swap_check = parseSwapCheckParams(node.child("swap_check"));
 }
 
@@ -50,6 +51,7 @@ rt::Expected<TargetTask> TargetTask::create(const TargetTaskParams& params,
                                             rt::LatestSlot<TargetEstimate>& out) {
   if (auto s = localization::validate(params.localization); !s) return rt::Error{"localization: " + s.error().message};
   if (auto s = validate(params.depth_range); !s) return s.error();
+  if (auto s = validate(params.depth_people); !s) return s.error();
   auto poses = hal::OdometryHistory::create({});
   if (!poses) return poses.error();
   auto gimbal_history = GimbalAngleHistory::create({});
@@ -79,7 +81,8 @@ TargetTask::TargetTask(const TargetTaskParams& params, hal::OdometryHistory pose
       gimbal_(gimbal),
       out_(out),
       bystanders_(std::move(bystanders)),
-      swap_check_(std::move(swap_check)) {}
+      swap_check_(std::move(swap_check)),
+      depth_people_(params.depth_people) {}
 
 Eigen::Vector3d TargetTask::localize(const perception::TorsoFeatures& torso, const Eigen::Isometry3d& T_WC,
                                      Eigen::Vector3d& p_C_m) const {
@@ -537,6 +540,82 @@ int TargetTask::choosePerson(const hal::DetectionFrame& frame) const {
   return associate(frame, candidates).followed;
 }
 
+void TargetTask::trackDepthPeople(rt::TimeNs t_ns) {
+  // In capture order, each depth frame once: the tracks' filters take measurements in time order, and a depth frame
+  // older than a detection frame already given is skipped (it arrived late; its people have moved on).
+  for (std::size_t f = 0; f < depth_count_; ++f) {
+    const hal::DepthFrame& depth = *depth_frames_[f];
+    if (depth.stamp_ns <= depth_people_done_ns_ || depth.stamp_ns > t_ns) continue;
+    const hal::OdometryHistory::Lookup pose = poses_.lookup(depth.stamp_ns);
+    if (pose.status != rt::HistoryStatus::kOk) continue;
+    std::array<DepthPerson, kMaxAssignmentRows> people;
+    const std::size_t count = depth_people_.find(depth, pose.value * depth.T_BC, people);
+    ++stats_.depth_frames_searched;
+    stats_.depth_people += count;
+    if (count == 0) continue;
+    const TargetEstimate prior = estimator_.estimate(depth.stamp_ns);
+    const bool live = prior.initialised && !prior.lost;
+    // The depth camera gives no height: the measurement carries the followed track's (the regression's ground level,
+    // as every track's), with a noise that leaves every track's height alone.
+    constexpr double kNoHeightStdM = 100.0;
+    constexpr double kTwoBodiesM = 0.5;  // two people's centres at least two body radii apart
+    const double z_m = prior.initialised ? prior.p_WT_m.z() : params_.verdict_torso_height_m;
+    std::array<TargetMeasurement, kMaxAssignmentRows> m{};
+    std::array<bool, kMaxAssignmentRows> beyond_followed{};
+    AssignmentCosts costs;
+    const double gate = params_.estimator.gate_chi2;
+    for (std::size_t i = 0; i < count; ++i) {
+      m[i].stamp_ns = depth.stamp_ns;
+      m[i].p_WT_m = Eigen::Vector3d(people[i].p_W_m.x(), people[i].p_W_m.y(), z_m);
+      m[i].std_xy_m = people[i].std_m;
+      m[i].std_z_m = kNoHeightStdM;
+      const std::optional<double> d2 = live ? estimator_.mahalanobisSq(m[i]) : std::nullopt;
+      beyond_followed[i] = live && !(d2 && *d2 <= gate);
+      if (live && !beyond_followed[i]) costs.set(i, 0, *d2 / gate);
+      for (std::size_t j = 0; j < bystanders_.capacity(); ++j) {
+        if (!live && !bystanders_.seenWithFollowed(j)) continue;  // lost: someone unknown may be the person
+        const std::optional<double> d2_j = bystanders_.mahalanobisSq(j, m[i]);
+        if (d2_j && *d2_j <= gate) costs.set(i, 1 + j, *d2_j / gate);
+      }
+    }
+    const AssignmentResult assigned = cheapestAssignment(costs, count, 1 + bystanders_.capacity(), 1.0);
+    bool followed_seen = false;
+    int in_followed_gate = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      followed_seen = followed_seen || assigned.column[i] == 0;
+      in_followed_gate += live && !beyond_followed[i] ? 1 : 0;
+    }
+    stats_.depth_people_followed += followed_seen ? 1 : 0;
+    // The followed track's spread: a starved or young track is not fed (DepthPeopleParams::feed_max_std_m).
+    const Eigen::Matrix2d P_xy = prior.covariance.topLeftCorner<2, 2>();
+    const double larger_variance =
+        0.5 * (P_xy(0, 0) + P_xy(1, 1)) + std::hypot(0.5 * (P_xy(0, 0) - P_xy(1, 1)), P_xy(0, 1));  // 2 x 2 eigenvalue
+    const bool fed_spread = live && std::sqrt(std::max(0.0, larger_variance)) <= params_.depth_people.feed_max_std_m;
+    const perception::Appearance no_colour;
+    // Two bodies do not overlap: a piece of the followed person's body (something thin in front of them splits it) is
+    // not someone else.
+    const auto apartFromFollowed = [&](std::size_t i) {
+      for (std::size_t k = 0; k < count; ++k)
+        if (assigned.column[k] == 0 && (people[k].p_W_m - people[i].p_W_m).norm() < kTwoBodiesM) return false;
+      return true;
+    };
+    for (std::size_t i = 0; i < count; ++i) {
+      const int column = assigned.column[i];
+      if (column == 0 && in_followed_gate == 1 && params_.depth_people.feed_followed && fed_spread) {
+        if (estimator_.add(m[i]) == MeasurementVerdict::kAccepted) ++stats_.depth_people_fed;
+      } else if (column > 0) {
+        bystanders_.update(static_cast<std::size_t>(column - 1), m[i], no_colour, params_.tracker.appearance_rate,
+                           followed_seen);
+        ++stats_.depth_people_updates;
+      } else if (column == AssignmentResult::kNone && followed_seen && beyond_followed[i] && apartFromFollowed(i)) {
+        bystanders_.start(m[i], no_colour, true);
+        ++stats_.depth_people_tracks;
+      }
+    }
+  }
+  depth_people_done_ns_ = std::max(depth_people_done_ns_, t_ns);
+}
+
 bool TargetTask::process(const Candidate& c) {
   if (c.depth) {
     if (c.measurement && c.measurement->ranged)
@@ -720,6 +799,7 @@ void TargetTask::step(rt::TimeNs now_ns) {
     const hal::DetectionFrame& frame = pending_[done];
     const bool covered = newest_pose_ns_ >= frame.stamp_ns && newest_gimbal_ns_ >= frame.stamp_ns;
     if (!covered && now_ns - frame.stamp_ns < params_.max_wait_ns) break;  // readings still on their way
+    if (params_.depth_people.enabled && params_.choose_by_estimate) trackDepthPeople(frame.stamp_ns);
     std::array<Candidate, hal::kMaxPersons> candidates;
     Association a = associate(frame, candidates);
     const bool whole_frame_wanted = checkSwap(frame, candidates, a);
@@ -784,6 +864,11 @@ void TargetTask::step(rt::TimeNs now_ns) {
   std::move(pending_.begin() + static_cast<std::ptrdiff_t>(done),
             pending_.begin() + static_cast<std::ptrdiff_t>(pending_count_), pending_.begin());
   pending_count_ -= done;
+  // Depth frames are searched before each detection frame up to its capture time, and, while no detection comes
+  // (a crop that found nobody is not queued), once a detection taken then could no longer be waited for: the
+  // tracks stay fed, and take their measurements in time order.
+  if (params_.depth_people.enabled && params_.choose_by_estimate && pending_count_ == 0)
+    trackDepthPeople(std::min(newest_pose_ns_, now_ns - params_.max_wait_ns));
   TargetEstimate estimate = estimator_.estimate(now_ns);
   bystanders_.fillOthers(estimate.stamp_ns, estimate);
   const bool news =

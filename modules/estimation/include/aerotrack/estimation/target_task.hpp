@@ -25,6 +25,7 @@
 #include "aerotrack/estimation/assignment.hpp"
 #include "aerotrack/estimation/bystander_tracks.hpp"
 #include "aerotrack/estimation/camera_to_world.hpp"
+#include "aerotrack/estimation/depth_people.hpp"
 #include "aerotrack/estimation/depth_range.hpp"
 #include "aerotrack/estimation/gimbal_history.hpp"
 #include "aerotrack/estimation/swap_check.hpp"
@@ -190,6 +191,17 @@ struct TargetTaskParams {
   double verdict_torso_m = 0.5;
   /// The distance from the depth camera where it sees the person (`depth_range:`; absent: off).
   DepthRangeParams depth_range;
+  /// With choose_by_estimate and the depth frames (rangeFrom): the people the depth camera sees keep the other people's
+  /// tracks fed (`depth_people:`, depth_people.hpp; absent: off). Each depth frame up to a detection frame's capture
+  /// time, once its pose is known, is segmented into people; they are assigned (global nearest neighbour, each pair
+  /// within the track's gate) to the live followed track -- whose own measurements stay the detector's: the depth
+  /// camera vouches for nobody -- and to the bystander tracks, which they update (their colour untouched); someone
+  /// beyond the followed track's gate, while another person of the same depth frame went to it, starts a track, seen
+  /// beside the followed person. While the followed track is lost, nobody starts one, and only the tracks of people
+  /// seen beside it are updated (a person the depth camera places where nobody is tracked may be them). Why: the
+  /// detector runs on a crop around the followed person, and a look-alike walking up to them, on no track of their
+  /// own, was taken by the followed track once hidden and starved (docs/benchmarks.md).
+  DepthPeopleParams depth_people;
   rt::DurationNs max_wait_ns = 200 * rt::kNsPerMillisecond;
 };
 
@@ -219,6 +231,12 @@ struct TargetTaskStats {
   std::uint64_t depth_disagreed = 0;        ///< ... whose depth range the regression's disagreed with (not used).
   std::uint64_t depth_unseen = 0;           ///< ... for which no depth image near in time saw them (out of view).
   std::uint64_t scale_samples = 0;          ///< Frames the person's scale was learnt from (depth_range.scale_rate).
+  std::uint64_t depth_frames_searched = 0;  ///< Depth frames searched for people (depth_people).
+  std::uint64_t depth_people = 0;           ///< ... the people found in them...
+  std::uint64_t depth_people_followed = 0;  ///< ... of whom the followed track's...
+  std::uint64_t depth_people_fed = 0;       ///< ... (given to it: depth_people.feed_followed)...
+  std::uint64_t depth_people_updates = 0;   ///< ... a bystander track's...
+  std::uint64_t depth_people_tracks = 0;    ///< ... and tracks started on them.
   double range_scale = 1.0;                 ///< ... and the scale the regression's distances are multiplied by now.
 };
 
@@ -308,6 +326,8 @@ class TargetTask final : public rt::Task {
   /// followed track held a new bystander).
   bool checkSwap(const hal::DetectionFrame& frame, const std::array<Candidate, hal::kMaxPersons>& candidates,
                  Association& a);
+  /// Feeds the bystander tracks from the depth frames taken after the last ones searched, up to t_ns (depth_people).
+  void trackDepthPeople(rt::TimeNs t_ns);
   /// Gives the candidate to the estimator; true if it took a distance.
   bool process(const Candidate& candidate);
   /// The person's position in W from their (levelled) torso: the regression, read in the level camera frame
@@ -379,6 +399,8 @@ class TargetTask final : public rt::Task {
   /// The newest depth frames, oldest first (a detection arrives ~50 ms after its photo: older frames are needed).
   std::array<hal::DepthFrameHandle, 8> depth_frames_{};
   std::size_t depth_count_ = 0;
+  DepthPeopleFinder depth_people_;
+  rt::TimeNs depth_people_done_ns_ = -1;  ///< Depth frames up to this capture time were searched (or skipped).
 };
 
 }  // namespace aerotrack::estimation
