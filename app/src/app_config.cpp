@@ -301,6 +301,8 @@ std::string toYaml(const AppConfig& c) {
     out << YAML::Key << "max_depth_m" << YAML::Value << dp.max_depth_m;
     out << YAML::Key << "depth_jump_m" << YAML::Value << dp.depth_jump_m;
     out << YAML::Key << "min_area_m2" << YAML::Value << dp.min_area_m2;
+    out << YAML::Key << "split_two" << YAML::Value << dp.split_two;
+    out << YAML::Key << "split_seam_m" << YAML::Value << dp.split_seam_m;
     out << YAML::Key << "centre_behind_m" << YAML::Value << dp.centre_behind_m;
     out << YAML::Key << "std_m" << YAML::Value << dp.std_m;
     out << YAML::Key << "std_per_m2" << YAML::Value << dp.std_per_m2;

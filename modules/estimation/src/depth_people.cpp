@@ -23,6 +23,8 @@ rt::Status validate(const DepthPeopleParams& p) {
     return rt::Error{"depth_people: max_width_m, max_depth_m and depth_jump_m must be positive"};
   if (!std::isfinite(p.min_area_m2) || p.min_area_m2 < 0.0)
     return rt::Error{"depth_people: min_area_m2 must be finite and not negative"};
+  if (!std::isfinite(p.split_seam_m) || p.split_seam_m < 0.0)
+    return rt::Error{"depth_people: split_seam_m must be finite and not negative"};
   if (!std::isfinite(p.feed_max_std_m) || p.feed_max_std_m < 0.0)
     return rt::Error{"depth_people: feed_max_std_m must be finite and not negative"};
   if (p.centre_behind_m < 0.0 || !(p.std_m > 0.0) || p.std_per_m2 < 0.0)
@@ -44,6 +46,8 @@ DepthPeopleParams parseDepthPeopleParams(const rt::ConfigNode& node) {
   p.max_depth_m = node.getDouble("max_depth_m", 0.05, 5.0);
   p.depth_jump_m = node.getDouble("depth_jump_m", 0.01, 5.0);
   p.min_area_m2 = node.getDouble("min_area_m2", 0.0, 100.0);
+  p.split_two = node.getBool("split_two");
+  p.split_seam_m = node.getDouble("split_seam_m", 0.0, 1.0);
   p.centre_behind_m = node.getDouble("centre_behind_m", 0.0, 2.0);
   p.std_m = node.getDouble("std_m", 0.001, 10.0);
   p.std_per_m2 = node.getDouble("std_per_m2", 0.0, 1.0);
@@ -51,6 +55,85 @@ DepthPeopleParams parseDepthPeopleParams(const rt::ConfigNode& node) {
   p.feed_max_std_m = node.getDouble("feed_max_std_m", 0.0, 10.0);
   node.finish();
   return p;
+}
+
+namespace {
+// The seam's bins are at least this wide (and at least a sampled pixel's footprint at the component's far side, so
+// that no bin inside a body is empty), and each side of a seam at least this wide: half of a body seen side on.
+constexpr double kSeamBinMinM = 0.05;
+constexpr double kSeamSideMinM = 0.2;
+}  // namespace
+
+DepthPeopleFinder::Extent DepthPeopleFinder::extent(const Component& comp, const Axes& axes, double from_m, double to_m,
+                                                    double pixel_area_per_z2, std::size_t n) const {
+  const double inf = std::numeric_limits<double>::infinity();
+  Extent e;
+  e.min_depth = inf;
+  e.lo = e.near = inf;
+  e.hi = e.far = -inf;
+  const Eigen::Vector2d across = axes.across();
+  const auto id = label_[static_cast<std::size_t>(comp.first)];
+  for (std::size_t i = static_cast<std::size_t>(comp.first); i < n; ++i) {
+    if (label_[i] != id) continue;
+    const Eigen::Vector3f& p = points_W_[i];
+    const Eigen::Vector2d d = p.head<2>().cast<double>() - axes.camera_W;
+    const double a = d.dot(across);
+    if (a < from_m || a >= to_m) continue;
+    const double b = d.dot(axes.along);
+    const auto z = static_cast<double>(depth_[i]);
+    ++e.pixels;
+    e.area_m2 += pixel_area_per_z2 * z * z;
+    e.sum_W += p.cast<double>();
+    e.top_m = std::max(e.top_m, static_cast<double>(p.z()));
+    e.min_depth = std::min(e.min_depth, z);
+    e.lo = std::min(e.lo, a);
+    e.hi = std::max(e.hi, a);
+    e.near = std::min(e.near, b);
+    e.far = std::max(e.far, b);
+  }
+  return e;
+}
+
+std::optional<double> DepthPeopleFinder::seamAcross(const Component& comp, const Axes& axes, const Extent& whole,
+                                                    double fx_px, std::size_t n) {
+  const double bin_m = std::max(kSeamBinMinM, params_.stride_px * whole.far / fx_px);
+  const std::size_t bins = std::min(seam_near_.size(), static_cast<std::size_t>((whole.hi - whole.lo) / bin_m) + 1);
+  if (bins < 3) return std::nullopt;
+  const double inf = std::numeric_limits<double>::infinity();
+  std::fill_n(seam_near_.begin(), bins, inf);
+  const Eigen::Vector2d across = axes.across();
+  const auto id = label_[static_cast<std::size_t>(comp.first)];
+  for (std::size_t i = static_cast<std::size_t>(comp.first); i < n; ++i) {
+    if (label_[i] != id) continue;
+    const Eigen::Vector2d d = points_W_[i].head<2>().cast<double>() - axes.camera_W;
+    const auto b = std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, (d.dot(across) - whole.lo) / bin_m)));
+    seam_near_[b] = std::min(seam_near_[b], d.dot(axes.along));
+  }
+  // The seam: the bin whose nearest surface lies farthest behind the chord between the nearest points on its two
+  // sides (each body's front is convex, nearest at its middle; the seam between two is concave, and where one body
+  // stands behind the other, the nearer one's side hides part of it: a step, not a peak), with room for a body's side
+  // on each. An empty bin inside is a gap, the clearest seam.
+  const double stereo_m = params_.std_per_m2 * whole.far * whole.far;
+  const double needed_m = params_.split_seam_m + 2.0 * stereo_m;
+  double best_m = -inf;
+  std::optional<double> seam;
+  std::size_t left = 0;  // the nearest bin left of b
+  for (std::size_t b = 1; b + 1 < bins; ++b) {
+    if (seam_near_[b - 1] < seam_near_[left]) left = b - 1;
+    const double from_lo_m = static_cast<double>(b) * bin_m;
+    if (from_lo_m < kSeamSideMinM || whole.hi - whole.lo - from_lo_m - bin_m < kSeamSideMinM) continue;
+    const auto right =
+        static_cast<std::size_t>(std::min_element(seam_near_.begin() + static_cast<std::ptrdiff_t>(b) + 1,
+                                                  seam_near_.begin() + static_cast<std::ptrdiff_t>(bins)) -
+                                 seam_near_.begin());
+    const double w = static_cast<double>(b - left) / static_cast<double>(right - left);
+    const double behind_m = seam_near_[b] - ((1.0 - w) * seam_near_[left] + w * seam_near_[right]);
+    if (behind_m >= needed_m && behind_m > best_m) {
+      best_m = behind_m;
+      seam = whole.lo + from_lo_m + 0.5 * bin_m;
+    }
+  }
+  return seam;
 }
 
 std::size_t DepthPeopleFinder::find(const hal::DepthFrame& depth, const Eigen::Isometry3d& T_WD,
@@ -71,6 +154,7 @@ std::size_t DepthPeopleFinder::find(const hal::DepthFrame& depth, const Eigen::I
     stack_.resize(n);
     components_.reserve(n);
   }
+  if (seam_near_.empty()) seam_near_.resize(static_cast<std::size_t>(2.0 * params_.max_width_m / kSeamBinMinM) + 2);
   // Each sampled pixel's point in W (the pixel's centre: pixel u covers [u, u + 1), HAL convention); a body pixel
   // stands above the ground. A pixel without data, or beyond max_range_m, is nobody's.
   const Eigen::Matrix3f R = T_WD.linear().cast<float>();
@@ -140,46 +224,53 @@ std::size_t DepthPeopleFinder::find(const hal::DepthFrame& depth, const Eigen::I
     }
     components_.push_back(comp);
   }
-  // The shape of a person, then each one's width across the line of sight to its mean (a second pass over its
-  // pixels: the components' pixels are not stored apart).
+  // The shape of a person; then each one's extent across and along the line of sight to its mean, and a component
+  // too wide for one body split at the seam between two (more passes over its pixels: they are not stored apart).
   const Eigen::Vector2d camera_W = T_WD.translation().head<2>();
   std::size_t found = 0;
-  for (Component& comp : components_) {
-    if (comp.area_m2 < params_.min_area_m2 || comp.too_tall || comp.cut || comp.top_m < params_.min_top_m) continue;
-    const Eigen::Vector2d mean_W = comp.sum_W.head<2>() / comp.pixels;
+  const auto place = [&](const Extent& e) {
+    if (e.pixels == 0 || e.area_m2 < params_.min_area_m2 || e.top_m < params_.min_top_m) return;
+    if (e.hi - e.lo > params_.max_width_m || e.far - e.near > params_.max_depth_m) return;
+    const Eigen::Vector2d mean_W = e.sum_W.head<2>() / e.pixels;
     const Eigen::Vector2d line = mean_W - camera_W;
     const double range = line.norm();
-    if (!(range > 1e-6)) continue;
-    const Eigen::Vector2d along = line / range;
-    const Eigen::Vector2d across(-along.y(), along.x());
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo, near = lo, far = -lo;
-    const auto id = label_[static_cast<std::size_t>(comp.first)];
-    for (std::size_t i = static_cast<std::size_t>(comp.first); i < n; ++i) {
-      if (label_[i] != id) continue;
-      const Eigen::Vector2d d = points_W_[i].head<2>().cast<double>() - camera_W;
-      lo = std::min(lo, d.dot(across));
-      hi = std::max(hi, d.dot(across));
-      near = std::min(near, d.dot(along));
-      far = std::max(far, d.dot(along));
-    }
-    if (hi - lo > params_.max_width_m || far - near > params_.max_depth_m) continue;
+    if (!(range > 1e-6)) return;
     DepthPerson person;
-    person.p_W_m = mean_W + params_.centre_behind_m * along;
+    person.p_W_m = mean_W + params_.centre_behind_m * line / range;
     person.range_m = range + params_.centre_behind_m;
-    person.top_m = comp.top_m;
-    person.pixels = comp.pixels;
-    person.area_m2 = comp.area_m2;
-    const double stereo_m = params_.std_per_m2 * comp.min_depth * comp.min_depth;
+    person.top_m = e.top_m;
+    person.pixels = e.pixels;
+    person.area_m2 = e.area_m2;
+    const double stereo_m = params_.std_per_m2 * e.min_depth * e.min_depth;
     person.std_m = std::hypot(params_.std_m, stereo_m);
     // Nearest first: kept when `out` is too small for everyone.
     std::size_t at = std::min(found, out.size() - 1);
-    if (found >= out.size() && !(person.range_m < out[at].range_m)) continue;
+    if (found >= out.size() && !(person.range_m < out[at].range_m)) return;
     while (at > 0 && person.range_m < out[at - 1].range_m) {
       out[at] = out[at - 1];
       --at;
     }
     out[at] = person;
     found = std::min(found + 1, out.size());
+  };
+  for (const Component& comp : components_) {
+    if (comp.area_m2 < params_.min_area_m2 || comp.too_tall || comp.cut || comp.top_m < params_.min_top_m) continue;
+    const Eigen::Vector2d line = comp.sum_W.head<2>() / comp.pixels - camera_W;
+    const double range = line.norm();
+    if (!(range > 1e-6)) continue;
+    const Axes axes{camera_W, line / range};
+    const double inf = std::numeric_limits<double>::infinity();
+    const Extent whole = extent(comp, axes, -inf, inf, pixel_area_per_z2, n);
+    const double width_m = whole.hi - whole.lo;
+    if (width_m <= params_.max_width_m || !params_.split_two) {
+      place(whole);
+      continue;
+    }
+    if (width_m > 2.0 * params_.max_width_m) continue;  // wider than two bodies: a wall, a hedge, a crowd
+    const std::optional<double> seam = seamAcross(comp, axes, whole, k.fx_px, n);
+    if (!seam) continue;  // one wide thing (a wall, a box, a bin): no person
+    place(extent(comp, axes, -inf, *seam, pixel_area_per_z2, n));
+    place(extent(comp, axes, *seam, inf, pixel_area_per_z2, n));
   }
   return found;
 }

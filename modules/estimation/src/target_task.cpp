@@ -587,27 +587,29 @@ void TargetTask::trackDepthPeople(rt::TimeNs t_ns) {
     }
     stats_.depth_people_followed += followed_seen ? 1 : 0;
     // The followed track's spread: a starved or young track is not fed (DepthPeopleParams::feed_max_std_m).
-    const Eigen::Matrix2d P_xy = prior.covariance.topLeftCorner<2, 2>();
-    const double larger_variance =
-        0.5 * (P_xy(0, 0) + P_xy(1, 1)) + std::hypot(0.5 * (P_xy(0, 0) - P_xy(1, 1)), P_xy(0, 1));  // 2 x 2 eigenvalue
-    const bool fed_spread = live && std::sqrt(std::max(0.0, larger_variance)) <= params_.depth_people.feed_max_std_m;
+    const auto fed_spread = [&] {
+      const Eigen::Matrix2d P_xy = prior.covariance.topLeftCorner<2, 2>();
+      const double larger_variance =  // the larger eigenvalue of the 2 x 2
+          0.5 * (P_xy(0, 0) + P_xy(1, 1)) + std::hypot(0.5 * (P_xy(0, 0) - P_xy(1, 1)), P_xy(0, 1));
+      return live && std::sqrt(std::max(0.0, larger_variance)) <= params_.depth_people.feed_max_std_m;
+    };
     const perception::Appearance no_colour;
     // Two bodies do not overlap: a piece of the followed person's body (something thin in front of them splits it) is
     // not someone else.
-    const auto apartFromFollowed = [&](std::size_t i) {
+    const auto apart_from_followed = [&](std::size_t i) {
       for (std::size_t k = 0; k < count; ++k)
         if (assigned.column[k] == 0 && (people[k].p_W_m - people[i].p_W_m).norm() < kTwoBodiesM) return false;
       return true;
     };
     for (std::size_t i = 0; i < count; ++i) {
       const int column = assigned.column[i];
-      if (column == 0 && in_followed_gate == 1 && params_.depth_people.feed_followed && fed_spread) {
+      if (column == 0 && in_followed_gate == 1 && params_.depth_people.feed_followed && fed_spread()) {
         if (estimator_.add(m[i]) == MeasurementVerdict::kAccepted) ++stats_.depth_people_fed;
       } else if (column > 0) {
         bystanders_.update(static_cast<std::size_t>(column - 1), m[i], no_colour, params_.tracker.appearance_rate,
                            followed_seen);
         ++stats_.depth_people_updates;
-      } else if (column == AssignmentResult::kNone && followed_seen && beyond_followed[i] && apartFromFollowed(i)) {
+      } else if (column == AssignmentResult::kNone && followed_seen && beyond_followed[i] && apart_from_followed(i)) {
         bystanders_.start(m[i], no_colour, true);
         ++stats_.depth_people_tracks;
       }

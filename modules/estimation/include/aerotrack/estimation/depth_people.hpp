@@ -22,12 +22,16 @@
 // carry; OpenCV's connectedComponents labels a binary image, without the depth steps. Checked against where the
 // simulator's D435 model renders the bodies (depth_people_test.cpp).
 //
+// Two people pressed together in view at one depth are one component, too wide for a body: it is split at the seam
+// between them, where the nearest surface across the image lies behind both sides' (each body's front is nearest at
+// its middle; a wall, a box or a bin has no such seam), and each side placed if it has a person's shape.
+//
 // What it cannot tell: who a person is (no colour: the depth camera sees shapes), a person from an upright obstacle
-// of a person's size (a post 1.7 m high), or two people pressed together in view at one depth (one component, too
-// wide: dropped, not split).
+// of a person's size (a post 1.7 m high, the inside corner of two low walls), or three people pressed together.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -55,6 +59,11 @@ struct DepthPeopleParams {
   /// A component whose pixels cover less than this (each pixel's footprint at its depth, times stride^2) is too little
   /// seen to place: a person from 0.3 m up is about 0.7 m^2, half of them hidden 0.35.
   double min_area_m2 = 0.2;
+  /// A component wider than max_width_m (and at most twice it) is split at the seam between two bodies when the
+  /// seam's nearest surface lies at least split_seam_m plus two standard deviations of the stereo noise behind the
+  /// nearest on either side: two 0.25 m cylinders touching side by side, 0.14 m (a 5 cm bin's edge). false: dropped.
+  bool split_two = true;
+  double split_seam_m = 0.05;
   double centre_behind_m = 0.2;  ///< From the surface's mean to the body's axis, along the line of sight.
   double std_m = 0.1;            ///< The centre's noise per horizontal axis: the body's shape and pose...
   double std_per_m2 = 0.0015;    ///< ... and the stereo noise k z^2 added to it (in quadrature; depth_range.hpp).
@@ -106,12 +115,36 @@ class DepthPeopleFinder {
     double min_depth = 0.0, max_depth = 0.0;  ///< Optical z.
     std::int32_t first = -1;                  ///< First pixel (to revisit its points).
   };
+  /// The horizontal line of sight from the camera to a component's mean, and across it (to the left).
+  struct Axes {
+    Eigen::Vector2d camera_W;
+    Eigen::Vector2d along;
+    Eigen::Vector2d across() const { return {-along.y(), along.x()}; }
+  };
+  /// A component's pixels within an interval across the line of sight, summed.
+  struct Extent {
+    int pixels = 0;
+    double area_m2 = 0.0;
+    Eigen::Vector3d sum_W = Eigen::Vector3d::Zero();
+    double top_m = 0.0;
+    double min_depth = 0.0;        ///< Optical z.
+    double lo = 0.0, hi = 0.0;     ///< Across the line of sight from the camera.
+    double near = 0.0, far = 0.0;  ///< Along it.
+  };
+  /// The pixels of `comp` whose across coordinate lies in [from_m, to_m).
+  Extent extent(const Component& comp, const Axes& axes, double from_m, double to_m, double pixel_area_per_z2,
+                std::size_t n) const;
+  /// The across coordinate of the seam between two bodies in `comp` (its extent `whole`), if it has one.
+  std::optional<double> seamAcross(const Component& comp, const Axes& axes, const Extent& whole, double fx_px,
+                                   std::size_t n);
   DepthPeopleParams params_;
   std::vector<Eigen::Vector3f> points_W_;  ///< Per sampled pixel; NaN: not a body pixel.
   std::vector<float> depth_;               ///< Per sampled pixel, optical z (0: none).
   std::vector<std::int32_t> label_;        ///< Per sampled pixel: its component, -1: none.
   std::vector<std::int32_t> stack_;
   std::vector<Component> components_;
+  std::vector<double>
+      seam_near_;  ///< Per bin across a too-wide component: its nearest surface along the line of sight.
 };
 
 }  // namespace aerotrack::estimation
