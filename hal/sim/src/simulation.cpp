@@ -437,8 +437,11 @@ void Simulation::captureDepth() {
   frame->T_BC.linear() = opticalAxesInFlu();
   frame->T_BC.translation() = spec.mount_B_m;
   // Everyone's body, the followed person's too, as a real depth camera sees them (issue 22: their range is a
-  // measurement; the mapper leaves them out of the map).
-  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m, std::span<const Cylinder>(bodies_));
+  // measurement; the mapper leaves them out of the map) -- but not through a forced occlusion of the person, which
+  // hides them from every camera on the drone (the depth camera's people would carry the track through it).
+  const bool occluded = options_.faults.person_occluded.active(secondsSinceStart(now_ns_));
+  std::span<const Cylinder> bodies(bodies_);
+  renderDepth(obstacles_, T_WC, spec.camera, depth_rng_, frame->depth_m, occluded ? bodies.subspan(1) : bodies);
   depth_out_.write(std::move(frame));
 }
 

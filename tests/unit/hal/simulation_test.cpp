@@ -1,8 +1,9 @@
 // The integrated simulation against hand-built situations: sensor rates and latencies, the
 // depth camera seeing a wall at a known distance, occlusion hiding the person, odometry noise,
-// gimbal commands, collisions counted.
+// gimbal commands, collisions counted, a forced occlusion hiding the person from the depth camera too.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "aerotrack/hal/sim/simulation.hpp"
@@ -45,12 +46,13 @@ success:
 )";
 }
 
-std::unique_ptr<Simulation> makeSim(bool wall_between, bool depth = true) {
+std::unique_ptr<Simulation> makeSim(bool wall_between, bool depth = true, const SimFaults& faults = {}) {
   const ScenarioSpec spec =
       aerotrack::test::require(parseScenarioSpec(worldYaml(wall_between), "test.yaml"), "test.yaml");
   const ScenarioInstance trial = aerotrack::test::require(instantiate(spec, 1), "instantiate");
   SimulationOptions options;
   options.render_depth = depth;
+  options.faults = faults;
   return aerotrack::test::require(Simulation::create(trial, options, 0), "Simulation::create");
 }
 
@@ -127,6 +129,39 @@ TEST(Simulation, GivenWallAheadThenDepthFramesAt15HzSeeItAtItsDistance) {
   float seen = 0.0F;
   for (int v = 0; v < last->depth_m.rows / 2 && seen == 0.0F; ++v) seen = last->depth_m.at<float>(v, u);
   EXPECT_NEAR(seen, 10.0 - 0.12, 3.0 * 0.0015 * 100.0);  // 3 sigma of the depth noise at ~10 m
+}
+
+TEST(Simulation, GivenAForcedOcclusionThenTheDepthCameraDoesNotSeeThePersonEither) {
+  // The person stands 4 m ahead (their near side 3.75 m, 3.63 m from the camera's mount); from 0.5 s to 1.5 s a
+  // forced occlusion hides them from every camera on the drone: the depth camera's centre pixel then sees the
+  // wall 10 m away behind them.
+  SimFaults faults;
+  faults.person_occluded = {0.5, 1.5};
+  auto sim = makeSim(false, true, faults);
+  Setpoint hold;
+  hold.p_W_m = Eigen::Vector3d(0, 0, 1.5);
+  sim->setpointInbox().write(hold);
+  std::uint64_t version = 0;
+  std::array<int, 3> frames{}, seen{};  // before, in and after the window
+  for (rt::TimeNs t = 0; t <= 2 * kNsPerSecond; t += 5'000'000) {
+    hold.stamp_ns = t;
+    sim->setpointInbox().write(hold);
+    sim->step(t);
+    if (sim->depthOut().version() == version) continue;
+    version = sim->depthOut().version();
+    const DepthFrameHandle frame = sim->depthOut().read();
+    const float centre = frame->depth_m.at<float>(frame->depth_m.rows / 2, frame->depth_m.cols / 2);
+    const double t_s = sim->secondsSinceStart(frame->stamp_ns);
+    const std::size_t window = t_s < 0.5 ? 0 : (t_s < 1.5 ? 1 : 2);
+    ++frames[window];
+    seen[window] += std::abs(static_cast<double>(centre) - 3.63) < 0.2 ? 1 : 0;
+  }
+  EXPECT_GE(frames[0], 6);  // 15 Hz
+  EXPECT_GE(frames[1], 14);
+  EXPECT_GE(seen[0], frames[0] - 1);  // a pixel may drop out
+  EXPECT_EQ(seen[1], 0);
+  EXPECT_GE(seen[2], frames[2] - 1);
+  EXPECT_GE(frames[2], 6);
 }
 
 TEST(Simulation, OdometryIsDelayedByItsLatencyAndNoisyAsConfigured) {

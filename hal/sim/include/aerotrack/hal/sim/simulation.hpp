@@ -58,7 +58,7 @@ struct FaultWindow {
 /// Faults the sim devices inject (issue 9: the supervisor's failsafes and relocation are tested with them).
 struct SimFaults {
   FaultWindow camera_stop;      ///< The gimbal camera delivers no frames.
-  FaultWindow person_occluded;  ///< Frames arrive, but the person is in none (a forced occlusion).
+  FaultWindow person_occluded;  ///< Frames arrive, but the person is in none (a forced occlusion), depth frames too.
   FaultWindow odometry_freeze;  ///< Odometry repeats the last sample from before the window.
   FaultWindow depth_stop;       ///< The depth camera delivers no frames.
   // The wider fault matrix (issue 23; docs/modules/closed-loop.md, "Fault matrix"):
