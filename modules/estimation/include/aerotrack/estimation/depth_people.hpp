@@ -23,8 +23,9 @@
 // simulator's D435 model renders the bodies (depth_people_test.cpp).
 //
 // Two people pressed together in view at one depth are one component, too wide for a body: it is split at the seam
-// between them, where the nearest surface across the image lies behind both sides' (each body's front is nearest at
-// its middle; a wall, a box or a bin has no such seam), and each side placed if it has a person's shape.
+// between them, where the nearest surface across the image lies behind the chord joining the nearest points on its
+// two sides (each body's front is convex, nearest at its middle; a wall, a box or a bin has no such seam), and each
+// side placed if it has a person's shape.
 //
 // What it cannot tell: who a person is (no colour: the depth camera sees shapes), a person from an upright obstacle
 // of a person's size (a post 1.7 m high, the inside corner of two low walls), or three people pressed together.
@@ -60,8 +61,9 @@ struct DepthPeopleParams {
   /// seen to place: a person from 0.3 m up is about 0.7 m^2, half of them hidden 0.35.
   double min_area_m2 = 0.2;
   /// A component wider than max_width_m (and at most twice it) is split at the seam between two bodies when the
-  /// seam's nearest surface lies at least split_seam_m plus two standard deviations of the stereo noise behind the
-  /// nearest on either side: two 0.25 m cylinders touching side by side, 0.14 m (a 5 cm bin's edge). false: dropped.
+  /// seam's nearest surface lies at least split_seam_m plus two standard deviations of the stereo noise (at the
+  /// component's far side) behind the chord joining the nearest points on its two sides: two 0.25 m cylinders
+  /// touching side by side at one depth, 0.14 m (a 5 cm bin's edge). false: a too-wide component is dropped.
   bool split_two = true;
   double split_seam_m = 0.05;
   double centre_behind_m = 0.2;  ///< From the surface's mean to the body's axis, along the line of sight.
@@ -143,8 +145,8 @@ class DepthPeopleFinder {
   std::vector<std::int32_t> label_;        ///< Per sampled pixel: its component, -1: none.
   std::vector<std::int32_t> stack_;
   std::vector<Component> components_;
-  std::vector<double>
-      seam_near_;  ///< Per bin across a too-wide component: its nearest surface along the line of sight.
+  /// Per bin across a too-wide component: its nearest surface along the line of sight.
+  std::vector<double> seam_near_;
 };
 
 }  // namespace aerotrack::estimation
