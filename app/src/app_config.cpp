@@ -259,6 +259,7 @@ std::string toYaml(const AppConfig& c) {
         << (e.task.in_front_test == estimation::TargetTaskParams::InFrontTest::kGate ? "gate" : "nearer");
     out << YAML::Key << "hidden_behind_m" << YAML::Value << e.task.hidden_behind_m;
     out << YAML::Key << "depth_vets_bearings" << YAML::Value << e.task.depth_vets_bearings;
+    out << YAML::Key << "bearing_by_likelihood" << YAML::Value << e.task.bearing_by_likelihood;
     out << YAML::Key << "in_front_doubtful_starts_track" << YAML::Value << e.task.in_front_doubtful_starts_track;
     out << YAML::Key << "look_gate_after_loss" << YAML::Value << e.task.look_gate_after_loss;
     out << YAML::Key << "refused_alone_frames" << YAML::Value << e.task.refused_alone_frames;

@@ -32,6 +32,7 @@ void parseTargetTaskParams(const rt::ConfigNode& node, TargetTaskParams& params)
                                : TargetTaskParams::InFrontTest::kNearer;
   params.hidden_behind_m = node.getDoubleOr("hidden_behind_m", params.hidden_behind_m, 0.0, 5.0);
   params.depth_vets_bearings = node.getBoolOr("depth_vets_bearings", params.depth_vets_bearings);
+  params.bearing_by_likelihood = node.getBoolOr("bearing_by_likelihood", params.bearing_by_likelihood);
   params.refused_alone_frames = node.getIntOr("refused_alone_frames", params.refused_alone_frames, 0, 100);
   params.look_refused_off_tracks = node.getBoolOr("look_refused_off_tracks", params.look_refused_off_tracks);
   params.lost_competing_colour_capped =
@@ -247,18 +248,19 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   // bystander's the colour learnt for their track; the cost is the lock-on's form (gate fraction plus weighted colour
   // fraction) for every track alike. While the followed person is lost, a bystander track never seen beside them may be
   // them, and does not compete. The cheapest assignment of distances to tracks (global nearest neighbour, solved
-  // exactly: assignment.hpp); then, if nobody went to the followed track, a bearing -- unless it fits better a
-  // bystander track that no one in the frame explains (a bearing fits anyone on its line of sight), or the depth camera
-  // sees through where the person would be on it (depth_vets_bearings). Nobody for the followed track: it coasts (never
-  // the lock-on's choice, whose bystander the estimator's restart rule would hand the track to). Column 0 of the costs
-  // is the followed track, column 1 + j bystander track j.
+  // exactly: assignment.hpp); then, if nobody went to the followed track, a bearing -- unless it fits better (by its
+  // likelihood with bearing_by_likelihood) a bystander track that no one in the frame explains (a bearing fits anyone
+  // on its line of sight), or the depth camera sees through where the person would be on it (depth_vets_bearings).
+  // Nobody for the followed track: it coasts (never the lock-on's choice, whose bystander the estimator's restart rule
+  // would hand the track to). Column 0 of the costs is the followed track, column 1 + j bystander track j.
   AssignmentCosts costs;
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};
-  std::array<bool, hal::kMaxPersons> in_front{};     // ranged in front of the followed person: someone else
-  std::array<bool, hal::kMaxPersons> doubtful{};     // ... refused by in_front_gate_chi2 only: maybe the person
-  std::array<bool, hal::kMaxPersons> beyond_gate{};  // a distance the live followed track's gate refused
-  std::array<bool, hal::kMaxPersons> kept_off{};     // refused by the look gate, kept off the bystander tracks
+  std::array<double, hal::kMaxPersons> bearing_nll{};  // d2 + log det S: twice the negative log-likelihood
+  std::array<bool, hal::kMaxPersons> in_front{};       // ranged in front of the followed person: someone else
+  std::array<bool, hal::kMaxPersons> doubtful{};       // ... refused by in_front_gate_chi2 only: maybe the person
+  std::array<bool, hal::kMaxPersons> beyond_gate{};    // a distance the live followed track's gate refused
+  std::array<bool, hal::kMaxPersons> kept_off{};       // refused by the look gate, kept off the bystander tracks
   bearing_cost.fill(std::numeric_limits<double>::infinity());
   const double gate = params_.estimator.gate_chi2;
   const perception::TrackerParams& t = params_.tracker;
@@ -330,6 +332,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (bearing) {
       bearing_cost[static_cast<std::size_t>(i)] = cost;
       bearing_d2[static_cast<std::size_t>(i)] = d2;
+      bearing_nll[static_cast<std::size_t>(i)] = d2 + fit->log_det_S;
     } else {
       costs.set(static_cast<std::size_t>(i), 0, cost);
     }
@@ -360,9 +363,12 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     bool explains_bystander = false;
     for (std::size_t j = 0; j < bystanders_.capacity() && !explains_bystander; ++j) {
       if (track_taken[j] || !competes(j)) continue;
-      const std::optional<double> d2 =
-          bystanders_.mahalanobisSq(j, candidates[static_cast<std::size_t>(i)].judgedAsOther());
-      explains_bystander = d2 && *d2 <= bearing_d2[static_cast<std::size_t>(i)];
+      const auto k = static_cast<std::size_t>(i);
+      const std::optional<TargetEstimator::Fit> fit_j = bystanders_.fit(j, candidates[k].judgedAsOther());
+      if (!fit_j) continue;
+      explains_bystander = params_.bearing_by_likelihood
+                               ? fit_j->d2 <= gate && fit_j->d2 + fit_j->log_det_S <= bearing_nll[k]
+                               : fit_j->d2 <= bearing_d2[k];
     }
     if (explains_bystander) continue;
     best_bearing_cost = cost;

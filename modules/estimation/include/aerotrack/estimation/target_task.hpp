@@ -151,6 +151,16 @@ struct TargetTaskParams {
   /// was taken (traced: image-mode crowd seed 9, flown from the truth, depth 1.3 m against 2.4 m predicted), and a
   /// low-scored person 7 m behind (seed 100, closed loop: no surface within 8 m). false: off.
   bool depth_vets_bearings = false;
+  /// A bearing (bearing_fallback) that no one else in the frame took goes to the followed track unless a bystander
+  /// track nobody in the frame explains fits it better. true: better by its likelihood (the squared Mahalanobis
+  /// distance plus the log-determinant of the innovation covariance); false: by the squared Mahalanobis distance alone.
+  /// A bearing is placed at the followed track's predicted range and fits anyone on its line of sight; when that line
+  /// passes near both the followed track's prediction and a bystander's, the distances alone favour the wider track --
+  /// the followed track starved while the person is hidden, whose gate has grown (traced: image-mode crowd seed 19
+  /// with the depth camera's people, a bystander in front of the hidden person, 4 degrees off their line of sight,
+  /// taken at d2 0.00 against 0.02 to their own tight track; seed 25 the same, 1.0 m from the person). The likelihood
+  /// weighs in each track's spread: a young bystander track's wide gate does not take the person's own bearing either.
+  bool bearing_by_likelihood = false;
   /// With choose_by_estimate: someone with a distance whom the live followed track's gate refuses (beyond it, and on
   /// no bystander track) in this many detection frames in a row, each within a running person's reach of the one
   /// before, is someone else: a bystander track is started on them, counted as seen beside the followed person (it
