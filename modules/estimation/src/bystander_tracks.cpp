@@ -31,6 +31,11 @@ std::optional<TargetEstimator::Fit> BystanderTracks::fit(std::size_t i, const Ta
   return tracks_[i].filter.fit(m);
 }
 
+std::optional<TargetEstimator::Fit> BystanderTracks::fitAcrossLine(std::size_t i, const TargetMeasurement& m) const {
+  if (!live(i, m.stamp_ns)) return std::nullopt;
+  return tracks_[i].filter.fitAcrossLine(m);
+}
+
 MeasurementVerdict BystanderTracks::update(std::size_t i, const TargetMeasurement& m,
                                            const perception::Appearance& look, double rate, bool with_followed) {
   const MeasurementVerdict verdict = tracks_[i].filter.add(m);

@@ -314,6 +314,17 @@ std::optional<TargetEstimator::Fit> TargetEstimator::fit(const TargetMeasurement
   return Fit{i->nu_m.dot(llt.solve(i->nu_m)), 2.0 * L.diagonal().array().log().sum()};
 }
 
+std::optional<TargetEstimator::Fit> TargetEstimator::fitAcrossLine(const TargetMeasurement& m) const {
+  if (!m.hasLineOfSight() || !(std::abs(m.bearing_W.norm() - 1.0) <= 1e-6)) return std::nullopt;
+  const std::optional<Innovation> i = innovation(m);
+  if (!i) return std::nullopt;
+  const Eigen::Vector2d n(-m.bearing_W.y(), m.bearing_W.x());
+  const double across_m = n.dot(i->nu_m.head<2>());
+  const double s_m2 = n.dot(i->S_m2.topLeftCorner<2, 2>() * n);
+  if (!(s_m2 > 0.0) || !std::isfinite(s_m2)) return std::nullopt;
+  return Fit{across_m * across_m / s_m2, std::log(s_m2)};
+}
+
 std::optional<TargetEstimator::Innovation> TargetEstimator::innovation(const TargetMeasurement& m) const {
   if (!valid(m) || (folded_any_ && m.stamp_ns < folded_until_ns_)) return std::nullopt;
   // The state add() would update: after the newest buffered measurement at or before m's time.

@@ -256,7 +256,7 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
   AssignmentCosts costs;
   std::array<double, hal::kMaxPersons> bearing_cost{};  // the followed track's, for bearings; inf: out of its gates
   std::array<double, hal::kMaxPersons> bearing_d2{};
-  std::array<double, hal::kMaxPersons> bearing_nll{};  // d2 + log det S: twice the negative log-likelihood
+  std::array<double, hal::kMaxPersons> bearing_nll{};  // across its line: twice the negative log-likelihood
   std::array<bool, hal::kMaxPersons> in_front{};       // ranged in front of the followed person: someone else
   std::array<bool, hal::kMaxPersons> doubtful{};       // ... refused by in_front_gate_chi2 only: maybe the person
   std::array<bool, hal::kMaxPersons> beyond_gate{};    // a distance the live followed track's gate refused
@@ -332,7 +332,9 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (bearing) {
       bearing_cost[static_cast<std::size_t>(i)] = cost;
       bearing_d2[static_cast<std::size_t>(i)] = d2;
-      bearing_nll[static_cast<std::size_t>(i)] = d2 + fit->log_det_S;
+      const std::optional<TargetEstimator::Fit> across = estimator_.fitAcrossLine(c.judged());
+      bearing_nll[static_cast<std::size_t>(i)] =
+          across ? across->d2 + across->log_det_S : std::numeric_limits<double>::infinity();
     } else {
       costs.set(static_cast<std::size_t>(i), 0, cost);
     }
@@ -364,11 +366,15 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     for (std::size_t j = 0; j < bystanders_.capacity() && !explains_bystander; ++j) {
       if (track_taken[j] || !competes(j)) continue;
       const auto k = static_cast<std::size_t>(i);
-      const std::optional<TargetEstimator::Fit> fit_j = bystanders_.fit(j, candidates[k].judgedAsOther());
-      if (!fit_j) continue;
-      explains_bystander = params_.bearing_by_likelihood
-                               ? fit_j->d2 <= gate && fit_j->d2 + fit_j->log_det_S <= bearing_nll[k]
-                               : fit_j->d2 <= bearing_d2[k];
+      const TargetMeasurement& m = candidates[k].judgedAsOther();
+      const std::optional<double> d2_j = bystanders_.mahalanobisSq(j, m);
+      if (!d2_j) continue;
+      if (!params_.bearing_by_likelihood) {
+        explains_bystander = *d2_j <= bearing_d2[k];
+        continue;
+      }
+      const std::optional<TargetEstimator::Fit> across_j = bystanders_.fitAcrossLine(j, m);
+      explains_bystander = *d2_j <= gate && across_j && across_j->d2 + across_j->log_det_S <= bearing_nll[k];
     }
     if (explains_bystander) continue;
     best_bearing_cost = cost;

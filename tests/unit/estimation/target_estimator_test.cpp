@@ -274,6 +274,42 @@ TEST(TargetEstimator, GivenAMeasurement_ThenItsFitIsTheGaussianLogLikelihoodOfTh
   EXPECT_FALSE(estimator->fit(bad).has_value());
 }
 
+TEST(TargetEstimator, GivenABearing_ThenItsFitAcrossTheLineIsTheGaussianOfTheInnovationsAcrossComponent) {
+  // fitAcrossLine() against the innovation's covariance turned into the line's frame by a rotation matrix written
+  // out (x along the line, y across it): the across component's 1-D Gaussian, -2 ln N(nu_y; 0, S_yy) - ln 2 pi.
+  // Moving the bearing's point along its line or up leaves it unchanged; no line of sight gives nothing.
+  std::mt19937_64 rng(6);
+  auto estimator = TargetEstimator::create({});
+  ASSERT_TRUE(estimator);
+  for (int k = 0; k < 30; ++k) estimator->add(measure(straight, k, rng));
+  for (const double angle_rad : {0.3, 2.0, -1.2}) {
+    TargetMeasurement m = measure(straight, 40, rng);
+    m.p_WT_m += Eigen::Vector3d(0.3, -0.2, 0.05);
+    m.bearing_W = Eigen::Vector2d(std::cos(angle_rad), std::sin(angle_rad));
+    m.range_std_m = 100.0;
+    const auto across = estimator->fitAcrossLine(m);
+    const auto innovation = estimator->innovation(m);
+    ASSERT_TRUE(across && innovation);
+    Eigen::Matrix2d R_LW;  // world to the line's frame
+    R_LW << std::cos(angle_rad), std::sin(angle_rad), -std::sin(angle_rad), std::cos(angle_rad);
+    const Eigen::Vector2d nu_L = R_LW * innovation->nu_m.head<2>();
+    const Eigen::Matrix2d S_L = R_LW * innovation->S_m2.topLeftCorner<2, 2>() * R_LW.transpose();
+    const double density =
+        std::exp(-0.5 * nu_L.y() * nu_L.y() / S_L(1, 1)) / std::sqrt(2.0 * std::numbers::pi * S_L(1, 1));
+    EXPECT_NEAR(across->d2, nu_L.y() * nu_L.y() / S_L(1, 1), 1e-9);
+    EXPECT_NEAR(across->log_det_S, std::log(S_L(1, 1)), 1e-9);
+    EXPECT_NEAR(across->d2 + across->log_det_S, -2.0 * std::log(density) - std::log(2.0 * std::numbers::pi), 1e-9);
+    TargetMeasurement moved = m;
+    moved.p_WT_m.head<2>() += 2.5 * m.bearing_W;
+    moved.p_WT_m.z() += 0.4;
+    const auto moved_across = estimator->fitAcrossLine(moved);
+    ASSERT_TRUE(moved_across);
+    EXPECT_NEAR(moved_across->d2, across->d2, 1e-9 * (1.0 + across->d2));
+    EXPECT_NEAR(moved_across->log_det_S, across->log_det_S, 1e-9);
+  }
+  EXPECT_FALSE(estimator->fitAcrossLine(measure(straight, 40, rng)).has_value());  // no line of sight
+}
+
 TEST(TargetEstimator, GivenRepeatedConsistentRejectionsThenTheFilterRestarts) {
   // Given a track, then the measurements move 3 m away and stay there (the track was wrong).
   TargetEstimatorParams params;

@@ -5,9 +5,9 @@
 // whole (their track fed, the followed track starving), then for 0.4 s with their hips cut off (a bearing) as they
 // pass in front of the person. A bearing is placed at the followed track's predicted range, so where the bystander's
 // line of sight crosses the person's place it fits the starved followed track's wide gate as closely as the
-// bystander's own (traced: image-mode crowd seed 19, d2 0.00 against 0.02). Over seeded draws, without the rule some
-// of these bearings are given to the followed track, with it none; and with the bystander walking 3 m to the side,
-// the person's own bearings are taken as without it.
+// bystander's own (traced: image-mode crowd seed 19, taken at d2 0.00, the bystander's track 0.02 m from that line).
+// Over seeded draws, without the rule some of these bearings are given to the followed track, with it none; and with
+// the bystander walking 3 m to the side, the person's own bearings are taken as without it.
 #include <gtest/gtest.h>
 
 #include <cstdint>

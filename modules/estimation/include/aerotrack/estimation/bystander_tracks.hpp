@@ -41,6 +41,8 @@ class BystanderTracks {
   std::optional<double> mahalanobisSq(std::size_t i, const TargetMeasurement& m) const;
   /// The same with ln|S| (TargetEstimator::fit).
   std::optional<TargetEstimator::Fit> fit(std::size_t i, const TargetMeasurement& m) const;
+  /// ... across a bearing's line of sight (TargetEstimator::fitAcrossLine).
+  std::optional<TargetEstimator::Fit> fitAcrossLine(std::size_t i, const TargetMeasurement& m) const;
   /// Updates live track i with m (its own gate applies) and blends `look` into its colour at `rate` (at
   /// 1/n for its n-th colour while that is larger); `with_followed`: the followed person was measured in the
   /// same frame.

@@ -180,6 +180,13 @@ class TargetEstimator {
     double log_det_S = 0.0;
   };
   std::optional<Fit> fit(const TargetMeasurement& measurement) const;
+  /// fit() of a bearing's line of sight across it on the ground plane alone: the innovation's component along the
+  /// horizontal normal n of bearing_W, d2 = (n . nu)^2 / (n^T S n) and ln(n^T S n). Along the line a bearing says
+  /// nothing (its noise there is range_std_m), and its height is the followed track's prediction, while a track fed
+  /// by the depth camera carries no height (a 100 m spread in z): the 3-D ln|S| of such a track says how little is
+  /// known of its height, not whether the bearing is theirs. Nothing where fit() gives nothing, or bearing_W is not
+  /// a horizontal unit vector.
+  std::optional<Fit> fitAcrossLine(const TargetMeasurement& measurement) const;
 
   /// Forgets everything (the buffer keeps its memory).
   void reset();

@@ -152,14 +152,19 @@ struct TargetTaskParams {
   /// low-scored person 7 m behind (seed 100, closed loop: no surface within 8 m). false: off.
   bool depth_vets_bearings = false;
   /// A bearing (bearing_fallback) that no one else in the frame took goes to the followed track unless a bystander
-  /// track nobody in the frame explains fits it better. true: better by its likelihood (the squared Mahalanobis
-  /// distance plus the log-determinant of the innovation covariance); false: by the squared Mahalanobis distance alone.
+  /// track nobody in the frame explains fits it better. true: better by its likelihood across its line of sight on the
+  /// ground plane (TargetEstimator::fitAcrossLine: the squared distance plus the log of the innovation's variance
+  /// there), for a track whose gate holds it; false: by the squared Mahalanobis distance alone.
   /// A bearing is placed at the followed track's predicted range and fits anyone on its line of sight; when that line
   /// passes near both the followed track's prediction and a bystander's, the distances alone favour the wider track --
   /// the followed track starved while the person is hidden, whose gate has grown (traced: image-mode crowd seed 19
   /// with the depth camera's people, a bystander in front of the hidden person, 4 degrees off their line of sight,
-  /// taken at d2 0.00 against 0.02 to their own tight track; seed 25 the same, 1.0 m from the person). The likelihood
-  /// weighs in each track's spread: a young bystander track's wide gate does not take the person's own bearing either.
+  /// taken at d2 0.00 while their own track's position lay 0.02 m from that line). The likelihood weighs in each
+  /// track's spread: a young bystander track's wide gate does not take the person's own bearing either (measured: "any
+  /// bystander track whose gate holds the bearing" refused the person's own bearings beside a one-frame track). Across
+  /// the line only: in 3-D the depth camera's tracks, which carry no height, are unlikely for anyone (traced: seed 29,
+  /// three bearings a depth-fed track fitted at d2 0.00-1.23 given to the followed track for its ln|S| 12-13 against
+  /// 4), which lost seeds 3, 29 and 31 of the first 60.
   bool bearing_by_likelihood = false;
   /// With choose_by_estimate: someone with a distance whom the live followed track's gate refuses (beyond it, and on
   /// no bystander track) in this many detection frames in a row, each within a running person's reach of the one
