@@ -332,9 +332,11 @@ TargetTask::Association TargetTask::associate(const hal::DetectionFrame& frame,
     if (bearing) {
       bearing_cost[static_cast<std::size_t>(i)] = cost;
       bearing_d2[static_cast<std::size_t>(i)] = d2;
-      const std::optional<TargetEstimator::Fit> across = estimator_.fitAcrossLine(c.judged());
-      bearing_nll[static_cast<std::size_t>(i)] =
-          across ? across->d2 + across->log_det_S : std::numeric_limits<double>::infinity();
+      if (params_.bearing_by_likelihood) {  // another prediction of the track: only where it is compared
+        const std::optional<TargetEstimator::Fit> across = estimator_.fitAcrossLine(c.judged());
+        bearing_nll[static_cast<std::size_t>(i)] =
+            across ? across->d2 + across->log_det_S : std::numeric_limits<double>::infinity();
+      }
     } else {
       costs.set(static_cast<std::size_t>(i), 0, cost);
     }
